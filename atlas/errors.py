@@ -1,0 +1,20 @@
+"""atlas's exceptions: each carries one line that names the culprit (a key, a file, a backend).
+
+The CLI prints ``atlas: error: <message>`` for any :class:`AtlasError` and exits with status 2.
+"""
+
+
+class AtlasError(Exception):
+    """Bad input or an unusable environment, reported to the user as one clear line."""
+
+
+class ConfigError(AtlasError, ValueError):
+    """A config file that cannot be read or does not validate."""
+
+
+class InputFileError(AtlasError):
+    """A file given to atlas (``atlas info``/``atlas plot``/``--resume``) that it cannot use."""
+
+
+class BackendUnavailable(AtlasError, RuntimeError):
+    """A requested backend (CUDA, Dask) that is not installed or has no device."""
