@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Pendulum", "CriticalPoint", "critical_points"]
+__all__ = ["Pendulum", "CriticalPoint", "critical_points", "rk4_stable"]
 
 
 @dataclass(frozen=True)
@@ -131,3 +131,17 @@ def critical_points(pendulum: Pendulum, theta_min: float, theta_max: float) -> l
         else:
             points.append(CriticalPoint(n, _ATTRACTOR_KIND[pendulum.regime], attractor))
     return points
+
+
+def rk4_stable(pendulum: Pendulum, dt: float) -> bool:
+    """Whether RK4 with step ``dt`` [s] is linearly stable at every critical point's decaying
+    modes: |R(dt·λ)| ≤ 1 with R(z) = 1 + z + z²/2 + z³/6 + z⁴/24 (Hairer & Wanner, *Solving
+    ODEs II*, §IV.2) for the attractor roots r1, r2 and the saddle's stable root −u2.
+    Beyond it the integrator itself amplifies what the physics damps."""
+    r1, r2 = pendulum.attractor_eigenvalues()
+    stable_saddle = complex(pendulum.saddle_eigenvalues()[1])
+    for lam in (r1, r2, stable_saddle):
+        z = dt * lam
+        if abs(1 + z + z * z / 2 + z**3 / 6 + z**4 / 24) > 1.0 + 1e-12:
+            return False
+    return True

@@ -1,0 +1,52 @@
+# atlas — make targets. `make help` lists them. `make run` and `make test` set up .venv themselves.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+CONFIG ?= configs/default.yaml
+# The output file named inside a config (its `output:` key), so outputs are targets of configs.
+output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
+
+.DEFAULT_GOAL := help
+.PHONY: help run test atlas figures bench lint clean venv
+
+help: ## list the targets
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -e 's/:.*## /\t/' | expand -t 10
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $@
+
+venv: $(STAMP) ## create .venv and install atlas with its dev tools
+
+# The atlas file is a target of its config: recomputed only when the config (or the
+# installed package) changed. A config without `output:` writes atlas's default path.
+OUT := $(or $(call output_of,$(CONFIG)),outputs/default.h5)
+
+$(OUT): $(CONFIG) $(STAMP)
+	$(BIN)/atlas run $(CONFIG) -o $@
+	$(BIN)/atlas plot $@
+
+run: $(OUT) ## compute configs/default.yaml → outputs/default.h5 and outputs/default.png
+
+atlas: $(OUT) ## compute any config: make atlas CONFIG=configs/x.yaml
+
+test: $(STAMP) ## run the whole test suite
+	$(BIN)/python -m pytest -q
+
+figures: $(STAMP) ## the essay's Figures 1-12 → outputs/figures/
+	$(BIN)/atlas figures
+
+bench: $(STAMP) ## benchmark table → outputs/bench.json
+	$(BIN)/atlas bench
+
+lint: $(STAMP) ## ruff
+	$(BIN)/ruff check atlas tests
+
+clean: ## remove generated outputs and caches (keeps .venv)
+	find outputs -mindepth 1 ! -name .gitkeep -exec rm -rf {} +
+	find . -name __pycache__ -not -path './$(VENV)/*' -exec rm -rf {} +
+	rm -rf .pytest_cache .ruff_cache .hypothesis

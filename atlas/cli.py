@@ -1,0 +1,134 @@
+"""The ``atlas`` command line: a thin layer over the Python API.
+
+Bad input of any kind ends with one line ``atlas: error: …`` on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from .errors import AtlasError
+
+EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (no usage dump) and exit status 2."""
+
+    def error(self, message):
+        raise AtlasError(f"{self.prog}: {message}")
+
+
+def _cmd_run(args) -> int:
+    from . import sweep
+    from .config import load_config
+
+    cfg = load_config(args.config, output=args.output)
+    try:
+        tree = sweep.run(cfg, resume=args.resume, quiet=args.quiet, backend=args.backend)
+    except KeyboardInterrupt:
+        from .store import partial_path
+
+        print(f"atlas: interrupted; finished tiles are kept in {partial_path(cfg.output)}; "
+              "continue with --resume", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if not args.quiet:
+        print(f"wrote {cfg.output}")
+        for line in sweep.summary_lines(tree):
+            print("  " + line)
+        if "separatrices" in tree.children:
+            from .separatrices import summary
+
+            for line in summary(tree["separatrices"].to_dataset(inherit=False)):
+                print("  " + line)
+    return 0
+
+
+def _cmd_info(args) -> int:
+    from .info import info_lines
+
+    for line in info_lines(args.file):
+        print(line)
+    return 0
+
+
+def _cmd_plot(args) -> int:
+    from .plotting import plot_atlas
+    from .store import open_atlas
+
+    tree = open_atlas(args.file)
+    for path in plot_atlas(tree, args.file):
+        print(f"wrote {path}")
+    return 0
+
+
+def _cmd_figures(args) -> int:
+    from .figures import write_all
+
+    for path in write_all(Path(args.outdir)):
+        print(f"wrote {path}")
+    return 0
+
+
+def _cmd_bench(args) -> int:
+    from .benchmarks import bench_command
+
+    return bench_command(quick=args.quick, backend=args.backend, out=Path(args.output))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="atlas", description="Phase-space atlas of the damped pendulum "
+                     "θ̈ = −ω0² sin θ − 2αθ̇: basins of attraction, separatrices, figures.")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("run", help="compute the atlas of a YAML config into HDF5")
+    p.add_argument("config", help="YAML config, e.g. configs/default.yaml")
+    p.add_argument("-o", "--output", help="output file (overrides the config's output key)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run of the same config")
+    p.add_argument("--backend", choices=["cpu", "cuda", "dask"],
+                   help="override execution.backend")
+    p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("info", help="describe an atlas file")
+    p.add_argument("file")
+    p.set_defaults(func=_cmd_info)
+
+    p = sub.add_parser("plot", help="PNG figures next to an atlas file")
+    p.add_argument("file")
+    p.set_defaults(func=_cmd_plot)
+
+    p = sub.add_parser("figures", help="the essay's Figures 1-12")
+    p.add_argument("--outdir", default="outputs/figures")
+    p.set_defaults(func=_cmd_figures)
+
+    p = sub.add_parser("bench", help="benchmark table, written to outputs/bench.json")
+    p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions")
+    p.add_argument("--backend", choices=["cpu", "cuda"], default="cpu")
+    p.add_argument("--output", default="outputs/bench.json")
+    p.set_defaults(func=_cmd_bench)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+        logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                            format="atlas: %(message)s")
+        return args.func(args)
+    except AtlasError as exc:
+        print(f"atlas: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("atlas: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,272 @@
+"""Sweep configs: YAML validated by pydantic v2. Every default is written once, here.
+
+A config names the pendulum (α, ω0 — a list for either makes a parameter atlas), the
+(θ0, θ̇0) grid, the integrator, the separatrix tracing, the execution backend and the output
+path. Numbers may be written as π expressions: ``3pi``, ``-pi/2``, ``2*pi``, ``0.5pi``.
+Any problem is raised as :class:`atlas.errors.ConfigError` with one line naming the key.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import json
+import math
+import operator
+import re
+from pathlib import Path
+from typing import Annotated, Literal
+
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from .errors import ConfigError
+
+__all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash"]
+
+# ---------------------------------------------------------------------------- π expressions
+
+_BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+           ast.Div: operator.truediv}
+_UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+_IMPLICIT_PI = re.compile(r"(\d|\.)\s*(?=pi\b)")
+
+
+def _evaluate(node: ast.AST) -> float:
+    if isinstance(node, ast.Expression):
+        return _evaluate(node.body)
+    if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        return float(node.value)
+    if isinstance(node, ast.Name) and node.id in ("pi", "π"):
+        return math.pi
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
+        return _BINARY[type(node.op)](_evaluate(node.left), _evaluate(node.right))
+    if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
+        return _UNARY[type(node.op)](_evaluate(node.operand))
+    raise ValueError("only numbers, pi, + - * / and parentheses are allowed")
+
+
+def parse_pi_expression(text: str) -> float:
+    """Evaluate a number written with π: ``"3pi"`` → 3π, ``"-pi/2"``, ``"2*pi"``, ``"1.5"``.
+
+    Only numbers, ``pi`` (or ``π``), + − × ÷ and parentheses are accepted; implicit
+    multiplication is allowed only directly before ``pi``.
+    """
+    source = _IMPLICIT_PI.sub(r"\1*", text.strip().replace("π", "pi"))
+    try:
+        value = _evaluate(ast.parse(source, mode="eval"))
+    except (SyntaxError, ValueError, ZeroDivisionError) as exc:
+        detail = "division by zero" if isinstance(exc, ZeroDivisionError) else str(exc)
+        if isinstance(exc, SyntaxError):
+            detail = "not a number or π expression (e.g. 3pi, -pi/2, 2*pi)"
+        raise ValueError(f"cannot read {text!r}: {detail}") from None
+    return value
+
+
+def _number(value):
+    """Accept ints, floats and π-expression strings; refuse bools, NaN and infinities."""
+    if isinstance(value, bool):
+        raise ValueError("expected a number, got a boolean")
+    if isinstance(value, str):
+        value = parse_pi_expression(value)
+    if isinstance(value, (int, float)):
+        value = float(value)
+        if not math.isfinite(value):
+            raise ValueError(f"must be a finite number, got {value}")
+        return value
+    raise ValueError(f"expected a number or π expression, got {type(value).__name__}")
+
+
+Number = Annotated[float, BeforeValidator(_number)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+# ---------------------------------------------------------------------------- sections
+
+
+class PendulumConfig(_Strict):
+    """α [s⁻¹] and ω0 [rad s⁻¹]; a list for either makes a parameter atlas (leading dims)."""
+
+    alpha: Number | list[Number] = 0.1
+    omega0: Number | list[Number] = 1.0
+
+    @field_validator("alpha")
+    @classmethod
+    def _alpha(cls, value):
+        for a in value if isinstance(value, list) else [value]:
+            if a < 0:
+                raise ValueError(f"damping must be >= 0, got {a}")
+            if a == 0:
+                raise ValueError(
+                    "alpha = 0 makes no basin atlas: without damping the energy is conserved "
+                    "and no orbit ever settles on an attractor"
+                )
+        return value
+
+    @field_validator("omega0")
+    @classmethod
+    def _omega0(cls, value):
+        for w in value if isinstance(value, list) else [value]:
+            if w <= 0:
+                raise ValueError(f"must be > 0, got {w}")
+        return value
+
+    @field_validator("alpha", "omega0")
+    @classmethod
+    def _nonempty(cls, value):
+        if isinstance(value, list) and not value:
+            raise ValueError("an empty list sweeps nothing")
+        return value
+
+    @property
+    def alphas(self) -> list[float]:
+        return self.alpha if isinstance(self.alpha, list) else [self.alpha]
+
+    @property
+    def omega0s(self) -> list[float]:
+        return self.omega0 if isinstance(self.omega0, list) else [self.omega0]
+
+    @property
+    def is_sweep(self) -> bool:
+        return isinstance(self.alpha, list) or isinstance(self.omega0, list)
+
+
+class Axis(_Strict):
+    """``num`` evenly spaced values from ``start`` to ``stop`` inclusive."""
+
+    start: Number
+    stop: Number
+    num: int = Field(ge=2, le=1 << 20)
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if self.start >= self.stop:
+            raise ValueError(f"start ({self.start:g}) must be less than stop ({self.stop:g})")
+        return self
+
+
+class GridConfig(_Strict):
+    """The grid of initial conditions θ0 [rad] × θ̇0 [rad s⁻¹]."""
+
+    theta0: Axis = Axis(start=-3 * math.pi, stop=3 * math.pi, num=512)
+    theta_dot0: Axis = Axis(start=-4.0, stop=4.0, num=512)
+
+
+class IntegratorConfig(_Strict):
+    """Fixed-step RK4: step ``dt`` [s]; orbits not trapped by ``t_max`` [s] are unresolved."""
+
+    dt: Number = Field(default=0.01, gt=0)
+    t_max: Number = Field(default=200.0, gt=0)
+
+
+class SeparatricesConfig(_Strict):
+    """Stable manifolds of the saddles, located by bisection to ``tol`` with vertices at most
+    ``max_spacing`` apart in the phase plane."""
+
+    enabled: bool = True
+    tol: Number = Field(default=1e-12, gt=0, lt=1e-3)
+    max_spacing: Number = Field(default=0.05, gt=0)
+
+
+class ExecutionConfig(_Strict):
+    """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write)."""
+
+    backend: Literal["cpu", "cuda", "dask"] = "cpu"
+    tile_orbits: int = Field(default=1 << 18, ge=1)
+    workers: int | None = Field(default=None, ge=1)
+    scheduler: str | None = None
+
+
+class Config(_Strict):
+    """A whole sweep (see ``configs/default.yaml`` for a commented example)."""
+
+    name: str = "default"
+    pendulum: PendulumConfig = PendulumConfig()
+    grid: GridConfig = GridConfig()
+    integrator: IntegratorConfig = IntegratorConfig()
+    separatrices: SeparatricesConfig = SeparatricesConfig()
+    execution: ExecutionConfig = ExecutionConfig()
+    output: Path = Path("outputs/default.h5")
+
+    @model_validator(mode="after")
+    def _stable_step(self):
+        from .model import Pendulum, rk4_stable
+
+        dt = self.integrator.dt
+        for a in self.pendulum.alphas:
+            for w in self.pendulum.omega0s:
+                if not rk4_stable(Pendulum(a, w), dt):
+                    raise ValueError(
+                        f"integrator.dt = {dt:g} is beyond RK4's stability limit for "
+                        f"alpha = {a:g}, omega0 = {w:g}; use a smaller dt"
+                    )
+        return self
+
+    def to_json(self) -> str:
+        """The validated config as canonical JSON (stored in every output file)."""
+        return json.dumps(self.model_dump(mode="json"), sort_keys=True)
+
+
+def config_hash(cfg: Config) -> str:
+    """Digest of everything that determines the arrays (not the output path or backend)."""
+    data = cfg.model_dump(mode="json", exclude={"output", "execution", "name"})
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _location(loc: tuple) -> str:
+    return ".".join(str(p) for p in loc if not str(p).startswith("function-")) or "config"
+
+
+def _first_error(exc: ValidationError) -> str:
+    err = exc.errors()[0]
+    loc = [p for p in err["loc"] if not isinstance(p, str) or "[" not in p]
+    key = _location(tuple(loc))
+    kind = err["type"]
+    if kind == "extra_forbidden":
+        return f"{key}: unknown key"
+    msg = err["msg"].removeprefix("Value error, ")
+    if kind.startswith(("int_", "float_", "bool_")) or kind == "missing":
+        msg = f"{msg} (got {err.get('input')!r})" if kind != "missing" else "missing"
+    return f"{key}: {msg}"
+
+
+def load_config(path: str | Path, *, output: str | Path | None = None) -> Config:
+    """Read and validate a YAML config; ``output`` overrides its ``output`` key.
+
+    Raises :class:`ConfigError` with one line ``<file>: <key>: <problem>``.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such config file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read config file ({exc.__class__.__name__})") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}: " if mark is not None else ""
+        problem = getattr(exc, "problem", None) or "invalid YAML"
+        raise ConfigError(f"{path}: {where}YAML syntax error: {problem}") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: a config must be a mapping of keys, got {type(data).__name__}")
+    if output is not None:
+        data = {**data, "output": str(output)}
+    try:
+        return Config.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{path}: {_first_error(exc)}") from None

@@ -1,0 +1,161 @@
+"""Figures of an atlas: a leaf layer that only reads Datasets (it computes nothing).
+
+* :func:`basin_map` — colour by attractor k, separatrices in red, saddles as open circles,
+  attractors as filled dots;
+* :func:`trap_time_map` — the certified trapping time on a log colour scale;
+* :func:`fraction_curves` — basin fractions against a swept parameter, with error bars.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import xarray as xr  # noqa: E402
+from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
+
+__all__ = ["basin_map", "trap_time_map", "fraction_curves", "plot_atlas", "STYLE"]
+
+#: One style for every atlas figure.
+STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
+         "axes.titlesize": 11, "legend.fontsize": 8, "legend.frameon": False}
+SEPARATRIX_COLOR = "red"
+
+
+def _pi_ticks(ax, lo: float, hi: float) -> None:
+    n = np.arange(np.ceil(lo / np.pi), np.floor(hi / np.pi) + 1)
+    ax.set_xticks(n * np.pi)
+    ax.set_xticklabels(["0" if k == 0 else ("π" if k == 1 else "−π" if k == -1 else f"{k:g}π")
+                        for k in n])
+
+
+def _single(ds: xr.Dataset, **index) -> xr.Dataset:
+    """The basin map of one parameter point (first point of a sweep unless indexed)."""
+    if "alpha" in ds.dims:
+        ds = ds.isel(alpha=index.get("alpha", 0), omega0=index.get("omega0", 0))
+    return ds
+
+
+def _param(ds: xr.Dataset, name: str) -> float:
+    """α or ω0 of a single-point map: a coordinate in a sweep, an attribute otherwise."""
+    return float(ds[name]) if name in ds.coords else float(ds.attrs[name])
+
+
+def _critical(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
+    if "critical_points" not in tree.children:
+        return
+    cp = tree["critical_points"].to_dataset(inherit=False)
+    saddle = cp["kind"].values == "saddle"
+    theta = cp["theta"].values
+    ax.plot(theta[~saddle], np.zeros((~saddle).sum()), "o", color="black", ms=5,
+            label="attractors (2πk, 0)")
+    ax.plot(theta[saddle], np.zeros(saddle.sum()), "o", mfc="none", mec=SEPARATRIX_COLOR,
+            mew=1.5, ms=7, label="saddles ((2j+1)π, 0)")
+
+
+def _separatrices(ax, tree: xr.DataTree) -> None:
+    if "separatrices" not in tree.children:
+        return
+    from .separatrices import branches
+
+    sep = tree["separatrices"].to_dataset(inherit=False)
+    for i, (_, _, theta, theta_dot) in enumerate(branches(sep)):
+        ax.plot(theta, theta_dot, color=SEPARATRIX_COLOR, lw=1.2,
+                label="separatrices" if i == 0 else None)
+
+
+def basin_map(tree: xr.DataTree, ax=None, **index):
+    """Draw the basin map of ``tree`` (colour by k) with critical points and separatrices."""
+    ds = _single(tree.to_dataset(inherit=False), **index)
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 4.8))
+    k = ds["attractor"].values.astype(float)
+    k[ds["status"].values != 0] = np.nan
+    finite = k[np.isfinite(k)]
+    kmin, kmax = (int(finite.min()), int(finite.max())) if finite.size else (0, 0)
+    levels = np.arange(kmin, kmax + 2) - 0.5
+    cmap = ListedColormap(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10))
+    cmap.set_bad("white")
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    mesh = ax.pcolormesh(th, v, np.ma.masked_invalid(k), cmap=cmap,
+                         norm=BoundaryNorm(levels, cmap.N), shading="nearest", rasterized=True)
+    cbar = ax.figure.colorbar(mesh, ax=ax, ticks=np.arange(kmin, kmax + 1))
+    cbar.set_label("attractor k: orbit settles at (2πk, 0)")
+    _separatrices(ax, tree)
+    _critical(ax, tree, ds)
+    ax.set_xlim(th[0], th[-1])
+    ax.set_ylim(v[0], v[-1])
+    _pi_ticks(ax, th[0], th[-1])
+    ax.set_xlabel("θ0 [rad]")
+    ax.set_ylabel("θ̇0 [rad/s]")
+    ax.set_title(f"Basins of attraction, α = {_param(ds, 'alpha'):g} s⁻¹, "
+                 f"ω0 = {_param(ds, 'omega0'):g} rad/s")
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)
+    return ax
+
+
+def trap_time_map(tree: xr.DataTree, ax=None, **index):
+    """Draw the certified trapping time t_trap [s] on a log colour scale."""
+    ds = _single(tree.to_dataset(inherit=False), **index)
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 4.8))
+    t = ds["t_trap"].values.astype(float)
+    positive = t[np.isfinite(t) & (t > 0)]
+    lo = positive.min() if positive.size else 1e-2
+    hi = max(positive.max() if positive.size else 1.0, lo * 10)
+    mesh = ax.pcolormesh(ds["theta0"].values, ds["theta_dot0"].values,
+                         np.ma.masked_invalid(np.where(t > 0, t, lo)), cmap="magma",
+                         norm=LogNorm(lo, hi), shading="nearest", rasterized=True)
+    ax.figure.colorbar(mesh, ax=ax).set_label("trapping time t_trap [s]")
+    _separatrices(ax, tree)
+    _pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
+    ax.set_xlabel("θ0 [rad]")
+    ax.set_ylabel("θ̇0 [rad/s]")
+    ax.set_title("Time to certified trapping (white: never trapped)")
+    return ax
+
+
+def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha"):
+    """Basin fraction of each k against the swept parameter ``dim``, with standard errors."""
+    ds = tree.to_dataset(inherit=False)
+    other = "omega0" if dim == "alpha" else "alpha"
+    ds = ds.isel({other: 0})
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4.5))
+    x = ds[dim].values
+    for k in ds["k"].values:
+        p = ds["basin_fraction"].sel(k=k).values
+        if np.any(p > 0):
+            ax.errorbar(x, p, yerr=ds["basin_fraction_stderr"].sel(k=k).values, marker="o",
+                        ms=3, capsize=2, label=f"k = {int(k):+d}")
+    ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
+    ax.set_xlabel("damping α [1/s]" if dim == "alpha" else "ω0 [rad/s]")
+    ax.set_ylabel("basin fraction of the grid")
+    ax.set_title("Basin fractions (error bars: one standard error)")
+    ax.legend(ncol=2)
+    return ax
+
+
+def plot_atlas(tree: xr.DataTree, path: Path) -> list[Path]:
+    """Write the figures of the atlas stored at ``path`` next to it; returns the PNG paths."""
+    path = Path(path)
+    written = []
+    ds = tree.to_dataset(inherit=False)
+    with plt.rc_context(STYLE):
+        jobs = [(path.with_suffix(".png"), basin_map),
+                (path.with_name(path.stem + "_t_trap.png"), trap_time_map)]
+        if "alpha" in ds.dims:
+            swept = "alpha" if ds.sizes["alpha"] > 1 else "omega0"
+            jobs.append((path.with_name(path.stem + "_fractions.png"),
+                         lambda t: fraction_curves(t, dim=swept)))
+        for out, draw in jobs:
+            ax = draw(tree)
+            ax.figure.tight_layout()
+            ax.figure.savefig(out)
+            plt.close(ax.figure)
+            written.append(out)
+    return written

@@ -1,0 +1,287 @@
+"""The sweep: a config's grid of initial conditions → tiles → a basin atlas on disk.
+
+The grid (θ̇0 rows × θ0 columns, for every α, ω0 of a parameter atlas) is cut into tiles of
+whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled independently
+(:func:`compute_tile`, which any backend can run) and each finished tile is written at once
+(:mod:`atlas.store`), so memory is bounded by a tile and a crash loses only tiles in flight.
+Orbits never interact, so results do not depend on tile size, backend or thread count.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import shutil
+import sys
+import time
+from collections.abc import Iterator
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from . import store
+from .config import Config, config_hash
+from .errors import AtlasError
+from .labels import CHECK_EVERY, label, trap_margin
+from .lock import output_lock
+from .model import Pendulum, critical_points
+
+__all__ = ["run", "compute_tile", "layout_of", "critical_points_dataset"]
+
+log = logging.getLogger(__name__)
+
+#: Upper bound on the bytes one orbit takes on disk (int16 + int8 + float32, uncompressed).
+BYTES_PER_ORBIT = 7
+
+
+def layout_of(cfg: Config) -> store.Layout:
+    """The grid axes, parameter axes and tiling of a config."""
+    g = cfg.grid
+    theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
+    theta_dot0 = np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num)
+    sweep = cfg.pendulum.is_sweep
+    return store.Layout(
+        theta0=theta0, theta_dot0=theta_dot0,
+        alpha=np.array(cfg.pendulum.alphas) if sweep else None,
+        omega0=np.array(cfg.pendulum.omega0s) if sweep else None,
+        rows_per_tile=max(1, min(g.theta_dot0.num, cfg.execution.tile_orbits // g.theta0.num)),
+    )
+
+
+def _pendulum(cfg: Config, params: tuple[int, ...]) -> Pendulum:
+    if not params:
+        return Pendulum(cfg.pendulum.alphas[0], cfg.pendulum.omega0s[0])
+    ia, iw = params
+    return Pendulum(cfg.pendulum.alphas[ia], cfg.pendulum.omega0s[iw])
+
+
+def compute_tile(theta0, theta_dot0, alpha, omega0, dt, t_max, backend="cpu",
+                 numba_threads=None):
+    """Label the orbits of one tile: θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows.
+
+    Returns (attractor, status, t_trap), each shaped (rows, columns). A plain function of
+    plain arguments, so it can run as a Dask task on another machine.
+    """
+    if numba_threads is not None:
+        import numba
+
+        numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
+    res = label(theta0[None, :], theta_dot0[:, None], alpha=alpha, omega0=omega0, dt=dt,
+                t_max=t_max, backend=backend)
+    return res.attractor, res.status, res.t_trap
+
+
+def _tile_args(cfg: Config, layout: store.Layout, index: int) -> tuple:
+    params, rows = layout.tile(index)
+    p = _pendulum(cfg, params)
+    return (layout.theta0, layout.theta_dot0[rows], p.alpha, p.omega0,
+            cfg.integrator.dt, cfg.integrator.t_max)
+
+
+def _local_results(cfg, layout, todo, backend) -> Iterator[tuple[int, tuple]]:
+    for index in todo:
+        yield index, compute_tile(*_tile_args(cfg, layout, index), backend=backend)
+
+
+def _dask_results(cfg, layout, todo) -> Iterator[tuple[int, tuple]]:
+    from .distributed import dask_results
+
+    yield from dask_results(cfg, todo, lambda i: _tile_args(cfg, layout, i), compute_tile)
+
+
+def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
+    """The ``/critical_points`` group: θ, n, kind and both eigenvalues of every rest state in
+    the θ0 window (per α, ω0 for a parameter atlas; the points are the same for all)."""
+    lo, hi = float(layout.theta0[0]), float(layout.theta0[-1])
+    per_param = []
+    for ia in range(len(cfg.pendulum.alphas)):
+        for iw in range(len(cfg.pendulum.omega0s)):
+            pts = critical_points(_pendulum(cfg, (ia, iw) if layout.alpha is not None else ()),
+                                  lo, hi)
+            per_param.append(np.array([p.eigenvalues for p in pts], np.complex128)
+                             .reshape(len(pts), 2))
+    eig = np.stack(per_param)
+    lead_dims = ("alpha", "omega0") if layout.alpha is not None else ()
+    lead_shape = (layout.alpha.size, layout.omega0.size) if layout.alpha is not None else ()
+    eig = eig.reshape(*lead_shape, len(pts), 2)
+    dims = (*lead_dims, "point", "eigen")
+    return xr.Dataset(
+        {
+            "eigenvalue_real": (dims, eig.real, {"units": "s-1",
+                                                 "long_name": "real part of the eigenvalue"}),
+            "eigenvalue_imag": (dims, eig.imag, {"units": "s-1",
+                                                 "long_name": "imaginary part of the eigenvalue"}),
+        },
+        coords={
+            "theta": ("point", np.array([p.theta for p in pts]),
+                      {"units": "rad", "long_name": "angle of the rest state (n*pi, 0)"}),
+            "n": ("point", np.array([p.n for p in pts], np.int32),
+                  {"units": "1", "long_name": "theta = n*pi"}),
+            "kind": ("point", np.array([p.kind for p in pts]),
+                     {"long_name": "attractor focus/node/critical node, or saddle"}),
+        },
+        attrs={"description": "critical points (n*pi, 0) of eq. (1) in the theta0 window and "
+                              "their linearisation eigenvalues (essay section 3, eqs. 22-24)"},
+    )
+
+
+def _separatrices_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset | None:
+    if not cfg.separatrices.enabled:
+        return None
+    from . import separatrices
+
+    window = ((float(layout.theta0[0]), float(layout.theta0[-1])),
+              (float(layout.theta_dot0[0]), float(layout.theta_dot0[-1])))
+    traced = []
+    for ia, a in enumerate(cfg.pendulum.alphas):
+        for iw, w in enumerate(cfg.pendulum.omega0s):
+            ds = separatrices.trace(Pendulum(a, w), *window, tol=cfg.separatrices.tol,
+                                    max_spacing=cfg.separatrices.max_spacing,
+                                    dt=cfg.integrator.dt)
+            if layout.alpha is not None:
+                ds = ds.assign_coords(point_alpha=("point", np.full(ds.sizes["point"], a)),
+                                      point_omega0=("point", np.full(ds.sizes["point"], w)))
+            traced.append(ds)
+    if len(traced) == 1:
+        return traced[0]
+    merged = xr.concat(traced, dim="point", data_vars="all", coords="different",
+                       compat="equals", combine_attrs="drop_conflicts")
+    merged.attrs["discrepancy"] = max(float(d.attrs["discrepancy"]) for d in traced)
+    return merged
+
+
+def _versions() -> dict:
+    import h5netcdf
+    import h5py
+    import numba
+
+    from . import __version__
+
+    return {"atlas_version": __version__, "numpy_version": np.__version__,
+            "numba_version": numba.__version__, "xarray_version": xr.__version__,
+            "h5py_version": h5py.__version__, "h5netcdf_version": h5netcdf.__version__,
+            "python_version": sys.version.split()[0]}
+
+
+def _attrs(cfg: Config) -> dict:
+    attrs = {
+        "title": f"atlas basin map: {cfg.name}",
+        "Conventions": "CF-1.10",
+        "method": "rk4",
+        "dt": cfg.integrator.dt,
+        "t_max": cfg.integrator.t_max,
+        "check_every": np.int64(CHECK_EVERY),
+        "config": cfg.to_json(),
+        "config_hash": config_hash(cfg),
+        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        **_versions(),
+    }
+    if not cfg.pendulum.is_sweep:
+        a, w = cfg.pendulum.alphas[0], cfg.pendulum.omega0s[0]
+        attrs.update(alpha=a, omega0=w, trap_margin=trap_margin(cfg.integrator.dt, a, w))
+    return attrs
+
+
+def _check_output_path(cfg: Config, layout: store.Layout) -> None:
+    out = cfg.output
+    if out.exists() and out.is_dir():
+        raise AtlasError(f"{out}: the output path is a directory")
+    parent = out.parent
+    if not parent.exists():
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise AtlasError(f"{out}: cannot create the output folder ({exc.strerror})") from None
+    if not parent.is_dir():
+        raise AtlasError(f"{out}: the output folder {parent} is not a directory")
+    if not os.access(parent, os.W_OK):
+        raise AtlasError(f"{out}: the output folder {parent} is not writable")
+    need = layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
+    free = shutil.disk_usage(parent).free
+    if need > free:
+        raise AtlasError(f"{out}: the output may need up to {need / 2**30:.1f} GiB but only "
+                         f"{free / 2**30:.1f} GiB is free on that disk")
+
+
+def _progress(total: int, initial: int, quiet: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=initial, unit="orbit", unit_scale=True, smoothing=0.1,
+                disable=quiet or not sys.stderr.isatty(), desc="atlas", leave=False)
+
+
+def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
+        backend: str | None = None) -> xr.DataTree:
+    """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
+
+    ``resume=True`` continues an interrupted run from ``<output>.partial`` (made from the
+    same config), computing only the tiles it is missing. ``backend`` overrides
+    ``execution.backend`` ('cpu', 'cuda' or 'dask').
+    """
+    backend = backend or cfg.execution.backend
+    layout = layout_of(cfg)
+    _check_output_path(cfg, layout)
+    if backend == "cuda":
+        from .kernels.cuda import require_cuda
+
+        require_cuda()
+    output = cfg.output
+    partial = store.partial_path(output)
+    start = time.perf_counter()
+    with output_lock(output):
+        if resume and partial.exists():
+            f, todo = store.open_partial(partial, config_hash(cfg))
+            log.info("resuming %s: %d of %d tiles to do", partial, todo.size, layout.n_tiles)
+        else:
+            if resume:
+                log.info("nothing to resume at %s: starting afresh", partial)
+            partial.unlink(missing_ok=True)
+            f = store.create(partial, layout, _attrs(cfg))
+            todo = np.arange(layout.n_tiles)
+        try:
+            tile_orbits = layout.rows_per_tile * layout.theta0.size
+            total = layout.n_params * layout.theta0.size * layout.theta_dot0.size
+            results = (_dask_results(cfg, layout, todo) if backend == "dask"
+                       else _local_results(cfg, layout, todo, backend))
+            with _progress(total, total - todo.size * tile_orbits, quiet) as bar:
+                for index, (attractor, status, t_trap) in results:
+                    store.write_tile(f, layout, index, attractor, status, t_trap)
+                    bar.update(status.size)
+            groups = {"critical_points": critical_points_dataset(cfg, layout)}
+            separatrices = _separatrices_dataset(cfg, layout)
+            if separatrices is not None:
+                groups["separatrices"] = separatrices
+        except BaseException:
+            f.close()
+            raise
+        run_time = time.perf_counter() - start
+        store.finalize(f, partial, output, groups,
+                       {"run_time_s": run_time, "backend": backend})
+    log.info("wrote %s in %.2f s", output, run_time)
+    return store.open_atlas(output)
+
+
+def summary_lines(tree: xr.DataTree) -> list[str]:
+    """A short human summary of an atlas: grid, time, basin fractions, unresolved count."""
+    ds = tree.to_dataset(inherit=False) if hasattr(tree, "to_dataset") else tree
+    n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+    lines = [f"grid      {ds.sizes['theta0']} x {ds.sizes['theta_dot0']} (theta0 x theta_dot0)"
+             f" = {n_orbits:,} orbits"]
+    if "alpha" in ds.dims:
+        lines.append(f"sweep     alpha: {ds.sizes['alpha']} values, omega0: "
+                     f"{ds.sizes['omega0']} values")
+    else:
+        lines.append(f"pendulum  alpha = {ds.attrs['alpha']:g} 1/s, omega0 = "
+                     f"{ds.attrs['omega0']:g} rad/s, dt = {ds.attrs['dt']:g} s")
+        fractions = ", ".join(
+            f"k={int(k):+d}: {float(p):.4f}±{float(e):.4f}"
+            for k, p, e in zip(ds["k"].values, ds["basin_fraction"].values,
+                               ds["basin_fraction_stderr"].values) if p > 0)
+        lines.append(f"basins    {fractions}")
+        unresolved = int(round(float(ds["unresolved_fraction"]) * n_orbits))
+        lines.append(f"unresolved {unresolved} orbits")
+    if "run_time_s" in ds.attrs:
+        lines.append(f"time      {float(ds.attrs['run_time_s']):.2f} s")
+    return lines

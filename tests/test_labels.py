@@ -1,0 +1,118 @@
+"""Certified labels: an independent reference, the symmetries, the energy trap's margin."""
+
+import math
+
+import numpy as np
+import pytest
+
+import atlas
+from atlas.kernels.rk4 import propagate_straightforward
+from atlas.labels import ATTRACTOR_FILL, trap_margin
+from atlas.model import Pendulum
+from tests.conftest import boundary_adjacent, dop853_attractor
+
+ALPHA, OMEGA0 = 0.1, 1.0
+
+
+@pytest.fixture(scope="module")
+def small_grid():
+    theta0 = np.linspace(-2.95 * np.pi, 2.95 * np.pi, 40)  # misses the saddles (nπ, 0)
+    theta_dot0 = np.linspace(-4.0, 4.0, 27)
+    return np.meshgrid(theta0, theta_dot0)
+
+
+def test_labels_agree_with_dop853_away_from_boundaries(small_grid):
+    theta0, theta_dot0 = small_grid
+    res = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0)
+    assert np.all(res.status == 0)
+    ref = np.array([[dop853_attractor(t, v, ALPHA, OMEGA0) for t, v in zip(rt, rv)]
+                    for rt, rv in zip(theta0, theta_dot0)], dtype=object)
+    settled = ref != None  # noqa: E711 (object array)
+    assert settled.mean() > 0.99
+    ref_k = np.where(settled, ref, 10_000).astype(int)
+    interior = ~boundary_adjacent(ref_k) & settled
+    assert interior.sum() > 0.25 * ref_k.size  # the comparison covers much of the grid
+    np.testing.assert_array_equal(res.attractor[interior], ref_k[interior])
+
+
+def test_point_reflection_maps_k_to_minus_k(small_grid):
+    theta0, theta_dot0 = small_grid
+    res = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0)
+    mirrored = atlas.label(-theta0, -theta_dot0, alpha=ALPHA, omega0=OMEGA0)
+    np.testing.assert_array_equal(mirrored.attractor, -res.attractor)
+    np.testing.assert_array_equal(mirrored.t_trap, res.t_trap)
+
+
+def test_shift_by_two_pi_maps_k_to_k_plus_one(small_grid):
+    theta0, theta_dot0 = small_grid
+    res = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0)
+    shifted = atlas.label(theta0 + 2 * np.pi, theta_dot0, alpha=ALPHA, omega0=OMEGA0)
+    # θ0 + 2π rounds differently from θ0 only for orbits that pass within ~1e-15 of a
+    # separatrix; on this grid none does
+    np.testing.assert_array_equal(shifted.attractor, res.attractor + 1)
+
+
+def test_rest_states_and_statuses():
+    res = atlas.label([0.0, 2 * np.pi, np.nan, 0.0, np.pi], [0.0, 0.0, 0.0, np.inf, 0.0],
+                      alpha=ALPHA, omega0=OMEGA0, t_max=5.0)
+    assert list(res.status) == [0, 0, 2, 2, 1]  # saddle (π, 0) is an equilibrium: unresolved
+    assert list(res.attractor) == [0, 1, ATTRACTOR_FILL, ATTRACTOR_FILL, ATTRACTOR_FILL]
+    assert res.t_trap[0] == 0.0 and np.isnan(res.t_trap[2:]).all()
+    assert res.attractor.dtype == np.int16 and res.status.dtype == np.int8
+    assert res.t_trap.dtype == np.float32
+
+
+def test_shapes_broadcast():
+    res = atlas.label(np.zeros((3, 1)), np.zeros(4), alpha=ALPHA, omega0=OMEGA0)
+    assert res.attractor.shape == res.status.shape == res.t_trap.shape == (3, 4)
+
+
+def test_straightforward_kernel_agrees(small_grid):
+    theta0, theta_dot0 = small_grid
+    a = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0)
+    b = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0, kernel="straightforward")
+    np.testing.assert_array_equal(a.attractor, b.attractor)
+    np.testing.assert_array_equal(a.t_trap, b.t_trap)
+
+
+@pytest.mark.parametrize("alpha,omega0,dt", [(0.1, 1.0, 0.01), (0.02, 1.0, 0.01),
+                                             (1.0, 2.0, 0.02), (3.0, 1.0, 0.05)])
+def test_energy_never_increases_beyond_the_trap_margin(alpha, omega0, dt):
+    """Along computed orbits, the largest rise of E over any stretch stays far below the
+    trap margin m·2ω0² (so a trapped orbit cannot climb out of its well)."""
+    p = Pendulum(alpha, omega0)
+    rng = np.random.default_rng(1)
+    # orbits near the separatrix energy (the hardest case) and generic ones
+    phi = rng.uniform(-np.pi, np.pi, 400)
+    e_target = p.saddle_energy * rng.uniform(0.95, 1.0, 400)
+    theta_dot = np.sqrt(np.maximum(2 * (e_target - p.energy(phi, 0.0)), 0.0))
+    theta = phi.copy()
+    energy, wells = [p.energy(theta, theta_dot)], [np.zeros_like(theta)]
+    for _ in range(3000):
+        propagate_straightforward(theta, theta_dot, alpha, omega0, dt, 1)
+        k = np.round(theta / (2 * np.pi))
+        energy.append(p.energy(theta, theta_dot, k))
+        wells.append(k)
+    energy = np.array(energy)
+    wells = np.array(wells)
+    # E_k is the energy in well k: compare only orbits that stay in one well
+    one_well = np.all(wells == wells[0], axis=0)
+    assert one_well.sum() > 100
+    running_min = np.minimum.accumulate(energy, axis=0)
+    rise = np.max((energy - running_min)[:, one_well])
+    margin = trap_margin(dt, alpha, omega0) * p.saddle_energy
+    assert rise < 0.05 * margin, (rise, margin)
+
+
+def test_trapped_orbits_never_leave_their_well():
+    p = Pendulum(ALPHA, OMEGA0)
+    m = trap_margin(0.01, ALPHA, OMEGA0)
+    # start just inside the trap level, at every phase of the well
+    phi = np.linspace(-np.pi + 1e-3, np.pi - 1e-3, 501)
+    cap = p.saddle_energy * (1 - m)
+    theta_dot = np.sqrt(np.maximum(2 * (cap * (1 - 1e-12) - p.energy(phi, 0.0)), 0.0))
+    theta = phi.copy()
+    for _ in range(200):
+        propagate_straightforward(theta, theta_dot, ALPHA, OMEGA0, 0.01, 50)
+        assert np.all(np.abs(theta) < math.pi)
+        assert np.all(p.energy(theta, theta_dot) < cap)
