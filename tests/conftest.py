@@ -27,6 +27,8 @@ def dop853_attractor(theta0, theta_dot0, alpha, omega0, t_end=200.0):
         return 0.5 * y[1] ** 2 + omega0**2 * (1 - np.cos(y[0] - 2 * np.pi * k)) - omega0**2
 
     low_energy.terminal = True
+    if low_energy(0.0, (theta0, theta_dot0)) < 0:
+        return round(theta0 / (2 * np.pi))
     sol = solve_ivp(rhs, (0.0, t_end), [theta0, theta_dot0], method="DOP853", rtol=1e-11,
                     atol=1e-12, events=low_energy)
     theta, theta_dot = sol.y[:, -1]

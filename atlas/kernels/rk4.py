@@ -25,25 +25,43 @@ TWO_PI = 2.0 * math.pi
 INV_TWO_PI = 1.0 / TWO_PI
 
 
-def make_rk4_step(sin):
+@nb.njit(inline="always")
+def _identity(x):
+    return x
+
+
+def make_rk4_step(sin, reduce=None):
     """Return a jitted ``step(theta, theta_dot, alpha, omega0, dt) -> (theta, theta_dot)``.
 
     One classical RK4 step of θ' = θ̇, θ̇' = −ω0² sin θ − 2αθ̇ using the given ``sin``.
+    With ``reduce`` given, the four stage angles θ + δ (δ = 0, ½dt·k1θ, ½dt·k2θ, dt·k3θ) share
+    one argument reduction: ``sin`` is then called as ``sin(reduce(θ), δ)`` = sin(θ + δ)
+    (:mod:`atlas.kernels.lanes` uses this with a polynomial sin).
     """
+    if reduce is None:
+        reduce = _identity
+
+        @nb.njit(inline="always", fastmath=FASTMATH)
+        def sin_near(theta, delta):
+            return sin(theta + delta)
+
+    else:
+        sin_near = sin
 
     @nb.njit(inline="always", fastmath=FASTMATH)
     def step(theta, theta_dot, alpha, omega0, dt):
         w2 = omega0 * omega0
         a2 = 2.0 * alpha
         h2 = 0.5 * dt
+        p = reduce(theta)
         k1t = theta_dot
-        k1v = -w2 * sin(theta) - a2 * theta_dot
+        k1v = -w2 * sin_near(p, 0.0) - a2 * theta_dot
         k2t = theta_dot + h2 * k1v
-        k2v = -w2 * sin(theta + h2 * k1t) - a2 * k2t
+        k2v = -w2 * sin_near(p, h2 * k1t) - a2 * k2t
         k3t = theta_dot + h2 * k2v
-        k3v = -w2 * sin(theta + h2 * k2t) - a2 * k3t
+        k3v = -w2 * sin_near(p, h2 * k2t) - a2 * k3t
         k4t = theta_dot + dt * k3v
-        k4v = -w2 * sin(theta + dt * k3t) - a2 * k4t
+        k4v = -w2 * sin_near(p, dt * k3t) - a2 * k4t
         h6 = dt / 6.0
         return (
             theta + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
@@ -79,6 +97,23 @@ rk4_step = make_rk4_step(_libm_sin)
 well_energy = make_well_energy(_libm_sin)
 
 
+@nb.njit(nogil=True, fastmath=FASTMATH)
+def label_orbit(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap):
+    """Label one orbit (kernel contract in :mod:`atlas.kernels`) with ``math.sin``; returns
+    (status, k, n_trap), k meaningful only when trapped."""
+    for j in range(n_checks + 1):
+        if not (math.isfinite(theta) and math.isfinite(theta_dot)):
+            return NONFINITE, 0, -1
+        k, energy = well_energy(theta, theta_dot, omega0)
+        if energy < energy_cap:
+            return TRAPPED, k, j * check_every
+        if j == n_checks:
+            break
+        for _ in range(check_every):
+            theta, theta_dot = rk4_step(theta, theta_dot, alpha, omega0, dt)
+    return UNRESOLVED, 0, -1
+
+
 @nb.njit(parallel=True, nogil=True, cache=True, fastmath=FASTMATH)
 def label_straightforward(
     theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
@@ -88,24 +123,12 @@ def label_straightforward(
     :mod:`atlas.kernels`). The plain implementation that the fast kernels are measured and
     checked against."""
     for i in nb.prange(theta0.size):
-        theta = theta0[i]
-        theta_dot = theta_dot0[i]
-        status[i] = UNRESOLVED
-        n_trap[i] = -1
-        for j in range(n_checks + 1):
-            if not (math.isfinite(theta) and math.isfinite(theta_dot)):
-                status[i] = NONFINITE
-                break
-            k, energy = well_energy(theta, theta_dot, omega0)
-            if energy < energy_cap:
-                attractor[i] = np.int32(k)
-                status[i] = TRAPPED
-                n_trap[i] = j * check_every
-                break
-            if j == n_checks:
-                break
-            for _ in range(check_every):
-                theta, theta_dot = rk4_step(theta, theta_dot, alpha, omega0, dt)
+        st, k, nt = label_orbit(theta0[i], theta_dot0[i], alpha, omega0, dt, n_checks,
+                                check_every, energy_cap)
+        status[i] = st
+        n_trap[i] = nt
+        if st == TRAPPED:
+            attractor[i] = np.int32(k)
 
 
 @nb.njit(parallel=True, nogil=True, cache=True, fastmath=FASTMATH)
