@@ -68,6 +68,8 @@ def parse_pi_expression(text: str) -> float:
         if isinstance(exc, SyntaxError):
             detail = "not a number or π expression (e.g. 3pi, -pi/2, 2*pi)"
         raise ValueError(f"cannot read {text!r}: {detail}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{text!r} is not a finite number")
     return value
 
 

@@ -1,0 +1,193 @@
+"""GPU benchmark: the CUDA kernels of :mod:`atlas.kernels.cuda` on the default problem.
+
+Default parameters (α = 0.1 s⁻¹, ω0 = 1 rad s⁻¹, dt = 0.01 s, t_max = 200 s) on an n × n grid
+of θ0 ∈ [−3π, 3π], θ̇0 ∈ [−4, 4]. For each kernel variant ("fast": wrapped θ and a
+reduced-range polynomial sin; "straightforward": one orbit per thread with libdevice sin):
+
+* basin map: kernel time by CUDA events (median of ``repeats`` after one warm-up launch,
+  device arrays, no transfers), the wall time of :func:`label_cuda` from host arrays to host
+  arrays (transfers, chunking and staging included), and effective steps/s = RK4 steps the
+  orbits actually took before trapping (or to t_max) / kernel time;
+* bulk: steps/s of a fixed-steps run (``propagate``, no early exit).
+
+Plus a JAX peer (``vmap`` over orbits of a ``lax.fori_loop`` RK4, float64, fixed steps) when
+JAX imports and sees a GPU. Without a CUDA GPU :func:`run_gpu_bench` returns None.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+
+import numpy as np
+
+from .kernels import TRAPPED, UNRESOLVED
+from .kernels.cuda import VARIANTS, cuda_status, kernels, label_cuda
+from .labels import CHECK_EVERY, n_checks_for, trap_margin
+
+__all__ = ["run_gpu_bench", "format_gpu_rows", "TARGETS"]
+
+DEFAULTS = {"alpha": 0.1, "omega0": 1.0, "dt": 0.01, "t_max": 200.0}
+#: Targets on one H100 at n = 4096 (PERFORMANCE.md; straightforward: ≈ 42 ms, ≈ 110 G steps/s).
+TARGETS = {"label_ms": 30.0, "bulk_gsteps_s": 150.0}
+
+
+def _grid(n):
+    theta0, theta_dot0 = np.meshgrid(np.linspace(-3 * np.pi, 3 * np.pi, n),
+                                     np.linspace(-4.0, 4.0, n))
+    return theta0.ravel().copy(), theta_dot0.ravel().copy()
+
+
+def _event_ms(cuda, launch, repeats):
+    """Median kernel time [ms] by CUDA events after one warm-up launch."""
+    launch()
+    cuda.synchronize()
+    times = []
+    for _ in range(repeats):
+        start, end = cuda.event(), cuda.event()
+        start.record()
+        launch()
+        end.record()
+        end.synchronize()
+        times.append(start.elapsed_time(end))
+    return statistics.median(times)
+
+
+def _wall_ms(run, repeats):
+    run()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        run()
+        times.append(1e3 * (time.perf_counter() - t0))
+    return statistics.median(times)
+
+
+def _bench_variant(cuda, variant, theta0, theta_dot0, p, n_checks, energy_cap, bulk_steps,
+                   repeats):
+    k = kernels(variant)
+    n = theta0.size
+    d_th, d_v = cuda.to_device(theta0), cuda.to_device(theta_dot0)
+    d_att = cuda.device_array(n, np.int32)
+    d_st = cuda.device_array(n, np.int8)
+    d_nt = cuda.device_array(n, np.int32)
+    grid = -(-n // k.label_block)
+    scalars = (p["alpha"], p["omega0"], p["dt"], n_checks, CHECK_EVERY, energy_cap)
+    label_ms = _event_ms(cuda, lambda: k.label[grid, k.label_block](
+        d_th, d_v, *scalars, d_att, d_st, d_nt), repeats)
+    status, n_trap, attractor = d_st.copy_to_host(), d_nt.copy_to_host(), d_att.copy_to_host()
+    steps = int(n_trap[status == TRAPPED].sum(dtype=np.int64)
+                + np.count_nonzero(status == UNRESOLVED) * n_checks * CHECK_EVERY)
+
+    out = (np.zeros(n, np.int32), np.zeros(n, np.int8), np.zeros(n, np.int32))
+    wall_ms = _wall_ms(lambda: label_cuda(theta0, theta_dot0, *scalars, *out, variant=variant),
+                       repeats)
+
+    d_pth, d_pv = cuda.to_device(theta0), cuda.to_device(theta_dot0)
+    pgrid = -(-n // k.propagate_block)
+    bulk_ms = _event_ms(cuda, lambda: k.propagate[pgrid, k.propagate_block](
+        d_pth, d_pv, p["alpha"], p["omega0"], p["dt"], bulk_steps), repeats)
+    return {
+        "label_ms": label_ms,
+        "label_with_transfers_ms": wall_ms,
+        "steps_taken": steps,
+        "effective_gsteps_s": steps / (label_ms * 1e-3) / 1e9 if label_ms > 0 else math.nan,
+        "bulk_ms": bulk_ms,
+        "bulk_gsteps_s": n * bulk_steps / (bulk_ms * 1e-3) / 1e9 if bulk_ms > 0 else math.nan,
+        "blocks": (k.label_block, k.propagate_block),
+        "labels": (attractor, status),
+    }
+
+
+def _jax_bulk(theta0, theta_dot0, p, bulk_steps, repeats):
+    """JAX peer: what a JAX user writes (vmap of a fori_loop RK4), fixed steps, float64."""
+    try:
+        import jax
+
+        jax.config.update("jax_enable_x64", True)
+        import jax.numpy as jnp
+        from jax import lax
+    except Exception as exc:  # not installed, or a broken install
+        return {"skipped": f"JAX not importable ({type(exc).__name__})"}
+    if not any(d.platform == "gpu" for d in jax.devices()):
+        return {"skipped": "JAX sees no GPU"}
+    a2, w2, dt = 2.0 * p["alpha"], p["omega0"] ** 2, p["dt"]
+
+    def rhs(th, v):
+        return v, -w2 * jnp.sin(th) - a2 * v
+
+    def step(_, s):
+        th, v = s
+        k1 = rhs(th, v)
+        k2 = rhs(th + 0.5 * dt * k1[0], v + 0.5 * dt * k1[1])
+        k3 = rhs(th + 0.5 * dt * k2[0], v + 0.5 * dt * k2[1])
+        k4 = rhs(th + dt * k3[0], v + dt * k3[1])
+        return (th + dt / 6.0 * (k1[0] + 2.0 * (k2[0] + k3[0]) + k4[0]),
+                v + dt / 6.0 * (k1[1] + 2.0 * (k2[1] + k3[1]) + k4[1]))
+
+    run = jax.jit(jax.vmap(lambda th, v: lax.fori_loop(0, bulk_steps, step, (th, v))))
+    th, v = jax.device_put(theta0), jax.device_put(theta_dot0)
+    ms = _wall_ms(lambda: jax.block_until_ready(run(th, v)), repeats)
+    return {"bulk_ms": ms, "bulk_gsteps_s": theta0.size * bulk_steps / (ms * 1e-3) / 1e9,
+            "version": jax.__version__}
+
+
+def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = DEFAULTS["t_max"],
+                  bulk_steps: int = 1000, allow_simulator: bool = False) -> dict | None:
+    """Benchmark the CUDA kernels on an n × n default-parameter grid (module doc).
+
+    Returns None when no CUDA GPU can be used (:func:`atlas.kernels.cuda.cuda_status` says
+    why) and, unless ``allow_simulator`` (tests), under the CUDA simulator, whose timings are
+    meaningless. Times in ms, throughputs in 10⁹ RK4 steps per second.
+    """
+    ok, device = cuda_status()
+    if not ok or (device == "CUDA simulator" and not allow_simulator):
+        return None
+    from numba import cuda
+
+    p = dict(DEFAULTS, t_max=t_max)
+    theta0, theta_dot0 = _grid(n)
+    n_checks = n_checks_for(t_max, p["dt"], CHECK_EVERY)
+    energy_cap = 2.0 * p["omega0"] ** 2 * (1.0 - trap_margin(p["dt"], p["alpha"], p["omega0"]))
+    variants = {v: _bench_variant(cuda, v, theta0, theta_dot0, p, n_checks, energy_cap,
+                                  bulk_steps, repeats) for v in VARIANTS}
+    (att_f, st_f), (att_s, st_s) = (variants[v].pop("labels") for v in VARIANTS)
+    same = (st_f == st_s) & ((st_f != TRAPPED) | (att_f == att_s))
+    return {
+        "device": device,
+        "n": n,
+        "orbits": n * n,
+        "repeats": repeats,
+        "params": p,
+        "check_every": CHECK_EVERY,
+        "bulk_steps": bulk_steps,
+        "variants": variants,
+        "labels_agree_fraction": float(np.mean(same)),
+        "jax": _jax_bulk(theta0, theta_dot0, p, bulk_steps, repeats),
+        "targets": TARGETS,
+    }
+
+
+def format_gpu_rows(result: dict | None) -> str:
+    """A small text table of :func:`run_gpu_bench`'s result (or why it was skipped)."""
+    if result is None:
+        ok, why = cuda_status()
+        return f"GPU benchmark skipped: {'CUDA simulator (timings meaningless)' if ok else why}"
+    n = result["n"]
+    lines = [f"GPU: {result['device']}, {n}x{n} orbits, default parameters, "
+             f"median of {result['repeats']}",
+             f"{'variant':<16}{'basin map ms':>14}{'+transfers ms':>15}"
+             f"{'eff. G steps/s':>16}{'bulk G steps/s':>16}"]
+    for name, r in result["variants"].items():
+        lines.append(f"{name:<16}{r['label_ms']:>14.2f}{r['label_with_transfers_ms']:>15.2f}"
+                     f"{r['effective_gsteps_s']:>16.1f}{r['bulk_gsteps_s']:>16.1f}")
+    jax = result["jax"]
+    jax_cell = (f"{jax['bulk_gsteps_s']:>16.1f}" if "bulk_gsteps_s" in jax
+                else f"  skipped: {jax['skipped']}")
+    lines.append(f"{'JAX vmap+fori':<16}{'—':>14}{'—':>15}{'—':>16}{jax_cell}")
+    t = result["targets"]
+    lines.append(f"targets (H100, 4096²): basin map ≤ {t['label_ms']:.0f} ms, bulk ≥ "
+                 f"{t['bulk_gsteps_s']:.0f} G steps/s; labels agree between variants on "
+                 f"{100 * result['labels_agree_fraction']:.4f} % of orbits")
+    return "\n".join(lines)

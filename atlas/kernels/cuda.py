@@ -1,0 +1,340 @@
+"""CUDA backend: the labelling kernel of :mod:`atlas.kernels` on an NVIDIA GPU (numba-cuda).
+
+One orbit per thread. The method is the CPU kernels' own: the RK4 step and the trap test are
+built by the factories of :mod:`atlas.kernels.rk4` and compiled for the device from the same
+Python source (``cuda.jit(device=True)`` on the factories' ``py_func``, so they get CUDA's
+floating-point options rather than the CPU fast-math set; no copied method). Two variants:
+
+* ``"straightforward"``: ``math.sin`` (libdevice), θ unbounded — the CPU kernel
+  :func:`atlas.kernels.rk4.label_straightforward` line for line;
+* ``"fast"`` (default): θ is kept near [−π, π] by subtracting 2πk at every trap test and the
+  winding k is counted separately, so sin only ever needs a short range reduction: the
+  polynomial :func:`atlas.kernels.fastsin.sin_poly` after one Cody–Waite step by π (max abs
+  error 1e-15 vs sin, see :mod:`atlas.kernels.fastsin`). The label is winding + the well index
+  of the reduced angle, which is the CPU's k = round(θ/2π) exactly (both are the nearest well;
+  they could differ only at θ ≡ π mod 2π, where E_k ≥ 2ω0² and nothing is trapped).
+
+Labels, status and n_trap agree with the CPU kernel exactly except for orbits whose fate is
+decided by rounding (within ~1e-12 of a separatrix, or an energy within ~1e-13 of the cap at a
+test): libdevice's sin, the polynomial sin and FMA contraction each round differently from the
+CPU's libm sin. ``tests/test_cuda.py`` checks equality on a grid and hand-picked orbits.
+
+Host numpy arrays in and out; the batch is cut into chunks that fit in free device memory
+and run on two streams with pinned staging buffers, so chunk i+1's transfers overlap chunk i's
+kernel. numba.cuda is imported only when a function here is called: the CPU path never
+imports it. Under ``NUMBA_ENABLE_CUDASIM=1`` the kernels run in numba's simulator (tests).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import BackendUnavailable
+from . import NONFINITE, TRAPPED, UNRESOLVED
+from .fastsin import INV_PI, PI_1, PI_2, PI_3, sin_poly
+from .rk4 import INV_TWO_PI, make_rk4_step, make_well_energy
+
+__all__ = ["VARIANTS", "cuda_status", "kernels", "label_cuda", "propagate_cuda"]
+
+#: Kernel variants: name -> (sin implementation, keep θ wrapped near [−π, π]).
+VARIANTS = ("fast", "straightforward")
+#: Most orbits per chunk (≈ 25 B each on the device for labelling, two chunks in flight).
+CHUNK_CAP = 1 << 22
+#: Fraction of the free device memory the two in-flight chunks may take.
+MEMORY_FRACTION = 0.5
+#: Steps between two wraps of θ in the fast fixed-steps kernel (stage offsets stay < 1 rad).
+WRAP_EVERY = 16
+#: 1.5·2⁵²: (x + R) − R rounds x to the nearest integer in float arithmetic for |x| < 2⁵¹,
+#: with no float→int conversion (NaN stays NaN; a NaN→int conversion would raise in the
+#: simulator and is undefined in LLVM).
+_ROUND_MAGIC = 6755399441055744.0
+_INSTALL_HINT = "install atlas[cuda] on a machine with an NVIDIA GPU"
+
+#: numba.cuda once imported by _import_cuda(). The kernels refer to it as a module global
+#: because the simulator substitutes its fake module only among a kernel's globals.
+cuda = None
+
+
+@functools.cache
+def _import_cuda():
+    """Import numba.cuda once; raise BackendUnavailable with one line when it cannot be."""
+    # numba-cuda 0.30 still calls numpy.row_stack, removed in numpy 2.5; without this alias
+    # compiling any kernel fails with "module 'numpy' has no attribute 'row_stack'".
+    if not hasattr(np, "row_stack"):
+        np.row_stack = np.vstack
+    global cuda
+    try:
+        from numba import cuda as module
+    except Exception as exc:  # e.g. numba-cuda without a CUDA extra: libcudart not found
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise BackendUnavailable(
+            f"backend 'cuda': numba.cuda cannot be imported ({reason}); {_INSTALL_HINT}"
+        ) from None
+    cuda = module
+    return module
+
+
+def _simulator() -> bool:
+    from numba import config
+
+    return bool(config.ENABLE_CUDASIM)
+
+
+def cuda_status() -> tuple[bool, str]:
+    """(usable?, device name or why not). Never raises; the simulator counts as usable and
+    is reported as "CUDA simulator"."""
+    try:
+        cuda = _import_cuda()
+        if _simulator():
+            return True, "CUDA simulator"
+        if not cuda.is_available():
+            return False, "no CUDA GPU found (numba.cuda.is_available() is False)"
+        name = cuda.get_current_device().name
+        return True, name.decode() if isinstance(name, bytes) else str(name)
+    except BackendUnavailable as exc:
+        return False, str(exc).removeprefix("backend 'cuda': ")
+    except Exception as exc:  # a broken driver or toolkit must not escape as a traceback
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        return False, f"CUDA unusable ({first})"
+
+
+def _require_cuda():
+    ok, reason = cuda_status()
+    if not ok:
+        hint = "" if _INSTALL_HINT in reason else f"; {_INSTALL_HINT}"
+        raise BackendUnavailable(f"backend 'cuda': {reason}{hint}")
+    return _import_cuda()
+
+
+class Kernels(NamedTuple):
+    """Compiled kernels of one variant and their block sizes (threads per block)."""
+
+    label: object
+    propagate: object
+    label_block: int
+    propagate_block: int
+
+
+def _device_functions(cuda, variant: str):
+    """The variant's (step, well_energy) as CUDA device functions built by the rk4 factories.
+
+    The factories return CPU dispatchers; their Python source (``py_func``) is compiled for
+    the device with CUDA's own floating-point options (called directly, numba would retarget
+    them with the CPU fast-math set, which CUDA widens to all fast flags, nnan included).
+    ``reduce`` is given as the identity so that the step calls ``sin_near(θ, δ) = sin(θ + δ)``,
+    a device function here, instead of the factory's CPU helper.
+    """
+
+    def device(jitted):
+        return cuda.jit(device=True)(getattr(jitted, "py_func", jitted))
+
+    if variant == "straightforward":
+
+        @cuda.jit(device=True)
+        def sin(x):
+            return math.sin(x)
+
+    else:
+        poly = device(sin_poly)
+
+        # Cody–Waite by π as in fastsin.reduce_pi, restated because numba-cuda has no device
+        # lowering of np.floor (reduce_pi's): q is rounded with _ROUND_MAGIC instead.
+        @cuda.jit(device=True)
+        def sin(x):
+            q = (x * INV_PI + _ROUND_MAGIC) - _ROUND_MAGIC
+            r = ((x - q * PI_1) - q * PI_2) - q * PI_3
+            parity = math.fabs(q - 2.0 * ((0.5 * q + _ROUND_MAGIC) - _ROUND_MAGIC))
+            return (1.0 - 2.0 * parity) * poly(r)
+
+    @cuda.jit(device=True)
+    def sin_near(theta, delta):
+        return sin(theta + delta)
+
+    @cuda.jit(device=True)
+    def identity(theta):
+        return theta
+
+    return device(make_rk4_step(sin_near, reduce=identity)), device(make_well_energy(sin))
+
+
+def _block_size(cuda, kernel) -> int:
+    """Threads per block maximising resident threads per SM given the kernel's registers
+    (CUDA occupancy rules: registers allocated per warp in units of 256); ties go to the
+    smaller block, which balances the uneven work of early exits better. 128 when the
+    device cannot be queried (simulator)."""
+    try:
+        regs = max(1, kernel.get_regs_per_thread())
+        dev = cuda.get_current_device()
+        regs_sm = dev.MAX_REGISTERS_PER_MULTIPROCESSOR
+        threads_sm = dev.MAX_THREADS_PER_MULTIPROCESSOR
+        blocks_sm = dev.MAX_BLOCKS_PER_MULTIPROCESSOR
+    except Exception:
+        return 128
+    warps_by_regs = regs_sm // (-(-regs * 32 // 256) * 256)
+
+    def resident(block):
+        return min(blocks_sm, threads_sm // block, warps_by_regs // (block // 32)) * block
+
+    return max((64, 128, 256, 512, 1024), key=lambda b: (resident(b), -b))
+
+
+@functools.cache
+def kernels(variant: str = "fast") -> Kernels:
+    """Compile (once) the labelling and fixed-steps kernels of ``variant`` (see module doc).
+
+    ``label(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+    attractor, status, n_trap)`` follows the contract of :mod:`atlas.kernels` on device
+    arrays; ``propagate(theta, theta_dot, alpha, omega0, dt, n_steps)`` advances in place.
+    """
+    if variant not in VARIANTS:
+        raise ValueError(f"CUDA variant must be one of {VARIANTS}, got {variant!r}")
+    _require_cuda()  # binds the global `cuda` the kernels below refer to
+    step, well_energy = _device_functions(cuda, variant)
+    wrap = variant == "fast"
+    f8, i8, i4, i1 = "float64", "int64", "int32", "int8"
+    label_sig = (f"void({f8}[::1], {f8}[::1], {f8}, {f8}, {f8}, {i8}, {i8}, {f8}, "
+                 f"{i4}[::1], {i1}[::1], {i4}[::1])")
+    propagate_sig = f"void({f8}[::1], {f8}[::1], {f8}, {f8}, {f8}, {i8})"
+
+    @cuda.jit(label_sig)
+    def label(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+              attractor, status, n_trap):
+        i = cuda.grid(1)
+        if i >= theta0.size:
+            return
+        theta = theta0[i]
+        theta_dot = theta_dot0[i]
+        winding = 0
+        status[i] = UNRESOLVED
+        n_trap[i] = -1
+        for j in range(n_checks + 1):
+            if not (math.isfinite(theta) and math.isfinite(theta_dot)):
+                status[i] = NONFINITE
+                return
+            k, energy = well_energy(theta, theta_dot, omega0)
+            if energy < energy_cap:
+                attractor[i] = winding + k
+                status[i] = TRAPPED
+                n_trap[i] = j * check_every
+                return
+            if j == n_checks:
+                return
+            if wrap:  # a closure constant: compiled out of the straightforward variant
+                theta = ((theta - k * (2.0 * PI_1)) - k * (2.0 * PI_2)) - k * (2.0 * PI_3)
+                winding += k
+            for _ in range(check_every):
+                theta, theta_dot = step(theta, theta_dot, alpha, omega0, dt)
+
+    @cuda.jit(propagate_sig)
+    def propagate(theta, theta_dot, alpha, omega0, dt, n_steps):
+        i = cuda.grid(1)
+        if i >= theta.size:
+            return
+        th = theta[i]
+        v = theta_dot[i]
+        winding = 0.0  # float: a NaN θ must not meet a float→int conversion
+        for s in range(n_steps):
+            th, v = step(th, v, alpha, omega0, dt)
+            if wrap and s % WRAP_EVERY == WRAP_EVERY - 1:
+                k = (th * INV_TWO_PI + _ROUND_MAGIC) - _ROUND_MAGIC
+                th = ((th - k * (2.0 * PI_1)) - k * (2.0 * PI_2)) - k * (2.0 * PI_3)
+                winding += k
+        if wrap:
+            th = ((th + winding * (2.0 * PI_1)) + winding * (2.0 * PI_2)) + winding * (2.0 * PI_3)
+        theta[i] = th
+        theta_dot[i] = v
+
+    return Kernels(label, propagate, _block_size(cuda, label), _block_size(cuda, propagate))
+
+
+def _chunk_size(cuda, bytes_per_item: int, block: int, cap: int | None) -> int:
+    """Orbits per chunk: two chunks in flight within MEMORY_FRACTION of free device memory."""
+    free, _total = cuda.current_context().get_memory_info()
+    fit = MEMORY_FRACTION * float(free) / (2 * bytes_per_item)
+    size = int(min(float(cap or CHUNK_CAP), fit))
+    return max(block, size // block * block) if cap is None else max(1, size)
+
+
+def _run_chunked(cuda, kernel, block, args, modes, chunk):
+    """Launch ``kernel(*args)`` over length-n host arrays in chunks, double-buffered.
+
+    ``modes[i]`` is "in", "out", "inout" for array arguments and None for scalars. Each of two
+    buffer sets owns a stream, pinned staging arrays and device arrays; chunk c uses set c % 2
+    and the host waits for a set only when it reuses it, so one chunk's copies overlap the
+    other chunk's kernel.
+    """
+    arrays = [(i, a) for i, (a, m) in enumerate(zip(args, modes, strict=True)) if m is not None]
+    n = arrays[0][1].size
+    size = min(n, _chunk_size(cuda, sum(a.itemsize for _, a in arrays), block, chunk))
+    sets = []
+    for _ in range(min(2, -(-n // size))):
+        stream = cuda.stream()
+        pinned = {i: cuda.pinned_array(size, a.dtype) for i, a in arrays}
+        device = {i: cuda.device_array(size, a.dtype, stream=stream) for i, a in arrays}
+        sets.append({"stream": stream, "pinned": pinned, "device": device, "pending": None})
+
+    def finish(buf):
+        if buf["pending"] is None:
+            return
+        lo, hi = buf["pending"]
+        buf["stream"].synchronize()
+        for i, a in arrays:
+            if modes[i] != "in":
+                a[lo:hi] = buf["pinned"][i][: hi - lo]
+        buf["pending"] = None
+
+    for c, lo in enumerate(range(0, n, size)):
+        hi = min(n, lo + size)
+        m = hi - lo
+        buf = sets[c % 2]
+        finish(buf)
+        stream, pinned, device = buf["stream"], buf["pinned"], buf["device"]
+        call = list(args)
+        for i, a in arrays:
+            view = device[i][:m]
+            if modes[i] != "out":
+                pinned[i][:m] = a[lo:hi]
+                view.copy_to_device(pinned[i][:m], stream=stream)
+            call[i] = view
+        kernel[-(-m // block), block, stream](*call)
+        for i, _ in arrays:
+            if modes[i] != "in":
+                device[i][:m].copy_to_host(pinned[i][:m], stream=stream)
+        buf["pending"] = (lo, hi)
+    for buf in sets:
+        finish(buf)
+
+
+def label_cuda(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+               attractor, status, n_trap, *, variant: str = "fast", chunk: int | None = None):
+    """Label orbits on the GPU; the contract of :mod:`atlas.kernels` on host numpy arrays.
+
+    ``variant`` picks the kernel (module doc); ``chunk`` caps the orbits per chunk (default:
+    by free device memory, at most CHUNK_CAP). Raises BackendUnavailable (one line) when CUDA
+    cannot be used.
+    """
+    k = kernels(variant)
+    if theta0.size == 0:
+        return
+    args = (theta0, theta_dot0, float(alpha), float(omega0), float(dt), int(n_checks),
+            int(check_every), float(energy_cap), attractor, status, n_trap)
+    # attractor is "inout": the contract leaves it untouched where nothing is trapped.
+    modes = ("in", "in", None, None, None, None, None, None, "inout", "out", "out")
+    _run_chunked(_import_cuda(), k.label, k.label_block, args, modes, chunk)
+
+
+def propagate_cuda(theta, theta_dot, alpha, omega0, dt, n_steps, *, variant: str = "fast",
+                   chunk: int | None = None):
+    """Advance every orbit (θ [rad], θ̇ [rad s⁻¹], float64 1-D host arrays) by ``n_steps`` RK4
+    steps of ``dt`` [s] in place, no early exit: the GPU twin of
+    :func:`atlas.kernels.rk4.propagate_straightforward` (bulk-throughput benchmark)."""
+    k = kernels(variant)
+    if theta.size == 0:
+        return
+    args = (theta, theta_dot, float(alpha), float(omega0), float(dt), int(n_steps))
+    modes = ("inout", "inout", None, None, None, None)
+    _run_chunked(_import_cuda(), k.propagate, k.propagate_block, args, modes, chunk)

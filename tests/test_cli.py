@@ -1,0 +1,88 @@
+"""The real CLI in a subprocess: end to end, and exit status 2 with one line on bad input."""
+
+import h5py
+import numpy as np
+import pytest
+
+from tests.conftest import run_cli
+
+
+def _one_clean_line(proc, *fragments):
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert lines[0].startswith("atlas: error: ")
+    for fragment in fragments:
+        assert fragment in lines[0]
+    return lines[0]
+
+
+def test_run_info_plot_end_to_end(small_config, tmp_path):
+    cfg = small_config()
+    proc = run_cli("run", cfg, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "small.h5"
+    assert out.exists() and not (tmp_path / "small.h5.partial").exists()
+    proc = run_cli("run", cfg, "-o", tmp_path / "again.h5")
+    assert proc.returncode == 0, proc.stderr
+    assert "24 x 16" in proc.stdout and "basins" in proc.stdout and "unresolved 0" in proc.stdout
+    info = run_cli("info", out)
+    assert info.returncode == 0, info.stderr
+    assert "complete" in info.stdout and "k=+0" in info.stdout and "alpha = 0.1" in info.stdout
+    plot = run_cli("plot", out)
+    assert plot.returncode == 0, plot.stderr
+    assert (tmp_path / "small.png").stat().st_size > 10_000
+    assert (tmp_path / "small_t_trap.png").stat().st_size > 10_000
+
+
+def test_bad_config_exits_2_and_writes_nothing(tmp_path):
+    cfg = tmp_path / "bad.yaml"
+    out = tmp_path / "out.h5"
+    cfg.write_text(f"pendulum: {{alpha: 0.1, omga0: 1}}\noutput: {out}\n")
+    _one_clean_line(run_cli("run", cfg), "bad.yaml", "pendulum.omga0", "unknown key")
+    assert list(tmp_path.iterdir()) == [cfg]
+
+
+def test_bad_config_does_not_overwrite_an_existing_output(tmp_path):
+    out = tmp_path / "out.h5"
+    out.write_bytes(b"precious")
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text(f"integrator: {{dt: -1}}\noutput: {out}\n")
+    _one_clean_line(run_cli("run", cfg), "integrator.dt")
+    assert out.read_bytes() == b"precious"
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["run"], "the following arguments are required: config"),
+    (["run", "nope.yaml"], "nope.yaml: no such config file"),
+    (["frobnicate"], "invalid choice"),
+    (["run", "configs/default.yaml", "--backend", "tpu"], "invalid choice"),
+    (["run", "configs/default.yaml", "--bogus"], "unrecognized arguments"),
+    ([], "required"),
+])
+def test_bad_arguments(args, fragment):
+    _one_clean_line(run_cli(*args), fragment)
+
+
+def test_info_and_plot_refuse_files_that_are_not_atlases(tmp_path):
+    missing = tmp_path / "missing.h5"
+    text = tmp_path / "text.h5"
+    text.write_text("not hdf5 at all")
+    foreign = tmp_path / "foreign.h5"
+    with h5py.File(foreign, "w") as f:
+        f["x"] = np.arange(3)
+    for cmd in ("info", "plot"):
+        _one_clean_line(run_cli(cmd, missing), "missing.h5", "no such file")
+        _one_clean_line(run_cli(cmd, text), "text.h5", "not a readable HDF5 file")
+        _one_clean_line(run_cli(cmd, foreign), "foreign.h5", "not an atlas")
+
+
+def test_truncated_file_is_refused(small_config, tmp_path):
+    assert run_cli("run", small_config(), "--quiet").returncode == 0
+    data = (tmp_path / "small.h5").read_bytes()
+    cut = tmp_path / "cut.h5"
+    cut.write_bytes(data[: len(data) // 2])
+    _one_clean_line(run_cli("info", cut), "cut.h5")
+    _one_clean_line(run_cli("plot", cut), "cut.h5")
+    assert not (tmp_path / "cut.png").exists()

@@ -1,0 +1,121 @@
+"""Configs: good ones load, every kind of bad one is a ConfigError naming the key."""
+
+import math
+from pathlib import Path
+
+import pytest
+
+from atlas import ConfigError, load_config
+from atlas.config import Config, parse_pi_expression
+
+CONFIGS = sorted(Path(__file__).resolve().parents[1].glob("configs/*.yaml"))
+
+
+@pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.name)
+def test_shipped_configs_load(path):
+    cfg = load_config(path)
+    assert isinstance(cfg, Config)
+
+
+def test_default_config_is_the_essays_figure_9():
+    cfg = load_config(CONFIGS[[p.name for p in CONFIGS].index("default.yaml")])
+    assert (cfg.pendulum.alpha, cfg.pendulum.omega0) == (0.1, 1.0)
+    assert cfg.grid.theta0.start == -3 * math.pi and cfg.grid.theta0.stop == 3 * math.pi
+    assert (cfg.grid.theta0.num, cfg.grid.theta_dot0.num) == (512, 512)
+    assert str(cfg.output) == "outputs/default.h5"
+
+
+def test_empty_config_gives_the_defaults(tmp_path):
+    (tmp_path / "c.yaml").write_text("")
+    assert load_config(tmp_path / "c.yaml") == Config()
+
+
+@pytest.mark.parametrize("text,value", [
+    ("3pi", 3 * math.pi), ("-pi/2", -math.pi / 2), ("2*pi", 2 * math.pi), ("pi", math.pi),
+    ("-3pi", -3 * math.pi), ("0.5pi", 0.5 * math.pi), ("(1+2)*pi/3", math.pi), ("1e3", 1000.0),
+    ("π/4", math.pi / 4), (" 2 pi ", 2 * math.pi),
+])
+def test_pi_expressions(text, value):
+    assert parse_pi_expression(text) == pytest.approx(value, rel=1e-15)
+
+
+@pytest.mark.parametrize("text", ["pi pi", "3pie", "__import__('os')", "2**pi", "pi/0", "",
+                                  "1e999*0", "abs(-1)"])
+def test_bad_pi_expressions(text):
+    with pytest.raises(ValueError):
+        parse_pi_expression(text)
+
+
+BAD = [
+    ("pendulum: {alpha: 0.1, omga0: 1}", "pendulum.omga0: unknown key"),
+    ("pendulumm: {alpha: 0.1}", "pendulumm: unknown key"),
+    ("pendulum: {alpha: fast}", "pendulum.alpha"),
+    ("pendulum: {alpha: .nan}", "pendulum.alpha"),
+    ("pendulum: {alpha: .inf}", "pendulum.alpha"),
+    ("pendulum: {alpha: -0.1}", "pendulum.alpha: damping must be >= 0"),
+    ("pendulum: {alpha: 0}", "no orbit ever settles"),
+    ("pendulum: {omega0: 0}", "pendulum.omega0: must be > 0"),
+    ("pendulum: {omega0: -1}", "pendulum.omega0"),
+    ("pendulum: {alpha: [0.1, -1, 0.3]}", "pendulum.alpha"),
+    ("pendulum: {alpha: []}", "pendulum.alpha"),
+    ("pendulum: {alpha: true}", "pendulum.alpha"),
+    ("integrator: {dt: 0}", "integrator.dt"),
+    ("integrator: {dt: -0.01}", "integrator.dt"),
+    ("integrator: {dt: 3.0}", "integrator.dt = 3 is beyond RK4's stability limit"),
+    ("integrator: {t_max: 0}", "integrator.t_max"),
+    ("grid: {theta0: {start: 0, stop: 1, num: 1}}", "grid.theta0.num"),
+    ("grid: {theta0: {start: 1, stop: 1, num: 8}}", "grid.theta0: start (1) must be less"),
+    ("grid: {theta0: {start: 3pi, stop: -3pi, num: 8}}", "grid.theta0"),
+    ("grid: {theta0: {start: 3pie, stop: 4, num: 8}}", "grid.theta0.start: cannot read '3pie'"),
+    ("grid: {theta0: {start: 0, stop: 1}}", "grid.theta0.num: missing"),
+    ("grid: {theta0: {start: 0, stop: 1, num: 2.5}}", "grid.theta0.num"),
+    ("separatrices: {tol: 0}", "separatrices.tol"),
+    ("execution: {backend: gpu}", "execution.backend"),
+    ("name: [1, 2]", "name"),
+    ("- 1\n- 2", "a config must be a mapping"),
+    ("pendulum: {alpha: 0.1\n", "line"),
+    ("grid:\n  theta0: {start: 0, stop: 1, num: 4}\n   bad: indent", "YAML syntax error"),
+]
+
+
+@pytest.mark.parametrize("text,message", BAD, ids=[m for _, m in BAD])
+def test_bad_configs_name_the_key(tmp_path, text, message):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    line = str(info.value)
+    assert message in line
+    assert line.startswith(str(path)) and "\n" not in line
+
+
+def test_missing_and_unreadable_files(tmp_path):
+    with pytest.raises(ConfigError, match="no such config file"):
+        load_config(tmp_path / "nope.yaml")
+    with pytest.raises(ConfigError, match="cannot read"):
+        load_config(tmp_path)  # a directory
+    binary = tmp_path / "b.yaml"
+    binary.write_bytes(b"\xff\xfe\x00bad")
+    with pytest.raises(ConfigError, match="cannot read"):
+        load_config(binary)
+
+
+def test_yaml_error_reports_the_line(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text("name: x\npendulum: {alpha: 0.1\noutput: y\n")
+    with pytest.raises(ConfigError, match=r"line \d+"):
+        load_config(path)
+
+
+def test_parameter_lists_make_a_sweep(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text("pendulum: {alpha: [0.1, 0.5, 2pi/4], omega0: 1}")
+    cfg = load_config(path)
+    assert cfg.pendulum.is_sweep
+    assert cfg.pendulum.alphas == pytest.approx([0.1, 0.5, math.pi / 2])
+    assert cfg.pendulum.omega0s == [1.0]
+
+
+def test_output_override(tmp_path):
+    (tmp_path / "c.yaml").write_text("output: a.h5")
+    assert str(load_config(tmp_path / "c.yaml", output="b.h5").output) == "b.h5"

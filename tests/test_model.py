@@ -1,0 +1,52 @@
+"""The model: eigenvalues solve the characteristic equations; critical points; RK4 stability."""
+
+import math
+
+import numpy as np
+import pytest
+
+from atlas.model import Pendulum, critical_points, rk4_stable
+
+
+@pytest.mark.parametrize("alpha,omega0", [(0.1, 1.0), (1.0, 1.0), (3.0, 1.0), (0.0, 2.0),
+                                          (50.0, 0.5)])
+def test_eigenvalues_solve_the_characteristic_equations(alpha, omega0):
+    p = Pendulum(alpha, omega0)
+    for r in p.attractor_eigenvalues():  # r² + 2αr + ω0² = 0 (essay eq. 3)
+        assert abs(r * r + 2 * alpha * r + omega0**2) < 1e-12 * max(1, abs(r) ** 2)
+    u1, minus_u2 = p.saddle_eigenvalues()  # r² + 2αr − ω0² = 0 (essay eq. 24)
+    assert u1 > 0 > minus_u2
+    for r in (u1, minus_u2):
+        assert abs(r * r + 2 * alpha * r - omega0**2) < 1e-12 * max(1, r * r)
+    d_theta, d_theta_dot = p.saddle_stable_direction()
+    assert d_theta_dot / d_theta == pytest.approx(minus_u2, rel=1e-14)
+
+
+def test_critical_points_in_a_window():
+    pts = critical_points(Pendulum(0.1, 1.0), -3 * math.pi, 3 * math.pi)
+    assert [p.n for p in pts] == list(range(-3, 4))
+    assert [p.kind for p in pts] == ["saddle", "attractor focus"] * 3 + ["saddle"]
+    kinds = {a: critical_points(Pendulum(a, 1.0), -1, 1)[0].kind for a in (0.0, 0.5, 1.0, 2.0)}
+    assert kinds == {0.0: "center", 0.5: "attractor focus", 1.0: "attractor critical node",
+                     2.0: "attractor node"}
+
+
+def test_energy_is_a_lyapunov_function():
+    p = Pendulum(0.3, 1.5)
+    theta, theta_dot = np.linspace(-7, 7, 50), np.linspace(-3, 3, 50)
+    # dE/dt = θ̇ θ̈ + ω0² sin θ θ̇ = −2αθ̇²
+    d_energy = theta_dot * p.acceleration(theta, theta_dot) + p.omega0**2 * np.sin(theta) * theta_dot
+    np.testing.assert_allclose(d_energy, -2 * p.alpha * theta_dot**2, atol=1e-12)
+
+
+def test_rk4_stability_limit():
+    # on the real axis RK4 is stable for dt·|λ| ≤ 2.785…; overdamped α = 10: |r2| ≈ 19.95
+    p = Pendulum(10.0, 1.0)
+    r2 = abs(p.attractor_eigenvalues()[1])
+    assert rk4_stable(p, 2.78 / r2) and not rk4_stable(p, 2.80 / r2)
+
+
+@pytest.mark.parametrize("alpha,omega0", [(-1, 1), (0.1, 0), (float("nan"), 1), (0.1, math.inf)])
+def test_bad_parameters(alpha, omega0):
+    with pytest.raises(ValueError):
+        Pendulum(alpha, omega0)

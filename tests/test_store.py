@@ -1,0 +1,121 @@
+"""The atlas file: schema, dtypes, attributes and groups round-trip; atomic completion."""
+
+import json
+from datetime import datetime
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import atlas
+from atlas import sweep
+from atlas.labels import ATTRACTOR_FILL
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory):
+    from tests.conftest import SMALL
+
+    tmp = tmp_path_factory.mktemp("store")
+    path = tmp / "c.yaml"
+    path.write_text(SMALL.format(sep="false", output=tmp / "small.h5"))
+    cfg = atlas.load_config(path)
+    tree = atlas.run(cfg, quiet=True)
+    return cfg, tree
+
+
+def test_root_schema_with_plain_xarray(written):
+    cfg, _ = written
+    ds = xr.open_dataset(cfg.output, engine="h5netcdf")
+    assert ds["attractor"].dims == ("theta_dot0", "theta0")
+    assert ds.sizes == {"theta_dot0": 16, "theta0": 24, "k": ds.sizes["k"],
+                        "tile": ds.sizes["tile"]}
+    assert ds["theta0"].attrs["units"] == "rad"
+    assert ds["theta_dot0"].attrs["units"] == "rad s-1"
+    assert ds["t_trap"].attrs["units"] == "s" and ds["t_trap"].dtype == np.float32
+    assert list(ds["status"].attrs["flag_values"]) == [0, 1, 2]
+    assert ds["status"].attrs["flag_meanings"] == "trapped unresolved nonfinite"
+    for name in ("attractor", "status", "t_trap", "basin_fraction", "basin_fraction_stderr"):
+        assert "long_name" in ds[name].attrs and "units" in ds[name].attrs
+    attrs = ds.attrs
+    assert (attrs["alpha"], attrs["omega0"], attrs["dt"], attrs["t_max"]) == (0.1, 1.0, 0.01,
+                                                                              200.0)
+    assert attrs["method"] == "rk4" and attrs["atlas_version"] == atlas.__version__
+    datetime.fromisoformat(attrs["created"])
+    assert json.loads(attrs["config"]) == json.loads(cfg.to_json())
+    assert atlas.Config.model_validate_json(attrs["config"]) == cfg
+    assert {"numba_version", "numpy_version", "xarray_version", "run_time_s"} <= set(attrs)
+
+
+def test_open_keeps_dtypes_and_groups(written):
+    cfg, tree = written
+    again = atlas.open(cfg.output)
+    assert set(again.children) == {"critical_points"}
+    root = again.to_dataset(inherit=False)
+    assert root["attractor"].dtype == np.int16 and root["status"].dtype == np.int8
+    assert root["attractor"].attrs["_FillValue"] == ATTRACTOR_FILL
+    cp = xr.open_datatree(cfg.output, engine="h5netcdf")["critical_points"]
+    assert list(cp["n"].values) == [-3, -2, -1, 0, 1, 2, 3]
+    assert list(cp["kind"].values[1::2]) == ["attractor focus"] * 3
+    assert list(cp["kind"].values[::2]) == ["saddle"] * 4
+
+
+def test_file_holds_the_labels_of_its_grid(written):
+    cfg, tree = written
+    root = tree.to_dataset(inherit=False)
+    th, v = np.meshgrid(root["theta0"].values, root["theta_dot0"].values)
+    ref = atlas.label(th, v, alpha=0.1, omega0=1.0)
+    np.testing.assert_array_equal(root["attractor"].values, ref.attractor)
+    np.testing.assert_array_equal(root["status"].values, ref.status)
+    np.testing.assert_array_equal(root["t_trap"].values, ref.t_trap)
+    assert root["tile_done"].values.all() and root.attrs["complete"] == 1
+
+
+def test_basin_fractions(written):
+    _, tree = written
+    root = tree.to_dataset(inherit=False)
+    n = root.sizes["theta0"] * root.sizes["theta_dot0"]
+    p = root["basin_fraction"].values
+    assert np.all((p >= 0) & (p <= 1))
+    assert p.sum() + float(root["unresolved_fraction"]) == pytest.approx(1.0, abs=1e-12)
+    for k, pk in zip(root["k"].values, p):
+        trapped = root["status"].values == 0
+        assert pk == np.count_nonzero(root["attractor"].values[trapped] == k) / n
+    np.testing.assert_allclose(root["basin_fraction_stderr"], np.sqrt(p * (1 - p) / n))
+
+
+def test_tile_size_does_not_change_results(written, tmp_path):
+    cfg, tree = written
+    other = cfg.model_copy(update={"output": tmp_path / "one_tile.h5",
+                                   "execution": cfg.execution.model_copy(
+                                       update={"tile_orbits": 10_000})})
+    a = tree.to_dataset(inherit=False)
+    b = atlas.run(other, quiet=True).to_dataset(inherit=False)
+    assert a.sizes["tile"] > 1 and b.sizes["tile"] == 1
+    for name in ("attractor", "status", "t_trap", "basin_fraction"):
+        np.testing.assert_array_equal(a[name].values, b[name].values)
+
+
+def test_failed_run_leaves_no_file_at_the_output(written, tmp_path, monkeypatch):
+    cfg, _ = written
+    out = tmp_path / "fails.h5"
+    cfg = cfg.model_copy(update={"output": out})
+    calls = []
+
+    def flaky(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise RuntimeError("simulated crash")
+        return real(*args, **kwargs)
+
+    real = sweep.compute_tile
+    monkeypatch.setattr(sweep, "compute_tile", flaky)
+    with pytest.raises(RuntimeError, match="simulated crash"):
+        atlas.run(cfg, quiet=True)
+    assert not out.exists()
+    partial = out.with_name(out.name + ".partial")
+    assert partial.exists() and not out.with_name(out.name + ".lock").exists()
+    from atlas.store import describe
+
+    info = describe(partial)
+    assert not info["complete"] and info["tiles_done"] == 2
