@@ -40,10 +40,11 @@ def test_energy_is_a_lyapunov_function():
 
 
 def test_rk4_stability_limit():
-    # on the real axis RK4 is stable for dt·|λ| ≤ 2.785…; overdamped α = 10: |r2| ≈ 19.95
+    # on the real axis RK4 is stable for dt·|λ| ≤ 2.785…; overdamped α = 10: the fastest
+    # decaying mode is the saddle's −u2 = −α − √(α² + ω0²) ≈ −20.05
     p = Pendulum(10.0, 1.0)
-    r2 = abs(p.attractor_eigenvalues()[1])
-    assert rk4_stable(p, 2.78 / r2) and not rk4_stable(p, 2.80 / r2)
+    fastest = abs(p.saddle_eigenvalues()[1])
+    assert rk4_stable(p, 2.78 / fastest) and not rk4_stable(p, 2.79 / fastest)
 
 
 @pytest.mark.parametrize("alpha,omega0", [(-1, 1), (0.1, 0), (float("nan"), 1), (0.1, math.inf)])
