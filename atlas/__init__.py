@@ -16,6 +16,6 @@ from .store import open_atlas as open
 from .sweep import run
 
 __version__ = "0.1.0"
-__all__ = ["label", "LabelResult", "load_config", "Config", "run", "open", "Pendulum",
+__all__ = ["label", "linear", "LabelResult", "load_config", "Config", "run", "open", "Pendulum",
            "critical_points", "AtlasError", "ConfigError", "InputFileError",
            "BackendUnavailable", "__version__"]

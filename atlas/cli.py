@@ -20,7 +20,8 @@ class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors (no usage dump) and exit status 2."""
 
     def error(self, message):
-        raise AtlasError(f"{self.prog}: {message}")
+        where = self.prog.removeprefix("atlas").strip()
+        raise AtlasError(f"{where}: {message}" if where else message)
 
 
 def _cmd_run(args) -> int:
@@ -83,10 +84,13 @@ def _cmd_bench(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="atlas", description="Phase-space atlas of the damped pendulum "
                      "θ̈ = −ω0² sin θ − 2αθ̇: basins of attraction, separatrices, figures.")
-    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log progress (-v) and every tile written (-vv)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    p = sub.add_parser("run", help="compute the atlas of a YAML config into HDF5")
+    p = sub.add_parser("run", parents=[common],
+                       help="compute the atlas of a YAML config into HDF5")
     p.add_argument("config", help="YAML config, e.g. configs/default.yaml")
     p.add_argument("-o", "--output", help="output file (overrides the config's output key)")
     p.add_argument("--resume", action="store_true",
@@ -96,19 +100,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("info", help="describe an atlas file")
+    p = sub.add_parser("info", parents=[common], help="describe an atlas file")
     p.add_argument("file")
     p.set_defaults(func=_cmd_info)
 
-    p = sub.add_parser("plot", help="PNG figures next to an atlas file")
+    p = sub.add_parser("plot", parents=[common], help="PNG figures next to an atlas file")
     p.add_argument("file")
     p.set_defaults(func=_cmd_plot)
 
-    p = sub.add_parser("figures", help="the essay's Figures 1-12")
+    p = sub.add_parser("figures", parents=[common], help="the essay's Figures 1-12")
     p.add_argument("--outdir", default="outputs/figures")
     p.set_defaults(func=_cmd_figures)
 
-    p = sub.add_parser("bench", help="benchmark table, written to outputs/bench.json")
+    p = sub.add_parser("bench", parents=[common],
+                       help="benchmark table, written to outputs/bench.json")
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions")
     p.add_argument("--backend", choices=["cpu", "cuda"], default="cpu")
     p.add_argument("--output", default="outputs/bench.json")
@@ -119,8 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
-        logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                            format="atlas: %(message)s")
+        level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
+        logging.basicConfig(level=level, format="atlas: %(message)s")
         return args.func(args)
     except AtlasError as exc:
         print(f"atlas: error: {exc}", file=sys.stderr)

@@ -126,7 +126,7 @@ def create(path: Path, layout: Layout, attrs: dict) -> h5netcdf.File:
         f.attrs.update({key: value for key, value in attrs.items() if value is not None})
         f.attrs["atlas_schema"] = SCHEMA
         f.attrs["complete"] = np.int8(0)
-        f.flush()
+        _sync(f)
     except BaseException:
         f.close()
         raise
@@ -161,6 +161,13 @@ def open_partial(path: Path, config_hash: str) -> tuple[h5netcdf.File, np.ndarra
     return f, np.flatnonzero(done == 0)
 
 
+def _sync(f: h5netcdf.File) -> None:
+    """Push everything written so far to disk. h5netcdf's own ``flush`` only writes its
+    netCDF bookkeeping, so the HDF5 file underneath is flushed explicitly."""
+    f.flush()
+    f._h5file.flush()
+
+
 def write_tile(f: h5netcdf.File, layout: Layout, index: int, attractor, status, t_trap) -> None:
     """Write tile ``index`` (arrays shaped (rows, n_theta0)) and record it done, durably."""
     params, rows = layout.tile(index)
@@ -168,9 +175,9 @@ def write_tile(f: h5netcdf.File, layout: Layout, index: int, attractor, status, 
     f.variables["attractor"][region] = attractor
     f.variables["status"][region] = status
     f.variables["t_trap"][region] = t_trap
-    f.flush()  # data before the record: a crash can lose a tile, never mislabel one
+    _sync(f)  # data before the record: a crash can lose a tile, never mislabel one
     f.variables["tile_done"][index] = 1
-    f.flush()
+    _sync(f)
 
 
 def _basin_counts(f: h5netcdf.File, layout: Layout) -> tuple[dict, np.ndarray]:

@@ -16,7 +16,6 @@ import sys
 import time
 from collections.abc import Iterator
 from datetime import datetime, timezone
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -135,8 +134,8 @@ def _separatrices_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset | Non
     window = ((float(layout.theta0[0]), float(layout.theta0[-1])),
               (float(layout.theta_dot0[0]), float(layout.theta_dot0[-1])))
     traced = []
-    for ia, a in enumerate(cfg.pendulum.alphas):
-        for iw, w in enumerate(cfg.pendulum.omega0s):
+    for a in cfg.pendulum.alphas:
+        for w in cfg.pendulum.omega0s:
             ds = separatrices.trace(Pendulum(a, w), *window, tol=cfg.separatrices.tol,
                                     max_spacing=cfg.separatrices.max_spacing,
                                     dt=cfg.integrator.dt)
@@ -249,6 +248,7 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
                 for index, (attractor, status, t_trap) in results:
                     store.write_tile(f, layout, index, attractor, status, t_trap)
                     bar.update(status.size)
+                    log.debug("tile %d of %d written", index + 1, layout.n_tiles)
             groups = {"critical_points": critical_points_dataset(cfg, layout)}
             separatrices = _separatrices_dataset(cfg, layout)
             if separatrices is not None:

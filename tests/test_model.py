@@ -35,7 +35,7 @@ def test_energy_is_a_lyapunov_function():
     p = Pendulum(0.3, 1.5)
     theta, theta_dot = np.linspace(-7, 7, 50), np.linspace(-3, 3, 50)
     # dE/dt = θ̇ θ̈ + ω0² sin θ θ̇ = −2αθ̇²
-    d_energy = theta_dot * p.acceleration(theta, theta_dot) + p.omega0**2 * np.sin(theta) * theta_dot
+    d_energy = theta_dot * (p.acceleration(theta, theta_dot) + p.omega0**2 * np.sin(theta))
     np.testing.assert_allclose(d_energy, -2 * p.alpha * theta_dot**2, atol=1e-12)
 
 

@@ -1,0 +1,175 @@
+"""Streaming, resumable sweeps: kill -9 and resume, backends, parameter atlases, memory."""
+
+import os
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import atlas
+from tests.conftest import REPO, run_cli, write_config
+
+LABELS = ("attractor", "status", "t_trap")
+
+
+def _arrays(path):
+    ds = atlas.open(path).to_dataset(inherit=False)
+    return {name: ds[name].values for name in (*LABELS, "basin_fraction", "k")}
+
+
+def _assert_same(a, b):
+    for name in a:
+        np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+MANY_TILES = """\
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 48}}
+  theta_dot0: {{start: -4, stop: 4, num: 160}}
+integrator: {{t_max: {t_max}}}
+separatrices: {{enabled: false}}
+execution: {{tile_orbits: 48}}
+output: {output}
+"""
+
+
+def test_kill_9_then_resume_gives_identical_arrays(tmp_path):
+    out = tmp_path / "killed.h5"
+    # a small step makes the run last a few seconds, so the kill lands mid-run
+    body = MANY_TILES.replace("integrator: {{t_max: {t_max}}}",
+                              "integrator: {{t_max: {t_max}, dt: 0.001}}")
+    cfg = write_config(tmp_path / "c.yaml", body.format(t_max=200, output=out))
+    partial = out.with_name(out.name + ".partial")
+    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "atlas.cli", "run", "-vv", str(cfg),
+                             "--quiet"], env=env, cwd=REPO, stderr=subprocess.PIPE, text=True)
+    for line in proc.stderr:  # -vv logs every tile written
+        if "tile 5 of 160 written" in line:
+            break
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    assert not out.exists() and partial.exists()
+    from atlas.store import describe
+
+    done_at_kill = describe(partial)["tiles_done"]
+    assert 5 <= done_at_kill < 160
+    # the dead run's lock is stale and must not block the resume
+    resumed = run_cli("run", cfg, "--resume", "--quiet", "-v")
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resuming" in resumed.stderr
+    assert out.exists() and not partial.exists()
+    fresh = run_cli("run", cfg, "--quiet", "-o", tmp_path / "fresh.h5")
+    assert fresh.returncode == 0, fresh.stderr
+    _assert_same(_arrays(out), _arrays(tmp_path / "fresh.h5"))
+
+
+def test_resume_refuses_a_partial_file_from_another_config(tmp_path, monkeypatch):
+    out = tmp_path / "x.h5"
+    cfg = write_config(tmp_path / "c.yaml", MANY_TILES.format(t_max=50, output=out))
+    partial = out.with_name(out.name + ".partial")
+    from atlas import sweep
+
+    calls = []
+
+    def crash_on_third(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    real = sweep.compute_tile
+    monkeypatch.setattr(sweep, "compute_tile", crash_on_third)
+    with pytest.raises(KeyboardInterrupt):
+        atlas.run(atlas.load_config(cfg), quiet=True)
+    before = partial.read_bytes()
+    other = write_config(tmp_path / "other.yaml", MANY_TILES.format(t_max=60, output=out))
+    proc = run_cli("run", other, "--resume")
+    assert proc.returncode == 2
+    assert "different config" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+    assert partial.read_bytes() == before and not out.exists()
+
+
+def test_dask_local_cluster_matches_the_local_backend(tmp_path):
+    body = MANY_TILES.replace("execution: {{tile_orbits: 48}}",
+                              "execution: {{tile_orbits: 480, workers: 2}}")
+    cfg = write_config(tmp_path / "c.yaml", body.format(t_max=200, output=tmp_path / "l.h5"))
+    local = run_cli("run", cfg, "--quiet")
+    dask = run_cli("run", cfg, "--quiet", "--backend", "dask", "-o", tmp_path / "d.h5")
+    assert local.returncode == 0 and dask.returncode == 0, dask.stderr
+    _assert_same(_arrays(tmp_path / "l.h5"), _arrays(tmp_path / "d.h5"))
+    assert xr.open_dataset(tmp_path / "d.h5", engine="h5netcdf").attrs["backend"] == "dask"
+
+
+def test_parameter_sweep_equals_single_parameter_runs(tmp_path):
+    grid = """\
+grid:
+  theta0: {{start: -2pi, stop: 2pi, num: 18}}
+  theta_dot0: {{start: -3, stop: 3, num: 10}}
+separatrices: {{enabled: false}}
+execution: {{tile_orbits: 40}}
+pendulum: {{alpha: {alpha}, omega0: {omega0}}}
+output: {output}
+"""
+    sweep_cfg = write_config(tmp_path / "s.yaml", grid.format(
+        alpha="[0.05, 0.5, 2.0]", omega0="[1.0, 1.5]", output=tmp_path / "s.h5"))
+    tree = atlas.run(atlas.load_config(sweep_cfg), quiet=True)
+    ds = tree.to_dataset(inherit=False)
+    assert ds["attractor"].dims == ("alpha", "omega0", "theta_dot0", "theta0")
+    assert ds["basin_fraction"].dims == ("alpha", "omega0", "k")
+    total = ds["basin_fraction"].sum("k") + ds["unresolved_fraction"]
+    np.testing.assert_allclose(total, 1.0, atol=1e-12)
+    cp = tree["critical_points"]
+    assert cp["eigenvalue_real"].dims == ("alpha", "omega0", "point", "eigen")
+    for ia, a in enumerate([0.05, 0.5, 2.0]):
+        for iw, w in enumerate([1.0, 1.5]):
+            single = write_config(tmp_path / "one.yaml", grid.format(
+                alpha=a, omega0=w, output=tmp_path / f"one_{ia}{iw}.h5"))
+            one = atlas.run(atlas.load_config(single), quiet=True).to_dataset(inherit=False)
+            for name in LABELS:
+                np.testing.assert_array_equal(ds[name].values[ia, iw], one[name].values)
+            frac = ds["basin_fraction"].isel(alpha=ia, omega0=iw)
+            frac = frac.where(frac > 0, drop=True)
+            np.testing.assert_array_equal(frac.values, one["basin_fraction"].values[
+                one["basin_fraction"].values > 0])
+
+
+def test_peak_memory_stays_bounded_by_the_tile(tmp_path):
+    """A 2048 × 2048 grid (4.2 M orbits) in tiles of 32768 orbits: the process's peak RSS
+    stays far below what holding the grid's inputs and outputs at once would take."""
+    script = f"""
+import resource, atlas
+cfg = atlas.load_config({str(tmp_path / 'c.yaml')!r})
+import numpy as np
+atlas.label(np.zeros(4), np.zeros(4), alpha=0.1, omega0=1.0)   # JIT, imports
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+atlas.run(cfg, quiet=True)
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print((peak - base) / 1024)
+"""
+    write_config(tmp_path / "c.yaml", f"""\
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 2048}}
+  theta_dot0: {{start: -4, stop: 4, num: 2048}}
+integrator: {{t_max: 0.08}}
+separatrices: {{enabled: false}}
+execution: {{tile_orbits: 32768}}
+output: {tmp_path / 'big.h5'}
+""")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          cwd=REPO, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    grown_mib = float(proc.stdout.strip().splitlines()[-1])
+    whole_grid_mib = 2048 * 2048 * (8 + 8 + 2 + 1 + 4) / 2**20  # inputs + outputs: 92 MiB
+    assert grown_mib < 0.5 * whole_grid_mib, grown_mib
+
+
+def test_large_outputs_open_lazily(tmp_path, small_config):
+    assert run_cli("run", small_config(), "--quiet").returncode == 0
+    ds = xr.open_dataset(tmp_path / "small.h5", engine="h5netcdf", chunks={})
+    assert ds["attractor"].chunks is not None
+    tree = atlas.open(tmp_path / "small.h5", chunks={})
+    assert tree["attractor"].chunks is not None
