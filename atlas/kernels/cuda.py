@@ -124,7 +124,8 @@ def _device_functions(cuda, variant: str):
 
     The factories return CPU dispatchers; their Python source (``py_func``) is compiled for
     the device with CUDA's own floating-point options (called directly, numba would retarget
-    them with the CPU fast-math set, which CUDA widens to all fast flags, nnan included).
+    them with the CPU fast-math set, which the CUDA compiler turns into fastmath=True: all
+    fast flags, nnan included, and approximate division).
     ``reduce`` is given as the identity so that the step calls ``sin_near(θ, δ) = sin(θ + δ)``,
     a device function here, instead of the factory's CPU helper.
     """
