@@ -129,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except AtlasError as exc:
         print(f"atlas: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return getattr(exc, "exit_code", EXIT_BAD_INPUT)
     except KeyboardInterrupt:
         print("atlas: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

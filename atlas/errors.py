@@ -1,6 +1,7 @@
 """atlas's exceptions: each carries one line that names the culprit (a key, a file, a backend).
 
-The CLI prints ``atlas: error: <message>`` for any :class:`AtlasError` and exits with status 2.
+The CLI prints ``atlas: error: <message>`` for any :class:`AtlasError` and exits with status 2
+(bad input) or the error's ``exit_code`` (1 for a fault during a run).
 """
 
 
@@ -18,3 +19,9 @@ class InputFileError(AtlasError):
 
 class BackendUnavailable(AtlasError, RuntimeError):
     """A requested backend (CUDA, Dask) that is not installed or has no device."""
+
+
+class StorageError(AtlasError):
+    """Writing the output failed mid-run (disk full, I/O error); finished tiles are kept."""
+
+    exit_code = 1

@@ -22,7 +22,7 @@ import xarray as xr
 
 from . import store
 from .config import Config, config_hash
-from .errors import AtlasError
+from .errors import AtlasError, StorageError
 from .labels import CHECK_EVERY, label, trap_margin
 from .lock import output_lock
 from .model import Pendulum, critical_points
@@ -211,13 +211,44 @@ def _progress(total: int, initial: int, quiet: bool):
                 disable=quiet or not sys.stderr.isatty(), desc="atlas", leave=False)
 
 
+def _open_partial(cfg: Config, layout: store.Layout, resume: bool):
+    """The partial file to write into and the tiles still to do."""
+    partial = store.partial_path(cfg.output)
+    if resume and partial.exists():
+        f, todo = store.open_partial(partial, config_hash(cfg))
+        log.info("resuming %s: %d of %d tiles to do", partial, todo.size, layout.n_tiles)
+        return f, todo
+    if resume:
+        log.info("nothing to resume at %s: starting afresh", partial)
+    partial.unlink(missing_ok=True)
+    return store.create(partial, layout, _attrs(cfg)), np.arange(layout.n_tiles)
+
+
+def _orbits(layout: store.Layout, tiles) -> int:
+    return sum((layout.tile(i)[1].stop - layout.tile(i)[1].start) for i in tiles) \
+        * layout.theta0.size
+
+
+def _compute_into(f, cfg: Config, layout: store.Layout, todo, backend: str, quiet: bool):
+    """Label the tiles ``todo`` and write each into ``f`` as it finishes."""
+    results = (_dask_results(cfg, layout, todo) if backend == "dask"
+               else _local_results(cfg, layout, todo, backend))
+    total = _orbits(layout, range(layout.n_tiles))
+    with _progress(total, total - _orbits(layout, todo), quiet) as bar:
+        for index, (attractor, status, t_trap) in results:
+            store.write_tile(f, layout, index, attractor, status, t_trap)
+            bar.update(status.size)
+            log.debug("tile %d of %d written", index + 1, layout.n_tiles)
+
+
 def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
         backend: str | None = None) -> xr.DataTree:
     """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
 
     ``resume=True`` continues an interrupted run from ``<output>.partial`` (made from the
     same config), computing only the tiles it is missing. ``backend`` overrides
-    ``execution.backend`` ('cpu', 'cuda' or 'dask').
+    ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O error)
+    raises :class:`StorageError`; the tiles finished before it stay resumable.
     """
     backend = backend or cfg.execution.backend
     layout = layout_of(cfg)
@@ -226,41 +257,39 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
         from .kernels.cuda import require_cuda
 
         require_cuda()
-    output = cfg.output
-    partial = store.partial_path(output)
+    partial = store.partial_path(cfg.output)
     start = time.perf_counter()
-    with output_lock(output):
-        if resume and partial.exists():
-            f, todo = store.open_partial(partial, config_hash(cfg))
-            log.info("resuming %s: %d of %d tiles to do", partial, todo.size, layout.n_tiles)
-        else:
-            if resume:
-                log.info("nothing to resume at %s: starting afresh", partial)
-            partial.unlink(missing_ok=True)
-            f = store.create(partial, layout, _attrs(cfg))
-            todo = np.arange(layout.n_tiles)
+    with output_lock(cfg.output):
         try:
-            tile_orbits = layout.rows_per_tile * layout.theta0.size
-            total = layout.n_params * layout.theta0.size * layout.theta_dot0.size
-            results = (_dask_results(cfg, layout, todo) if backend == "dask"
-                       else _local_results(cfg, layout, todo, backend))
-            with _progress(total, total - todo.size * tile_orbits, quiet) as bar:
-                for index, (attractor, status, t_trap) in results:
-                    store.write_tile(f, layout, index, attractor, status, t_trap)
-                    bar.update(status.size)
-                    log.debug("tile %d of %d written", index + 1, layout.n_tiles)
+            f, todo = _open_partial(cfg, layout, resume)
+        except OSError as exc:
+            raise StorageError(f"{partial}: cannot create the partial file "
+                               f"({exc.strerror or exc})") from None
+        try:
+            _compute_into(f, cfg, layout, todo, backend, quiet)
             groups = {"critical_points": critical_points_dataset(cfg, layout)}
             separatrices = _separatrices_dataset(cfg, layout)
             if separatrices is not None:
                 groups["separatrices"] = separatrices
+            store.finalize(f, partial, cfg.output, groups,
+                           {"run_time_s": time.perf_counter() - start, "backend": backend})
+        except OSError as exc:
+            _close_quietly(f)
+            raise StorageError(f"{partial}: writing failed ({exc.strerror or exc}); the "
+                               "tiles finished before it are kept: free space or fix the "
+                               "disk, then run again with --resume") from None
         except BaseException:
-            f.close()
+            _close_quietly(f)
             raise
-        run_time = time.perf_counter() - start
-        store.finalize(f, partial, output, groups,
-                       {"run_time_s": run_time, "backend": backend})
-    log.info("wrote %s in %.2f s", output, run_time)
-    return store.open_atlas(output)
+    log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
+    return store.open_atlas(cfg.output)
+
+
+def _close_quietly(f) -> None:
+    try:
+        f.close()
+    except Exception:  # the file may be unwritable (disk full): its flushed tiles are safe
+        log.debug("closing the partial file failed", exc_info=True)
 
 
 def summary_lines(tree: xr.DataTree) -> list[str]:

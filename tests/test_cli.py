@@ -86,3 +86,10 @@ def test_truncated_file_is_refused(small_config, tmp_path):
     _one_clean_line(run_cli("info", cut), "cut.h5")
     _one_clean_line(run_cli("plot", cut), "cut.h5")
     assert not (tmp_path / "cut.png").exists()
+
+
+def test_cuda_backend_without_a_gpu_is_one_clear_line(small_config, tmp_path):
+    env = {k: v for k, v in __import__("os").environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    proc = run_cli("run", small_config(), "--backend", "cuda", env=env)
+    _one_clean_line(proc, "backend 'cuda'")
+    assert not (tmp_path / "small.h5").exists()

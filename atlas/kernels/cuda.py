@@ -38,7 +38,7 @@ from . import NONFINITE, TRAPPED, UNRESOLVED
 from .fastsin import INV_PI, PI_1, PI_2, PI_3, sin_poly
 from .rk4 import INV_TWO_PI, make_rk4_step, make_well_energy
 
-__all__ = ["VARIANTS", "cuda_status", "kernels", "label_cuda", "propagate_cuda"]
+__all__ = ["VARIANTS", "cuda_status", "kernels", "label_cuda", "propagate_cuda", "require_cuda"]
 
 #: Kernel variants: name -> (sin implementation, keep θ wrapped near [−π, π]).
 VARIANTS = ("fast", "straightforward")
@@ -102,7 +102,7 @@ def cuda_status() -> tuple[bool, str]:
         return False, f"CUDA unusable ({first})"
 
 
-def _require_cuda():
+def require_cuda():
     ok, reason = cuda_status()
     if not ok:
         hint = "" if _INSTALL_HINT in reason else f"; {_INSTALL_HINT}"
@@ -193,7 +193,7 @@ def kernels(variant: str = "fast") -> Kernels:
     """
     if variant not in VARIANTS:
         raise ValueError(f"CUDA variant must be one of {VARIANTS}, got {variant!r}")
-    _require_cuda()  # binds the global `cuda` the kernels below refer to
+    require_cuda()  # binds the global `cuda` the kernels below refer to
     step, well_energy = _device_functions(cuda, variant)
     wrap = variant == "fast"
     f8, i8, i4, i1 = "float64", "int64", "int32", "int8"

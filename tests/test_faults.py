@@ -1,0 +1,139 @@
+"""Faults: disk full mid-run, Ctrl-C, a second writer, stale locks, unwritable outputs.
+
+Each runs the real CLI in a subprocess where the behaviour is about exit status, messages
+and files."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+
+import atlas
+from atlas.store import describe
+from tests.conftest import REPO, run_cli, write_config
+
+SLOW = """\
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 48}}
+  theta_dot0: {{start: -4, stop: 4, num: 160}}
+integrator: {{t_max: 200, dt: {dt}}}
+separatrices: {{enabled: false}}
+execution: {{tile_orbits: 48}}
+output: {output}
+"""
+
+
+def _start(cfg, *extra):
+    """Start ``atlas run -vv`` and return the process once it has written 5 tiles."""
+    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "atlas.cli", "run", "-vv", str(cfg),
+                             "--quiet", *extra], env=env, cwd=REPO, stderr=subprocess.PIPE,
+                            text=True)
+    for line in proc.stderr:
+        if "tile 5 of 160 written" in line:
+            return proc
+    raise AssertionError("the run ended before writing 5 tiles")
+
+
+def _labels(path):
+    ds = atlas.open(path).to_dataset(inherit=False)
+    return [ds[n].values for n in ("attractor", "status", "t_trap")]
+
+
+def _one_line(proc, code, *fragments):
+    assert proc.returncode == code, proc.stderr
+    lines = [ln for ln in proc.stderr.strip().splitlines() if not ln.startswith("atlas: tile")]
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+def test_disk_full_mid_run_keeps_finished_tiles_resumable(tmp_path):
+    out = tmp_path / "full.h5"
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
+    script = textwrap.dedent(f"""
+        import errno, sys
+        from atlas import store
+        from atlas.cli import main
+        real, calls = store.write_tile, []
+        def full_disk(*args):
+            calls.append(1)
+            if len(calls) == 4:
+                raise OSError(errno.ENOSPC, "No space left on device")
+            real(*args)
+        store.write_tile = full_disk
+        sys.exit(main(["run", {str(cfg)!r}, "--quiet"]))
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          cwd=REPO)
+    _one_line(proc, 1, "No space left on device", "--resume", "full.h5.partial")
+    assert not out.exists()
+    assert describe(out.with_name("full.h5.partial"))["tiles_done"] == 3
+    assert run_cli("run", cfg, "--resume", "--quiet").returncode == 0
+    assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
+    for a, b in zip(_labels(out), _labels(tmp_path / "ref.h5")):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_ctrl_c_stops_cleanly_and_keeps_finished_tiles(tmp_path):
+    out = tmp_path / "int.h5"
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.001, output=out))
+    proc = _start(cfg)
+    proc.send_signal(signal.SIGINT)
+    stderr = proc.stderr.read()
+    proc.wait()
+    assert proc.returncode == 130
+    assert "Traceback" not in stderr and "interrupted" in stderr and "--resume" in stderr
+    partial = out.with_name("int.h5.partial")
+    assert not out.exists() and describe(partial)["tiles_done"] >= 5
+    assert not out.with_name("int.h5.lock").exists()
+    info = run_cli("info", partial)
+    assert info.returncode == 0 and "partial" in info.stdout and "of 160 tiles" in info.stdout
+
+
+def test_a_second_writer_is_refused_while_the_first_runs(tmp_path):
+    out = tmp_path / "busy.h5"
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.001, output=out))
+    first = _start(cfg)
+    try:
+        second = run_cli("run", cfg, "--quiet")
+        _one_line(second, 2, "another atlas run", f"pid {first.pid}")
+    finally:
+        first.kill()
+        first.wait()
+
+
+def test_a_stale_lock_from_a_dead_process_does_not_block(tmp_path):
+    out = tmp_path / "stale.h5"
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True)
+    out.with_name("stale.h5.lock").write_text(dead.stdout.strip())
+    proc = run_cli("run", cfg, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    assert out.exists() and not out.with_name("stale.h5.lock").exists()
+
+
+def test_unwritable_output_paths(tmp_path):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    for output, fragment in [(blocker / "out.h5", "is not a directory"),
+                             (tmp_path, "is a directory"),
+                             ("/proc/atlas/out.h5", "cannot create the output folder")]:
+        cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=output))
+        _one_line(run_cli("run", cfg), 2, str(output), fragment)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file", "c.yaml"]
+
+
+def test_a_grid_larger_than_the_free_disk_is_refused_before_it_starts(tmp_path):
+    cfg = write_config(tmp_path / "c.yaml", f"""\
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 1048576}}
+  theta_dot0: {{start: -4, stop: 4, num: 1048576}}
+output: {tmp_path / 'huge.h5'}
+""")
+    _one_line(run_cli("run", cfg), 2, "huge.h5", "GiB is free")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
