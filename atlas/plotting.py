@@ -78,8 +78,8 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     finite = k[np.isfinite(k)]
     kmin, kmax = (int(finite.min()), int(finite.max())) if finite.size else (0, 0)
     levels = np.arange(kmin, kmax + 2) - 0.5
-    cmap = ListedColormap(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10))
-    cmap.set_bad("white")
+    cmap = ListedColormap(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10)).with_extremes(
+        bad="white")
     th, v = ds["theta0"].values, ds["theta_dot0"].values
     mesh = ax.pcolormesh(th, v, np.ma.masked_invalid(k), cmap=cmap,
                          norm=BoundaryNorm(levels, cmap.N), shading="nearest", rasterized=True)
@@ -119,19 +119,32 @@ def trap_time_map(tree: xr.DataTree, ax=None, **index):
     return ax
 
 
-def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha"):
-    """Basin fraction of each k against the swept parameter ``dim``, with standard errors."""
+def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7):
+    """Basin fraction of each k against the swept parameter ``dim``, with standard errors.
+
+    The ``max_curves`` largest basins get a curve each; the rest are summed into one
+    "other k" curve. A dashed line marks critical damping α = ω0 when α is swept.
+    """
     ds = tree.to_dataset(inherit=False)
-    other = "omega0" if dim == "alpha" else "alpha"
-    ds = ds.isel({other: 0})
+    other_dim = "omega0" if dim == "alpha" else "alpha"
+    ds = ds.isel({other_dim: 0})
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4.5))
     x = ds[dim].values
-    for k in ds["k"].values:
-        p = ds["basin_fraction"].sel(k=k).values
-        if np.any(p > 0):
-            ax.errorbar(x, p, yerr=ds["basin_fraction_stderr"].sel(k=k).values, marker="o",
-                        ms=3, capsize=2, label=f"k = {int(k):+d}")
+    p = ds["basin_fraction"].transpose(dim, "k").values
+    se = ds["basin_fraction_stderr"].transpose(dim, "k").values
+    shown = np.sort(np.argsort(p.max(axis=0))[::-1][:max_curves])
+    for j in shown:
+        ax.errorbar(x, p[:, j], yerr=se[:, j], marker="o", ms=3, capsize=2,
+                    label=f"k = {int(ds['k'].values[j]):+d}")
+    rest = np.setdiff1d(np.arange(p.shape[1]), shown)
+    if rest.size:
+        n = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+        q = p[:, rest].sum(axis=1)
+        ax.errorbar(x, q, yerr=np.sqrt(q * (1 - q) / n), marker="s", ms=3, capsize=2,
+                    color="0.5", ls="--", label=f"other k ({rest.size})")
+    if dim == "alpha":
+        ax.axvline(float(ds["omega0"]), color="0.3", ls=":", lw=1, label="α = ω0 (critical)")
     ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
     ax.set_xlabel("damping α [1/s]" if dim == "alpha" else "ω0 [rad/s]")
     ax.set_ylabel("basin fraction of the grid")

@@ -1,0 +1,87 @@
+"""`atlas plot`: the figures read the atlas and draw what it holds (inspect the Axes)."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.colors import LogNorm  # noqa: E402
+
+import atlas  # noqa: E402
+from atlas.plotting import basin_map, fraction_curves, plot_atlas, trap_time_map  # noqa: E402
+from tests.conftest import run_cli, write_config  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def sweep_tree(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("plot")
+    cfg = write_config(tmp / "s.yaml", f"""\
+pendulum: {{alpha: [0.1, 0.5, 2.0], omega0: 1.0}}
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 30}}
+  theta_dot0: {{start: -4, stop: 4, num: 20}}
+separatrices: {{enabled: false}}
+output: {tmp / 's.h5'}
+""")
+    return atlas.run(atlas.load_config(cfg), quiet=True), tmp / "s.h5"
+
+
+def test_basin_map_colours_cells_by_k_and_marks_critical_points(sweep_tree):
+    tree, _ = sweep_tree
+    ax = basin_map(tree)
+    mesh = ax.collections[0]
+    k = tree["attractor"].isel(alpha=0).values
+    np.testing.assert_array_equal(np.asarray(mesh.get_array()).reshape(k.shape), k)
+    labels = [line.get_label() for line in ax.lines]
+    assert "attractors (2πk, 0)" in labels and "saddles ((2j+1)π, 0)" in labels
+    saddles = ax.lines[labels.index("saddles ((2j+1)π, 0)")]
+    np.testing.assert_allclose(saddles.get_xdata(), np.pi * np.array([-3, -1, 1, 3]))
+    assert "[rad]" in ax.get_xlabel() and "[rad/s]" in ax.get_ylabel()
+    plt.close("all")
+
+
+def test_trap_time_map_uses_a_log_scale(sweep_tree):
+    tree, _ = sweep_tree
+    ax = trap_time_map(tree)
+    assert isinstance(ax.collections[0].norm, LogNorm)
+    plt.close("all")
+
+
+def test_fraction_curves_one_per_basin_with_error_bars(sweep_tree):
+    tree, _ = sweep_tree
+    ax = fraction_curves(tree, max_curves=3)
+    bars = [c for c in ax.containers if c.has_yerr]
+    assert len(bars) == 4  # three largest basins + "other k"
+    p0 = tree["basin_fraction"].sel(k=0).isel(omega0=0).values
+    k0 = next(c for c in bars if c.get_label() == "k = +0")
+    np.testing.assert_array_equal(k0.lines[0].get_ydata(), p0)
+    np.testing.assert_array_equal(k0.lines[0].get_xdata(), [0.1, 0.5, 2.0])
+    plt.close("all")
+
+
+def test_plot_atlas_writes_the_figures(sweep_tree):
+    tree, path = sweep_tree
+    written = plot_atlas(tree, path)
+    assert [p.name for p in written] == ["s.png", "s_t_trap.png", "s_fractions.png"]
+    assert all(p.stat().st_size > 10_000 for p in written)
+
+
+def test_atlas_plot_cli_draws_separatrices(tmp_path):
+    cfg = write_config(tmp_path / "c.yaml", f"""\
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 40}}
+  theta_dot0: {{start: -4, stop: 4, num: 30}}
+output: {tmp_path / 'c.h5'}
+""")
+    assert run_cli("run", cfg, "--quiet").returncode == 0
+    tree = atlas.open(tmp_path / "c.h5")
+    ax = basin_map(tree)
+    red = [ln for ln in ax.lines if ln.get_color() == "red" and len(ln.get_xdata()) > 2]
+    sep = tree["separatrices"]
+    n_branches = len({(int(n), str(b)) for n, b in zip(sep["saddle_n"].values,
+                                                        sep["branch"].values)})
+    assert len(red) == n_branches >= 4
+    plt.close("all")
+    proc = run_cli("plot", tmp_path / "c.h5")
+    assert proc.returncode == 0 and (tmp_path / "c.png").exists()
