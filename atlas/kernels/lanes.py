@@ -7,16 +7,17 @@ semantics as :func:`~atlas.kernels.rk4.label_straightforward`); measured against
 Why lanes. Orbits are independent, so ``LANES`` = 32 of them are advanced in lockstep as a
 structure of arrays (``th[LANES]``, ``v[LANES]``), the loop over lanes innermost: LLVM turns
 one RK4 step of 32 orbits into AVX-512 (zmm) code, four 8-wide vectors per variable, which also
-gives the FMA pipes enough independent work. 16 lanes are ≈ 15 % slower, 48 or 64 no faster,
-8 do not vectorise (measured side by side, bulk throughput).
+gives the FMA pipes enough independent work. 16 lanes are ≈ 13 % slower, 48 or 64 no faster,
+8 do not vectorise (measured side by side, bulk throughput; ≈ 1 G steps/s on 2 idle cores).
 
 Why this sin. ``math.sin`` is a scalar libm call that blocks vectorisation;
 :mod:`atlas.kernels.fastsin` is branch-free float arithmetic (Cody–Waite reduction by π,
 degree-21 odd polynomial). The four RK4 stage angles θ + δ (δ = 0, ½dt·k1θ, ½dt·k2θ, dt·k3θ)
 share one reduction of θ (``make_rk4_step(sin_near, reduce_pi)``, the same RK4 definition as
-the straightforward kernel), which needs |δ| ≤ 0.43 rad; that sharing is ≈ 1.35× faster than
-four full reductions. Orbits for which that is not guaranteed are labelled by the scalar
-reference path instead (:func:`_fits_lanes`).
+the straightforward kernel), which needs |δ| ≤ 0.43 rad; that sharing is ≈ 1.33× faster than
+four full reductions (``make_rk4_step(fast_sin)``). Orbits for which that is not guaranteed
+are labelled by the scalar reference path instead (:func:`_fits_lanes`; ``rk4.label_orbit``
+with ``math.sin``, bit-identical to the straightforward kernel).
 
 Fast-math. The kernels here use ``SIN_FASTMATH`` = the project's FASTMATH without
 'reassoc' (which would fold the three-part π of the reduction into one; see
@@ -27,8 +28,9 @@ Trap check. Every ``check_every`` steps the energies of all lanes are computed i
 loop, then a scalar pass over the lanes retires finished orbits (trapped, non-finite, or at
 the last check) and refills their lane with the next orbit of the chunk. Refill happens only at
 check boundaries and a new orbit starts its own count there, so every orbit is tested at
-steps 0, c, 2c, … of *its own* step count, exactly as the contract says. At c = 16 the check
-costs a few % of the step work; the 512² default map then runs at ≈ 70 % of the bulk rate
+steps 0, c, 2c, … of *its own* step count, exactly as the contract says. At c = 16 the energy
+loop costs about one sin per lane per 16 steps (≈ 2 % of the step work) and the bookkeeping
+pass a few %; measured, the 512² default map runs at ≈ 87 % of the bulk rate in useful steps
 (the rest: steps past the trap up to the next check, and lanes idle at the end of a chunk).
 
 Work balance. ``prange`` runs over ``_n_chunks(N)`` chunks; chunk b serves the orbits
@@ -109,8 +111,7 @@ def _label_chunk(first, stride, theta0, theta_dot0, alpha, omega0, dt, n_checks,
     energy = np.zeros(LANES)
     orbit = np.full(LANES, -1, np.int64)  # orbit index held by each lane, −1 if idle
     check = np.zeros(LANES, np.int64)  # checks done by the lane's orbit
-    nxt = np.int64(first)
-    stride = np.int64(stride)
+    nxt = first
     while True:
         for lane in range(LANES):
             well[lane], energy[lane] = _well_energy(th[lane], v[lane], omega0)
@@ -167,8 +168,10 @@ def label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, en
     the module docstring)."""
     n_chunks = _n_chunks(theta0.size)
     for b in nb.prange(n_chunks):
-        _label_chunk(b, n_chunks, theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
-                     energy_cap, attractor, status, n_trap)
+        # int64 chunk index: the parfor would otherwise type the call twice (int64 and uint64)
+        # and compile _label_chunk twice
+        _label_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                     check_every, energy_cap, attractor, status, n_trap)
 
 
 @nb.njit(parallel=True, nogil=True, cache=True, fastmath=SIN_FASTMATH)
