@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
 
-__all__ = ["basin_map", "trap_time_map", "fraction_curves", "plot_atlas", "STYLE"]
+__all__ = ["basin_map", "trap_time_map", "fraction_curves", "plot_atlas", "pi_ticks", "STYLE"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
@@ -26,10 +26,11 @@ STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size":
 SEPARATRIX_COLOR = "red"
 
 
-def _pi_ticks(ax, lo: float, hi: float) -> None:
-    n = np.arange(np.ceil(lo / np.pi), np.floor(hi / np.pi) + 1)
+def pi_ticks(ax, lo: float, hi: float) -> None:
+    """θ ticks at the multiples of π in [lo, hi] [rad], labelled −2π, −π, 0, π, 2π, …"""
+    n = np.arange(np.ceil(lo / np.pi), np.floor(hi / np.pi) + 1).astype(int)
     ax.set_xticks(n * np.pi)
-    ax.set_xticklabels(["0" if k == 0 else ("π" if k == 1 else "−π" if k == -1 else f"{k:g}π")
+    ax.set_xticklabels(["0" if k == 0 else f"{'−' if k < 0 else ''}{'' if abs(k) == 1 else abs(k)}π"
                         for k in n])
 
 
@@ -89,7 +90,7 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     _critical(ax, tree, ds)
     ax.set_xlim(th[0], th[-1])
     ax.set_ylim(v[0], v[-1])
-    _pi_ticks(ax, th[0], th[-1])
+    pi_ticks(ax, th[0], th[-1])
     ax.set_xlabel("θ0 [rad]")
     ax.set_ylabel("θ̇0 [rad/s]")
     ax.set_title(f"Basins of attraction, α = {_param(ds, 'alpha'):g} s⁻¹, "
@@ -112,7 +113,7 @@ def trap_time_map(tree: xr.DataTree, ax=None, **index):
                          norm=LogNorm(lo, hi), shading="nearest", rasterized=True)
     ax.figure.colorbar(mesh, ax=ax).set_label("trapping time t_trap [s]")
     _separatrices(ax, tree)
-    _pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
+    pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
     ax.set_xlabel("θ0 [rad]")
     ax.set_ylabel("θ̇0 [rad/s]")
     ax.set_title("Time to certified trapping (white: never trapped)")
