@@ -87,7 +87,21 @@ def _number(value):
     raise ValueError(f"expected a number or π expression, got {type(value).__name__}")
 
 
+def _number_or_list(value):
+    if isinstance(value, list):
+        numbers = []
+        for i, item in enumerate(value):
+            try:
+                numbers.append(_number(item))
+            except ValueError as exc:
+                raise ValueError(f"item {i}: {exc}") from None
+        return numbers
+    return _number(value)
+
+
 Number = Annotated[float, BeforeValidator(_number)]
+#: A number, or a list of numbers for a parameter atlas.
+Numbers = Annotated[float | list[float], BeforeValidator(_number_or_list)]
 
 
 class _Strict(BaseModel):
@@ -100,28 +114,44 @@ class _Strict(BaseModel):
 class PendulumConfig(_Strict):
     """α [s⁻¹] and ω0 [rad s⁻¹]; a list for either makes a parameter atlas (leading dims)."""
 
-    alpha: Number | list[Number] = 0.1
-    omega0: Number | list[Number] = 1.0
+    alpha: Numbers = 0.1
+    omega0: Numbers = 1.0
+
+    @staticmethod
+    def _each(value, check) -> None:
+        """Apply ``check`` to a value or to every item of a list (naming the bad item)."""
+        if not isinstance(value, list):
+            check(value)
+            return
+        for i, item in enumerate(value):
+            try:
+                check(item)
+            except ValueError as exc:
+                raise ValueError(f"item {i}: {exc}") from None
 
     @field_validator("alpha")
     @classmethod
     def _alpha(cls, value):
-        for a in value if isinstance(value, list) else [value]:
+        def check(a):
             if a < 0:
-                raise ValueError(f"damping must be >= 0, got {a}")
+                raise ValueError(f"damping must be >= 0, got {a:g}")
             if a == 0:
                 raise ValueError(
                     "alpha = 0 makes no basin atlas: without damping the energy is conserved "
                     "and no orbit ever settles on an attractor"
                 )
+
+        cls._each(value, check)
         return value
 
     @field_validator("omega0")
     @classmethod
     def _omega0(cls, value):
-        for w in value if isinstance(value, list) else [value]:
+        def check(w):
             if w <= 0:
-                raise ValueError(f"must be > 0, got {w}")
+                raise ValueError(f"must be > 0, got {w:g}")
+
+        cls._each(value, check)
         return value
 
     @field_validator("alpha", "omega0")
@@ -226,21 +256,22 @@ def config_hash(cfg: Config) -> str:
     return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 
-def _location(loc: tuple) -> str:
-    return ".".join(str(p) for p in loc if not str(p).startswith("function-")) or "config"
-
-
 def _first_error(exc: ValidationError) -> str:
+    """One line from pydantic's first error: ``<key>: <problem> (got <value>)``."""
     err = exc.errors()[0]
-    loc = [p for p in err["loc"] if not isinstance(p, str) or "[" not in p]
-    key = _location(tuple(loc))
+    loc = [p for p in err["loc"] if not (isinstance(p, str) and ("[" in p or "-" in p))]
     kind = err["type"]
+    msg = err["msg"].removeprefix("Value error, ").replace("Input should be", "must be")
     if kind == "extra_forbidden":
-        return f"{key}: unknown key"
-    msg = err["msg"].removeprefix("Value error, ")
-    if kind.startswith(("int_", "float_", "bool_")) or kind == "missing":
-        msg = f"{msg} (got {err.get('input')!r})" if kind != "missing" else "missing"
-    return f"{key}: {msg}"
+        msg = "unknown key"
+    elif kind == "missing":
+        msg = "missing"
+    elif kind != "value_error":
+        msg = f"{msg} (got {err.get('input')!r})"
+    if isinstance(loc[-1:] and loc[-1], int):  # an item of a list: name it
+        msg = f"item {loc.pop()}: {msg}"
+    key = ".".join(str(p) for p in loc)
+    return f"{key}: {msg}" if key else msg
 
 
 def load_config(path: str | Path, *, output: str | Path | None = None) -> Config:
