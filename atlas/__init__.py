@@ -5,17 +5,31 @@
     cfg = atlas.load_config("configs/default.yaml")
     tree = atlas.run(cfg)                                           # also written to disk
     tree = atlas.open("outputs/default.h5")
+
+The file-level API (config, run, open) loads xarray/pydantic on first use, so that
+``import atlas`` for labelling alone starts fast.
 """
 
 from . import linear
-from .config import Config, load_config
 from .errors import AtlasError, BackendUnavailable, ConfigError, InputFileError
 from .labels import LabelResult, label
 from .model import Pendulum, critical_points
-from .store import open_atlas as open
-from .sweep import run
 
 __version__ = "0.1.0"
-__all__ = ["label", "linear", "LabelResult", "load_config", "Config", "run", "open", "Pendulum",
-           "critical_points", "AtlasError", "ConfigError", "InputFileError",
+__all__ = ["label", "linear", "LabelResult", "load_config", "Config", "run", "open",
+           "Pendulum", "critical_points", "AtlasError", "ConfigError", "InputFileError",
            "BackendUnavailable", "__version__"]
+
+_LAZY = {"load_config": ("config", "load_config"), "Config": ("config", "Config"),
+         "run": ("sweep", "run"), "open": ("store", "open_atlas")}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        from importlib import import_module
+
+        module, attr = _LAZY[name]
+        value = getattr(import_module(f".{module}", __name__), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'atlas' has no attribute {name!r}")

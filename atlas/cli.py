@@ -38,14 +38,11 @@ def _cmd_run(args) -> int:
               "continue with --resume", file=sys.stderr)
         return EXIT_INTERRUPTED
     if not args.quiet:
-        print(f"wrote {cfg.output}")
-        for line in sweep.summary_lines(tree):
-            print("  " + line)
-        if "separatrices" in tree.children:
-            from .separatrices import summary
+        from .info import summary_lines
 
-            for line in summary(tree["separatrices"].to_dataset(inherit=False)):
-                print("  " + line)
+        print(f"wrote {cfg.output}")
+        for line in summary_lines(tree):
+            print("  " + line)
     return 0
 
 
@@ -76,9 +73,10 @@ def _cmd_figures(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    from .benchmarks import bench_command
+    from .bench import bench_to_json
 
-    return bench_command(quick=args.quick, backend=args.backend, out=Path(args.output))
+    bench_to_json(Path(args.output), backend=args.backend, quick=args.quick)
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,14 +1,57 @@
-"""``atlas info``: what an atlas file holds, in a few lines, without loading its arrays."""
+"""``atlas info`` and ``atlas run``'s summary: what an atlas holds, in a few lines."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import xarray as xr
+
 from . import store
 
 
+def summary_lines(tree: xr.DataTree) -> list[str]:
+    """Grid, parameters, basin fractions ± standard error, unresolved count, run time, and
+    the separatrices' summary."""
+    ds = tree.to_dataset(inherit=False)
+    n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+    lines = [f"grid      {ds.sizes['theta0']} x {ds.sizes['theta_dot0']} (theta0 x theta_dot0)"
+             f" = {n_orbits:,} orbits"]
+    if "alpha" in ds.dims:
+        lines.append(f"sweep     alpha: {ds.sizes['alpha']} values, omega0: "
+                     f"{ds.sizes['omega0']} values")
+        unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
+    else:
+        lines.append(f"pendulum  alpha = {ds.attrs['alpha']:g} 1/s, omega0 = "
+                     f"{ds.attrs['omega0']:g} rad/s, dt = {ds.attrs['dt']:g} s")
+        fractions = ", ".join(
+            f"k={int(k):+d}: {float(p):.4f}±{float(e):.4f}"
+            for k, p, e in zip(ds["k"].values, ds["basin_fraction"].values,
+                               ds["basin_fraction_stderr"].values) if p > 0)
+        lines.append(f"basins    {fractions}")
+        unresolved = int(round(float(ds["unresolved_fraction"]) * n_orbits))
+    lines.append(f"unresolved {unresolved} orbits")
+    if "run_time_s" in ds.attrs:
+        lines.append(f"time      {float(ds.attrs['run_time_s']):.2f} s")
+    if "separatrices" in tree.children:
+        lines += _separatrix_lines(tree["separatrices"].to_dataset(inherit=False))
+    return lines
+
+
+def _separatrix_lines(sep: xr.Dataset) -> list[str]:
+    from .separatrices import summary
+
+    if "point_alpha" not in sep.coords:
+        return summary(sep)
+    n = len({(a, w) for a, w in zip(sep["point_alpha"].values, sep["point_omega0"].values)})
+    bound = float(sep.attrs["discrepancy_bound"])
+    disc = float(sep.attrs["discrepancy"])
+    return [f"separatrices: {n} parameter points, {sep.sizes['point']} points in all; max "
+            f"distance to the DOP853 stable manifold {disc:.1e} "
+            f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e})"]
+
+
 def info_lines(path: str | Path) -> list[str]:
-    """Parameters, completeness, basin fractions ± standard error, separatrices, provenance."""
+    """Completeness, then :func:`summary_lines` for a complete file, then provenance."""
     path = Path(path)
     d = store.describe(path)
     attrs = d["attrs"]
@@ -16,15 +59,7 @@ def info_lines(path: str | Path) -> list[str]:
              f"partial: {d['tiles_done']} of {d['tiles']} tiles done (continue with --resume)")
     lines = [f"{path}: atlas file, {state}"]
     if d["complete"]:
-        from .sweep import summary_lines
-
-        tree = store.open_atlas(path)
-        lines += ["  " + line for line in summary_lines(tree)]
-        if "separatrices" in tree.children:
-            from .separatrices import summary
-
-            lines += ["  " + line for line in
-                      summary(tree["separatrices"].to_dataset(inherit=False))]
+        lines += ["  " + line for line in summary_lines(store.open_atlas(path))]
     lines.append(f"  created   {attrs.get('created', '?')} by atlas "
                  f"{attrs.get('atlas_version', '?')} (numba {attrs.get('numba_version', '?')}, "
                  f"numpy {attrs.get('numpy_version', '?')})")

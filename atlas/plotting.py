@@ -58,12 +58,15 @@ def _critical(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
             mew=1.5, ms=7, label="saddles ((2j+1)π, 0)")
 
 
-def _separatrices(ax, tree: xr.DataTree) -> None:
+def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
+    """The separatrices of the parameter point that ``ds`` shows, in red."""
     if "separatrices" not in tree.children:
         return
     from .separatrices import branches
+    from .sweep import select_parameter_point
 
-    sep = tree["separatrices"].to_dataset(inherit=False)
+    sep = select_parameter_point(tree["separatrices"].to_dataset(inherit=False),
+                                 _param(ds, "alpha"), _param(ds, "omega0"))
     for i, (_, _, theta, theta_dot) in enumerate(branches(sep)):
         ax.plot(theta, theta_dot, color=SEPARATRIX_COLOR, lw=1.2,
                 label="separatrices" if i == 0 else None)
@@ -86,7 +89,7 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
                          norm=BoundaryNorm(levels, cmap.N), shading="nearest", rasterized=True)
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=np.arange(kmin, kmax + 1))
     cbar.set_label("attractor k: orbit settles at (2πk, 0)")
-    _separatrices(ax, tree)
+    _separatrices(ax, tree, ds)
     _critical(ax, tree, ds)
     ax.set_xlim(th[0], th[-1])
     ax.set_ylim(v[0], v[-1])
@@ -112,7 +115,7 @@ def trap_time_map(tree: xr.DataTree, ax=None, **index):
                          np.ma.masked_invalid(np.where(t > 0, t, lo)), cmap="magma",
                          norm=LogNorm(lo, hi), shading="nearest", rasterized=True)
     ax.figure.colorbar(mesh, ax=ax).set_label("trapping time t_trap [s]")
-    _separatrices(ax, tree)
+    _separatrices(ax, tree, ds)
     pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
     ax.set_xlabel("θ0 [rad]")
     ax.set_ylabel("θ̇0 [rad/s]")

@@ -127,28 +127,51 @@ def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
 
 
 def _separatrices_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset | None:
+    """The ``/separatrices`` group; for a parameter atlas, every (α, ω0)'s curves and
+    crossings concatenated, tagged by ``point_alpha``/``point_omega0`` and
+    ``crossing_alpha``/``crossing_omega0``."""
     if not cfg.separatrices.enabled:
         return None
     from . import separatrices
 
     window = ((float(layout.theta0[0]), float(layout.theta0[-1])),
               (float(layout.theta_dot0[0]), float(layout.theta_dot0[-1])))
-    traced = []
-    for a in cfg.pendulum.alphas:
-        for w in cfg.pendulum.omega0s:
-            ds = separatrices.trace(Pendulum(a, w), *window, tol=cfg.separatrices.tol,
-                                    max_spacing=cfg.separatrices.max_spacing,
-                                    dt=cfg.integrator.dt)
-            if layout.alpha is not None:
-                ds = ds.assign_coords(point_alpha=("point", np.full(ds.sizes["point"], a)),
-                                      point_omega0=("point", np.full(ds.sizes["point"], w)))
-            traced.append(ds)
-    if len(traced) == 1:
-        return traced[0]
-    merged = xr.concat(traced, dim="point", data_vars="all", coords="different",
-                       compat="equals", combine_attrs="drop_conflicts")
-    merged.attrs["discrepancy"] = max(float(d.attrs["discrepancy"]) for d in traced)
+    traced = [(a, w, separatrices.trace(Pendulum(a, w), *window, tol=cfg.separatrices.tol,
+                                        max_spacing=cfg.separatrices.max_spacing,
+                                        dt=cfg.integrator.dt))
+              for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
+    if layout.alpha is None:
+        return traced[0][2]
+    return _merge_parameter_points(traced)
+
+
+def _merge_parameter_points(traced: list[tuple[float, float, xr.Dataset]]) -> xr.Dataset:
+    parts = {"point": [], "crossing": []}
+    for a, w, ds in traced:
+        for dim in parts:
+            names = [n for n in ds.variables if ds[n].dims == (dim,)]
+            part = ds[names].assign_coords({f"{dim}_alpha": (dim, np.full(ds.sizes[dim], a)),
+                                            f"{dim}_omega0": (dim, np.full(ds.sizes[dim], w))})
+            parts[dim].append(part.drop_attrs())
+    merged = xr.merge([xr.concat(parts[dim], dim=dim) for dim in parts])
+    attrs = [ds.attrs for *_, ds in traced]
+    merged.attrs = {k: v for k, v in attrs[0].items() if k not in ("alpha", "omega0")}
+    for key, combine in [("discrepancy", max), ("polyline_error", max), ("n_orbits", sum),
+                         ("n_unresolved", sum)]:
+        merged.attrs[key] = combine(a[key] for a in attrs)
+    merged.attrs["warnings"] = "\n".join(a["warnings"] for a in attrs if a.get("warnings"))
     return merged
+
+
+def select_parameter_point(sep: xr.Dataset, alpha: float, omega0: float) -> xr.Dataset:
+    """The separatrices of one (α, ω0) of a parameter atlas (the group itself otherwise)."""
+    if "point_alpha" not in sep.coords:
+        return sep
+    picks = {}
+    for dim in ("point", "crossing"):
+        picks[dim] = np.flatnonzero((sep[f"{dim}_alpha"].values == alpha)
+                                    & (sep[f"{dim}_omega0"].values == omega0))
+    return sep.isel(picks)
 
 
 def _versions() -> dict:
@@ -290,27 +313,3 @@ def _close_quietly(f) -> None:
         f.close()
     except Exception:  # the file may be unwritable (disk full): its flushed tiles are safe
         log.debug("closing the partial file failed", exc_info=True)
-
-
-def summary_lines(tree: xr.DataTree) -> list[str]:
-    """A short human summary of an atlas: grid, time, basin fractions, unresolved count."""
-    ds = tree.to_dataset(inherit=False) if hasattr(tree, "to_dataset") else tree
-    n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
-    lines = [f"grid      {ds.sizes['theta0']} x {ds.sizes['theta_dot0']} (theta0 x theta_dot0)"
-             f" = {n_orbits:,} orbits"]
-    if "alpha" in ds.dims:
-        lines.append(f"sweep     alpha: {ds.sizes['alpha']} values, omega0: "
-                     f"{ds.sizes['omega0']} values")
-    else:
-        lines.append(f"pendulum  alpha = {ds.attrs['alpha']:g} 1/s, omega0 = "
-                     f"{ds.attrs['omega0']:g} rad/s, dt = {ds.attrs['dt']:g} s")
-        fractions = ", ".join(
-            f"k={int(k):+d}: {float(p):.4f}±{float(e):.4f}"
-            for k, p, e in zip(ds["k"].values, ds["basin_fraction"].values,
-                               ds["basin_fraction_stderr"].values) if p > 0)
-        lines.append(f"basins    {fractions}")
-        unresolved = int(round(float(ds["unresolved_fraction"]) * n_orbits))
-        lines.append(f"unresolved {unresolved} orbits")
-    if "run_time_s" in ds.attrs:
-        lines.append(f"time      {float(ds.attrs['run_time_s']):.2f} s")
-    return lines

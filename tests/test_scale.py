@@ -173,3 +173,28 @@ def test_large_outputs_open_lazily(tmp_path, small_config):
     assert ds["attractor"].chunks is not None
     tree = atlas.open(tmp_path / "small.h5", chunks={})
     assert tree["attractor"].chunks is not None
+
+
+def test_parameter_sweep_stores_each_points_separatrices(tmp_path):
+    from atlas.separatrices import trace
+    from atlas.sweep import select_parameter_point
+
+    cfg = write_config(tmp_path / "s.yaml", f"""\
+pendulum: {{alpha: [0.2, 1.0], omega0: 1.0}}
+grid:
+  theta0: {{start: -1.5pi, stop: 1.5pi, num: 12}}
+  theta_dot0: {{start: -3, stop: 3, num: 10}}
+output: {tmp_path / 's.h5'}
+""")
+    proc = run_cli("run", cfg)
+    assert proc.returncode == 0, proc.stderr
+    assert "separatrices: 2 parameter points" in proc.stdout
+    sep = atlas.open(tmp_path / "s.h5")["separatrices"].to_dataset(inherit=False)
+    for alpha in (0.2, 1.0):
+        one = select_parameter_point(sep, alpha, 1.0)
+        ref = trace(atlas.Pendulum(alpha, 1.0), (-1.5 * np.pi, 1.5 * np.pi), (-3.0, 3.0))
+        np.testing.assert_array_equal(one["theta"].values, ref["theta"].values)
+        np.testing.assert_array_equal(one["crossing_theta_dot"].values,
+                                      ref["crossing_theta_dot"].values)
+    assert atlas.open(tmp_path / "s.h5") is not None
+    assert run_cli("plot", tmp_path / "s.h5").returncode == 0

@@ -1,0 +1,352 @@
+"""CPU benchmark: the lane-blocked kernel against its peers, side by side in one run.
+
+Default problem (α = 0.1 s⁻¹, ω0 = 1 rad s⁻¹, dt = 0.01 s, t_max = 200 s) on an n × n grid of
+θ0 ∈ [−3π, 3π], θ̇0 ∈ [−4, 4]. Every figure is the median of ``repeats`` timed runs after one
+warm-up run (which also compiles), all in this process; within each round the variants run in
+turn, so they see the same machine load and their ratios are meaningful even where absolute
+times drift (the best of the repeats is kept in the JSON too).
+
+* basin map (512², early exit): atlas = :func:`~atlas.kernels.lanes.label_lanes` with the
+  trap tested every ``CHECK_EVERY`` steps (what :func:`atlas.label` runs); the straightforward
+  Numba kernel with the trap tested every step (one orbit per ``prange`` iteration,
+  ``math.sin``) and every ``CHECK_EVERY`` steps; numpy over the whole grid without early exit
+  (fixed duration t_max, timed on a short run and extrapolated); scipy ``solve_ivp`` LSODA
+  (rtol 1e-8, atol 1e-10, one process) on a random sample of orbits to t_max, extrapolated to
+  the grid. "steps/s" there is effective: the RK4 steps the orbits need (Σ n_trap at
+  check_every = 1) per second of wall time; the run also reports whether the atlas labels
+  equal the straightforward ones.
+* bulk (fixed number of steps, no early exit): steps/s of ``propagate_lanes``,
+  ``propagate_straightforward`` and numpy; "512² map" there is the time to integrate every
+  orbit to t_max without early exit.
+* scaling: the atlas map at 256² … 4096² (the same window, finer grids).
+* JIT: a subprocess with ``NUMBA_CACHE_DIR`` pointed at a fresh directory times import and the
+  first call (compilation), then a second subprocess with the same directory (cache hit).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .kernels import TRAPPED
+from .kernels.lanes import label_lanes, propagate_lanes
+from .kernels.rk4 import label_straightforward, make_rk4_step, propagate_straightforward
+from .labels import CHECK_EVERY, n_checks_for, trap_margin
+
+__all__ = ["run_bench", "format_table", "bench_to_json"]
+
+DEFAULTS = {"alpha": 0.1, "omega0": 1.0, "dt": 0.01, "t_max": 200.0}
+MAP_N = 512
+SCALING = (256, 512, 1024, 2048, 4096)
+QUICK_SCALING = (256, 512, 1024)
+#: Targets on the 2-core development machine (issue 5).
+TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
+           "jit_cold_s": 5.0, "jit_warm_s": 1.0}
+
+# The same RK4 definition evaluated by numpy on whole arrays: make_rk4_step's Python body
+# with plain-Python sin/reduce (the Numba wrapper is never compiled).
+_numpy_step = make_rk4_step(lambda p, delta: np.sin(p + delta), reduce=lambda x: x).py_func
+
+
+def _grid(n):
+    theta0, theta_dot0 = np.meshgrid(np.linspace(-3 * np.pi, 3 * np.pi, n),
+                                     np.linspace(-4.0, 4.0, n))
+    return theta0.ravel().copy(), theta_dot0.ravel().copy()
+
+
+def _median_times(runs: dict, repeats: int) -> dict:
+    """{name: (median s, best s)} of the callables in ``runs``: one warm-up call each (which
+    also compiles), then ``repeats`` rounds that call them in turn, so that every variant sees
+    the same machine load."""
+    for run in runs.values():
+        run()
+    times = {name: [] for name in runs}
+    for _ in range(repeats):
+        for name, run in runs.items():
+            t0 = time.perf_counter()
+            run()
+            times[name].append(time.perf_counter() - t0)
+    return {name: (statistics.median(t), min(t)) for name, t in times.items()}
+
+
+def _label(kernel, theta0, theta_dot0, check_every, p):
+    n = theta0.size
+    out = (np.zeros(n, np.int32), np.zeros(n, np.int8), np.zeros(n, np.int32))
+    energy_cap = 2.0 * p["omega0"] ** 2 * (1.0 - trap_margin(p["dt"], p["alpha"], p["omega0"]))
+    kernel(theta0, theta_dot0, p["alpha"], p["omega0"], p["dt"],
+           n_checks_for(p["t_max"], p["dt"], check_every), check_every, energy_cap, *out)
+    return out
+
+
+def _label_run(kernel, theta0, theta_dot0, check_every, p):
+    return lambda: _label(kernel, theta0, theta_dot0, check_every, p)
+
+
+def _propagate_run(propagate, theta0, theta_dot0, n_steps, p):
+    """A fixed-steps run of every orbit (on copies: the initial state stays the same)."""
+    return lambda: propagate(theta0.copy(), theta_dot0.copy(), p["alpha"], p["omega0"],
+                             p["dt"], n_steps)
+
+
+def _numpy_propagate(theta, theta_dot, alpha, omega0, dt, n_steps):
+    for _ in range(n_steps):
+        theta, theta_dot = _numpy_step(theta, theta_dot, alpha, omega0, dt)
+    return theta, theta_dot
+
+
+def _lsoda_orbits_per_s(theta0, theta_dot0, p, n_sample, seed=0):
+    from scipy.integrate import solve_ivp
+
+    a2, w2 = 2.0 * p["alpha"], p["omega0"] ** 2
+
+    def rhs(_, y):
+        return [y[1], -w2 * np.sin(y[0]) - a2 * y[1]]
+
+    idx = np.random.default_rng(seed).choice(theta0.size, n_sample, replace=False)
+    t0 = time.perf_counter()
+    for i in idx:
+        solve_ivp(rhs, (0.0, p["t_max"]), [theta0[i], theta_dot0[i]], method="LSODA",
+                  rtol=1e-8, atol=1e-10)
+    return n_sample / (time.perf_counter() - t0)
+
+
+_JIT_SCRIPT = """
+import time
+t0 = time.perf_counter()
+import numpy as np
+from atlas.kernels.lanes import label_lanes
+t1 = time.perf_counter()
+n = 64
+out = (np.zeros(n, np.int32), np.zeros(n, np.int8), np.zeros(n, np.int32))
+label_lanes(np.linspace(-3.0, 3.0, n), np.zeros(n), 0.1, 1.0, 0.01, 10, 16, 1.9, *out)
+t2 = time.perf_counter()
+print(t1 - t0, t2 - t1)
+"""
+
+
+def _jit_times():
+    """(cold, warm) dicts of import_s, first_call_s, process_s (wall incl. interpreter)."""
+    root = str(Path(__file__).resolve().parents[1])
+    result = []
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache,
+                   PYTHONPATH=os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")])))
+        for _ in ("cold", "warm"):
+            t0 = time.perf_counter()
+            out = subprocess.run([sys.executable, "-c", _JIT_SCRIPT], env=env, check=True,
+                                 capture_output=True, text=True, timeout=600)
+            wall = time.perf_counter() - t0
+            import_s, call_s = map(float, out.stdout.split()[-2:])
+            result.append({"import_s": import_s, "first_call_s": call_s, "process_s": wall})
+    return result
+
+
+def machine_info() -> dict:
+    import llvmlite
+    import numba
+
+    cpu = "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        cpu = platform.processor() or cpu
+    return {
+        "cpu": cpu, "cores": os.cpu_count(), "numba_threads": numba.get_num_threads(),
+        "python": platform.python_version(), "numpy": np.__version__,
+        "numba": numba.__version__, "llvmlite": llvmlite.__version__,
+        "platform": platform.platform(),
+        "timestamp": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+    }
+
+
+def _row(variant, steps_s, orbits_s, map_s, atlas_map_s, note=""):
+    return {"variant": variant, "steps_per_s": steps_s, "orbits_per_s": orbits_s,
+            "map_512_s": map_s, "ratio_to_atlas": map_s / atlas_map_s, "note": note}
+
+
+def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = True,
+              lsoda_sample: int | None = None) -> dict:
+    """Run the CPU benchmark (module docstring) and return a JSON-ready dict.
+
+    ``sizes``: grid sides of the scaling rows (default 256…4096; ``quick`` stops at 1024 and
+    uses at most 2 repeats, shorter numpy/straightforward runs and a smaller LSODA sample).
+    """
+    p = dict(DEFAULTS)
+    if quick:
+        repeats = min(repeats, 2)
+    sizes = tuple(sizes or (QUICK_SCALING if quick else SCALING))
+    lsoda_sample = lsoda_sample or (8 if quick else 32)
+    full_steps = n_checks_for(p["t_max"], p["dt"], 1)  # steps to t_max
+    theta0, theta_dot0 = _grid(MAP_N)
+    n = theta0.size
+
+    # basin map, early exit
+    ref = _label(label_straightforward, theta0, theta_dot0, 1, p)
+    atl = _label(label_lanes, theta0, theta_dot0, CHECK_EVERY, p)
+    trapped = ref[1] == TRAPPED
+    useful = float(np.where(trapped, ref[2], full_steps).sum())  # steps the orbits need
+    np_steps = 5 if quick else 20
+    bulk_steps = {"atlas lanes propagate": 50 if quick else 200,
+                  "straightforward numba propagate": 5 if quick else 20,
+                  "numpy whole grid": np_steps}
+    t = _median_times({
+        "lanes": _label_run(label_lanes, theta0, theta_dot0, CHECK_EVERY, p),
+        "sf1": _label_run(label_straightforward, theta0, theta_dot0, 1, p),
+        "sf16": _label_run(label_straightforward, theta0, theta_dot0, CHECK_EVERY, p),
+        "atlas lanes propagate": _propagate_run(propagate_lanes, theta0, theta_dot0,
+                                                bulk_steps["atlas lanes propagate"], p),
+        "straightforward numba propagate": _propagate_run(
+            propagate_straightforward, theta0, theta_dot0,
+            bulk_steps["straightforward numba propagate"], p),
+        "numpy whole grid": _propagate_run(_numpy_propagate, theta0, theta_dot0, np_steps, p),
+    }, repeats)
+    atlas_s, sf1_s, sf16_s = t["lanes"][0], t["sf1"][0], t["sf16"][0]
+    rates = {name: n * steps / t[name][0] for name, steps in bulk_steps.items()}
+    np_map_s = n * full_steps / rates["numpy whole grid"]
+    lsoda_rate = _lsoda_orbits_per_s(theta0, theta_dot0, p, lsoda_sample)
+    lsoda_map_s = n / lsoda_rate
+    map_rows = [
+        _row(f"atlas lanes (check every {CHECK_EVERY})", useful / atlas_s, n / atlas_s,
+             atlas_s, atlas_s),
+        _row("straightforward numba (check every step)", useful / sf1_s, n / sf1_s, sf1_s,
+             atlas_s),
+        _row(f"straightforward numba (check every {CHECK_EVERY})", useful / sf16_s,
+             n / sf16_s, sf16_s, atlas_s),
+        _row("numpy whole grid, fixed duration", useful / np_map_s, n / np_map_s, np_map_s,
+             atlas_s, f"extrapolated from {np_steps} steps"),
+        _row("scipy LSODA rtol 1e-8, 1 process", useful / lsoda_map_s, lsoda_rate, lsoda_map_s,
+             atlas_s, f"extrapolated from {lsoda_sample} random orbits"),
+    ]
+    atlas_bulk_map = n * full_steps / rates["atlas lanes propagate"]
+    bulk_rows = [
+        _row(name, rate, rate / full_steps, n * full_steps / rate, atlas_bulk_map,
+             f"{bulk_steps[name]} steps timed, map time extrapolated to {full_steps} steps")
+        for name, rate in rates.items()
+    ]
+
+    scaling = []
+    for side in sizes:
+        th, v = _grid(side)
+        s = _median_times({"lanes": _label_run(label_lanes, th, v, CHECK_EVERY, p)},
+                          repeats if side <= 1024 else 1)["lanes"][0]
+        scaling.append({"n": side, "orbits": th.size, "wall_s": s, "orbits_per_s": th.size / s,
+                        "ns_per_orbit": s / th.size * 1e9})
+
+    result = {
+        "machine": machine_info(), "problem": {**p, "grid": MAP_N, "check_every": CHECK_EVERY},
+        "repeats": repeats, "quick": quick, "targets": TARGETS,
+        "map": {"rows": map_rows,
+                "labels_equal_straightforward": bool(
+                    np.array_equal(np.where(trapped, ref[0], 0),
+                                   np.where(atl[1] == TRAPPED, atl[0], 0))),
+                "status_equal": bool(np.array_equal(ref[1], atl[1])),
+                "label_mismatches": int(np.sum((ref[0] != atl[0]) & trapped)),
+                "useful_steps": useful},
+        "bulk": {"rows": bulk_rows},
+        "scaling": scaling,
+        "best_of_repeats_s": {name: best for name, (_, best) in t.items()},
+        "summary": {"map_speedup": sf1_s / atlas_s,
+                    "bulk_msteps_s": rates["atlas lanes propagate"] / 1e6,
+                    "bulk_msteps_s_best": n * bulk_steps["atlas lanes propagate"]
+                    / t["atlas lanes propagate"][1] / 1e6,
+                    "bulk_speedup": rates["atlas lanes propagate"]
+                    / rates["straightforward numba propagate"]},
+    }
+    if jit:
+        cold, warm = _jit_times()
+        result["jit"] = {"cold": cold, "warm_cache": warm}
+        # "starts computing": import atlas and load (or compile) the kernel, in the process
+        result["summary"].update(jit_cold_s=cold["import_s"] + cold["first_call_s"],
+                                 jit_warm_s=warm["import_s"] + warm["first_call_s"])
+    return result
+
+
+def _fmt_rows(rows):
+    lines = [f"  {'variant':44s} {'steps/s':>10s} {'orbits/s':>10s} {'512² map':>10s} "
+             f"{'× atlas':>8s}"]
+    for r in rows:
+        lines.append(f"  {r['variant']:44s} {r['steps_per_s']:10.3g} {r['orbits_per_s']:10.3g} "
+                     f"{_fmt_s(r['map_512_s']):>10s} {r['ratio_to_atlas']:8.3g}"
+                     + (f"  ({r['note']})" if r["note"] else ""))
+    return lines
+
+
+def _fmt_s(s):
+    return f"{s * 1e3:.0f} ms" if s < 1 else f"{s:.3g} s" if s < 600 else f"{s / 60:.3g} min"
+
+
+def format_table(result: dict) -> str:
+    """The benchmark as a plain-text table."""
+    m, s = result["machine"], result["summary"]
+    lines = [f"CPU: {m['cpu']}, {m['cores']} cores ({m['numba_threads']} numba threads); "
+             f"python {m['python']}, numpy {m['numpy']}, numba {m['numba']}, "
+             f"llvmlite {m['llvmlite']}; {m['timestamp']}",
+             f"Basin map {MAP_N}² (early exit; steps/s = needed RK4 steps / wall; labels equal "
+             f"straightforward: {result['map']['labels_equal_straightforward']}, status equal: "
+             f"{result['map']['status_equal']})"]
+    lines += _fmt_rows(result["map"]["rows"])
+    lines.append("Bulk RK4, fixed steps, no early exit")
+    lines += _fmt_rows(result["bulk"]["rows"])
+    lines.append("Scaling, atlas map")
+    for r in result["scaling"]:
+        lines.append(f"  {r['n']:5d}² {r['orbits']:9d} orbits {_fmt_s(r['wall_s']):>9s} "
+                     f"{r['orbits_per_s']:10.3g} orbits/s {r['ns_per_orbit']:8.1f} ns/orbit")
+    if "jit" in result:
+        for k, j in result["jit"].items():
+            lines.append(f"JIT {k:10s}: import {j['import_s']:.2f} s, first call "
+                         f"{j['first_call_s']:.2f} s, process {j['process_s']:.2f} s")
+    t = result["targets"]
+    jit = (f"; JIT cold {s['jit_cold_s']:.2f} s (< {t['jit_cold_s']:g}), warm cache "
+           f"{s['jit_warm_s']:.2f} s (< {t['jit_warm_s']:g})" if "jit_cold_s" in s else "")
+    lines.append(f"Summary: map {s['map_speedup']:.1f}× straightforward (target ≥ "
+                 f"{t['map_speedup']:g}×); bulk {s['bulk_msteps_s']:.0f} M steps/s (target ≥ "
+                 f"{t['bulk_msteps_s']:g}; best of repeats {s['bulk_msteps_s_best']:.0f}), "
+                 f"{s['bulk_speedup']:.1f}× straightforward (target ≥ "
+                 f"{t['bulk_speedup']:g}×){jit}")
+    return "\n".join(lines)
+
+
+def bench_to_json(path="outputs/bench.json", *, backend: str = "cpu", **kwargs) -> dict:
+    """Run the benchmark, write its result to ``path`` as JSON, print the table.
+
+    ``backend="cpu"``: the CPU table, plus the GPU rows when a CUDA GPU is present;
+    ``backend="cuda"``: the GPU rows only (BackendUnavailable without a GPU).
+    """
+    from .bench_gpu import format_gpu_rows, run_gpu_bench
+    from .kernels.cuda import cuda_status
+
+    result = {} if backend == "cuda" else run_bench(**kwargs)
+    gpu_ok, _ = cuda_status()
+    if backend == "cuda" and not gpu_ok:
+        from .kernels.cuda import require_cuda
+
+        require_cuda()  # raises with the one-line reason
+    if gpu_ok:
+        result["gpu"] = run_gpu_bench(repeats=3 if kwargs.get("quick") else 5)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=2))
+    if backend != "cuda":
+        print(format_table(result))
+    if "gpu" in result:
+        print(format_gpu_rows(result["gpu"]))
+    print(f"wrote {path}")
+    return result
+
+
+if __name__ == "__main__":
+    _paths = [a for a in sys.argv[1:] if not a.startswith("--")]
+    bench_to_json(*_paths[:1], quick="--quick" in sys.argv)
