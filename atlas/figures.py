@@ -32,13 +32,12 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numba as nb  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from . import linear  # noqa: E402
-from .kernels.rk4 import rk4_step  # noqa: E402
+from .kernels.rk4 import record_straightforward  # noqa: E402
 from .model import Pendulum, critical_points  # noqa: E402
 from .plotting import STYLE, pi_ticks  # noqa: E402
 
@@ -127,18 +126,6 @@ def _offset_ticks(ax, axis: str, centre: float, name: str, step: float, half: fl
     getattr(ax, f"set_{axis}ticklabels")(labels)
 
 
-@nb.njit(cache=True)
-def _record_rk4(theta, theta_dot, alpha, omega0, dt, every, out):
-    """out[:, i, j] = (θ, θ̇) of orbit j after i·every RK4 steps (the kernels' ``rk4_step``)."""
-    for j in range(theta.size):
-        th, v = theta[j], theta_dot[j]
-        out[0, 0, j], out[1, 0, j] = th, v
-        for i in range(1, out.shape[1]):
-            for _ in range(every):
-                th, v = rk4_step(th, v, alpha, omega0, dt)
-            out[0, i, j], out[1, i, j] = th, v
-
-
 def rk4_orbits(theta0, theta_dot0, t_max: float, *, alpha: float, omega0: float,
                dt: float = 0.01, every: int = 4):
     """Orbits of the full eq. (1) by classical RK4 at step ``dt`` [s] (global error O(dt⁴);
@@ -151,7 +138,8 @@ def rk4_orbits(theta0, theta_dot0, t_max: float, *, alpha: float, omega0: float,
     theta_dot = np.broadcast_to(np.asarray(theta_dot0, dtype=float), theta.shape).copy()
     n_records = math.ceil(t_max / (dt * every))
     out = np.empty((2, n_records + 1, theta.size))
-    _record_rk4(theta, theta_dot, float(alpha), float(omega0), float(dt), int(every), out)
+    record_straightforward(theta, theta_dot, float(alpha), float(omega0), float(dt), int(every),
+                           out)
     return np.arange(n_records + 1) * (dt * every), out[0], out[1]
 
 

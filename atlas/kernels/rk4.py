@@ -142,3 +142,16 @@ def propagate_straightforward(theta, theta_dot, alpha, omega0, dt, n_steps):
             th, v = rk4_step(th, v, alpha, omega0, dt)
         theta[i] = th
         theta_dot[i] = v
+
+
+@nb.njit(parallel=True, nogil=True, cache=True, fastmath=FASTMATH)
+def record_straightforward(theta, theta_dot, alpha, omega0, dt, every, out):
+    """Trajectories: ``out[:, i, j]`` = (θ, θ̇) of orbit j after i·``every`` RK4 steps, for
+    i < out.shape[1] (figures and phase portraits; the same step as every kernel here)."""
+    for j in nb.prange(theta.size):
+        th, v = theta[j], theta_dot[j]
+        out[0, 0, j], out[1, 0, j] = th, v
+        for i in range(1, out.shape[1]):
+            for _ in range(every):
+                th, v = rk4_step(th, v, alpha, omega0, dt)
+            out[0, i, j], out[1, i, j] = th, v
