@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import run_cli
+from tests.test_config import BAD
 
 
 def _one_clean_line(proc, *fragments):
@@ -93,3 +94,14 @@ def test_cuda_backend_without_a_gpu_is_one_clear_line(small_config, tmp_path):
     proc = run_cli("run", small_config(), "--backend", "cuda", env=env)
     _one_clean_line(proc, "backend 'cuda'")
     assert not (tmp_path / "small.h5").exists()
+
+
+@pytest.mark.parametrize("text,message", BAD, ids=[m for _, m in BAD])
+def test_every_bad_config_through_the_cli(tmp_path, text, message):
+    out = tmp_path / "out.h5"
+    out.write_bytes(b"an earlier result")
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text(text)
+    _one_clean_line(run_cli("run", cfg, "-o", out), "bad.yaml", message)
+    assert out.read_bytes() == b"an earlier result"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.yaml", "out.h5"]
