@@ -24,7 +24,7 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
         lines.append(f"pendulum  alpha = {ds.attrs['alpha']:g} 1/s, omega0 = "
                      f"{ds.attrs['omega0']:g} rad/s, dt = {ds.attrs['dt']:g} s")
         fractions = ", ".join(
-            f"k={int(k):+d}: {float(p):.4f}±{float(e):.4f}"
+            f"k={int(k):+d}: {float(p):.5f}±{float(e):.1e}"
             for k, p, e in zip(ds["k"].values, ds["basin_fraction"].values,
                                ds["basin_fraction_stderr"].values) if p > 0)
         lines.append(f"basins    {fractions}")
