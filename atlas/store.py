@@ -31,7 +31,7 @@ from .errors import InputFileError
 from .labels import ATTRACTOR_FILL
 
 __all__ = ["Layout", "create", "open_partial", "write_tile", "finalize", "open_atlas",
-           "partial_path", "describe"]
+           "partial_path", "describe", "read_layout"]
 
 STATUS_FLAGS = {"flag_values": np.array([0, 1, 2], np.int8),
                 "flag_meanings": "trapped unresolved nonfinite"}
@@ -133,7 +133,8 @@ def create(path: Path, layout: Layout, attrs: dict) -> h5netcdf.File:
     return f
 
 
-def _read_layout(f: h5netcdf.File) -> Layout:
+def read_layout(f: h5netcdf.File) -> Layout:
+    """The layout a file was created with (its tiling included)."""
     sweep = "alpha" in f.variables
     return Layout(
         theta0=f.variables["theta0"][...], theta_dot0=f.variables["theta_dot0"][...],
@@ -143,10 +144,11 @@ def _read_layout(f: h5netcdf.File) -> Layout:
     )
 
 
-def open_partial(path: Path, config_hash: str) -> tuple[h5netcdf.File, np.ndarray]:
-    """Reopen an interrupted run for ``--resume``: (file, indices of tiles still to do).
+def open_partial(path: Path, config_hash: str) -> tuple[h5netcdf.File, Layout, np.ndarray]:
+    """Reopen an interrupted run for ``--resume``: (file, its layout, tiles still to do).
 
-    Refuses a file that is unreadable or was made from a different config.
+    The file's own tiling is kept, so a resume may use another ``tile_orbits``. Refuses a
+    file that is unreadable or was made from a different config.
     """
     try:
         f = h5netcdf.File(path, "a")
@@ -158,7 +160,7 @@ def open_partial(path: Path, config_hash: str) -> tuple[h5netcdf.File, np.ndarra
         raise InputFileError(f"{path}: cannot resume, the partial file was made from a "
                              "different config; delete it or run without --resume")
     done = f.variables["tile_done"][...]
-    return f, np.flatnonzero(done == 0)
+    return f, read_layout(f), np.flatnonzero(done == 0)
 
 
 def _sync(f: h5netcdf.File) -> None:
@@ -225,7 +227,7 @@ def _write_fractions(f: h5netcdf.File, layout: Layout) -> None:
 def finalize(f: h5netcdf.File, path: Path, output: Path, groups: dict[str, xr.Dataset],
              attrs: dict) -> None:
     """Complete the partial file at ``path`` and rename it onto ``output``."""
-    layout = _read_layout(f)
+    layout = read_layout(f)
     _write_fractions(f, layout)
     f.attrs.update(attrs)
     f.attrs["complete"] = np.int8(1)

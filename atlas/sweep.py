@@ -235,16 +235,16 @@ def _progress(total: int, initial: int, quiet: bool):
 
 
 def _open_partial(cfg: Config, layout: store.Layout, resume: bool):
-    """The partial file to write into and the tiles still to do."""
+    """The partial file to write into, its layout, and the tiles still to do."""
     partial = store.partial_path(cfg.output)
     if resume and partial.exists():
-        f, todo = store.open_partial(partial, config_hash(cfg))
+        f, layout, todo = store.open_partial(partial, config_hash(cfg))
         log.info("resuming %s: %d of %d tiles to do", partial, todo.size, layout.n_tiles)
-        return f, todo
+        return f, layout, todo
     if resume:
         log.info("nothing to resume at %s: starting afresh", partial)
     partial.unlink(missing_ok=True)
-    return store.create(partial, layout, _attrs(cfg)), np.arange(layout.n_tiles)
+    return store.create(partial, layout, _attrs(cfg)), layout, np.arange(layout.n_tiles)
 
 
 def _orbits(layout: store.Layout, tiles) -> int:
@@ -284,7 +284,7 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
     start = time.perf_counter()
     with output_lock(cfg.output):
         try:
-            f, todo = _open_partial(cfg, layout, resume)
+            f, layout, todo = _open_partial(cfg, layout, resume)
         except OSError as exc:
             raise StorageError(f"{partial}: cannot create the partial file "
                                f"({exc.strerror or exc})") from None

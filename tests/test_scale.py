@@ -67,6 +67,33 @@ def test_kill_9_then_resume_gives_identical_arrays(tmp_path):
     _assert_same(_arrays(out), _arrays(tmp_path / "fresh.h5"))
 
 
+def test_resume_with_another_tile_size_keeps_the_files_tiling(tmp_path, monkeypatch):
+    out = tmp_path / "t.h5"
+    cfg = atlas.load_config(write_config(tmp_path / "c.yaml",
+                                         MANY_TILES.format(t_max=50, output=out)))
+    from atlas import sweep
+
+    calls = []
+
+    def crash_on_fourth(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 4:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    real = sweep.compute_tile
+    monkeypatch.setattr(sweep, "compute_tile", crash_on_fourth)
+    with pytest.raises(KeyboardInterrupt):
+        atlas.run(cfg, quiet=True)
+    monkeypatch.setattr(sweep, "compute_tile", real)
+    bigger = cfg.model_copy(update={"execution": cfg.execution.model_copy(
+        update={"tile_orbits": 48 * 7})})
+    resumed = atlas.run(bigger, resume=True, quiet=True).to_dataset(inherit=False)
+    assert resumed.sizes["tile"] == 160  # the partial file's tiling, not the new one
+    atlas.run(cfg.model_copy(update={"output": tmp_path / "f.h5"}), quiet=True)
+    _assert_same(_arrays(out), _arrays(tmp_path / "f.h5"))
+
+
 def test_resume_refuses_a_partial_file_from_another_config(tmp_path, monkeypatch):
     out = tmp_path / "x.h5"
     cfg = write_config(tmp_path / "c.yaml", MANY_TILES.format(t_max=50, output=out))
