@@ -28,6 +28,7 @@ from pydantic import (
     model_validator,
 )
 
+from . import defaults
 from .errors import ConfigError
 
 __all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash"]
@@ -114,8 +115,8 @@ class _Strict(BaseModel):
 class PendulumConfig(_Strict):
     """α [s⁻¹] and ω0 [rad s⁻¹]; a list for either makes a parameter atlas (leading dims)."""
 
-    alpha: Numbers = 0.1
-    omega0: Numbers = 1.0
+    alpha: Numbers = defaults.ALPHA
+    omega0: Numbers = defaults.OMEGA0
 
     @staticmethod
     def _each(value, check) -> None:
@@ -191,15 +192,17 @@ class Axis(_Strict):
 class GridConfig(_Strict):
     """The grid of initial conditions θ0 [rad] × θ̇0 [rad s⁻¹]."""
 
-    theta0: Axis = Axis(start=-3 * math.pi, stop=3 * math.pi, num=512)
-    theta_dot0: Axis = Axis(start=-4.0, stop=4.0, num=512)
+    theta0: Axis = Axis(start=defaults.THETA0_WINDOW[0], stop=defaults.THETA0_WINDOW[1],
+                        num=defaults.GRID_NUM)
+    theta_dot0: Axis = Axis(start=defaults.THETA_DOT0_WINDOW[0],
+                            stop=defaults.THETA_DOT0_WINDOW[1], num=defaults.GRID_NUM)
 
 
 class IntegratorConfig(_Strict):
     """Fixed-step RK4: step ``dt`` [s]; orbits not trapped by ``t_max`` [s] are unresolved."""
 
-    dt: Number = Field(default=0.01, gt=0)
-    t_max: Number = Field(default=200.0, gt=0)
+    dt: Number = Field(default=defaults.DT, gt=0)
+    t_max: Number = Field(default=defaults.T_MAX, gt=0)
 
 
 class SeparatricesConfig(_Strict):
@@ -207,15 +210,15 @@ class SeparatricesConfig(_Strict):
     ``max_spacing`` apart in the phase plane."""
 
     enabled: bool = True
-    tol: Number = Field(default=1e-12, gt=0, lt=1e-3)
-    max_spacing: Number = Field(default=0.05, gt=0)
+    tol: Number = Field(default=defaults.SEPARATRIX_TOL, gt=0, lt=1e-3)
+    max_spacing: Number = Field(default=defaults.MAX_SPACING, gt=0)
 
 
 class ExecutionConfig(_Strict):
     """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write)."""
 
     backend: Literal["cpu", "cuda", "dask"] = "cpu"
-    tile_orbits: int = Field(default=1 << 18, ge=1)
+    tile_orbits: int = Field(default=defaults.TILE_ORBITS, ge=1)
     workers: int | None = Field(default=None, ge=1)
     scheduler: str | None = None
 
@@ -229,7 +232,7 @@ class Config(_Strict):
     integrator: IntegratorConfig = IntegratorConfig()
     separatrices: SeparatricesConfig = SeparatricesConfig()
     execution: ExecutionConfig = ExecutionConfig()
-    output: Path = Path("outputs/default.h5")
+    output: Path = Path(defaults.OUTPUT)
 
     @model_validator(mode="after")
     def _stable_step(self):

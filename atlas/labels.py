@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import defaults
 from .kernels import TRAPPED
 
 __all__ = ["LabelResult", "label", "trap_margin", "ATTRACTOR_FILL", "BACKENDS"]
@@ -88,8 +89,8 @@ def label(
     *,
     alpha: float,
     omega0: float,
-    dt: float = 0.01,
-    t_max: float = 200.0,
+    dt: float = defaults.DT,
+    t_max: float = defaults.T_MAX,
     backend: str = "cpu",
     kernel: str | None = None,
     check_every: int = CHECK_EVERY,

@@ -63,7 +63,7 @@ def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
     if "separatrices" not in tree.children:
         return
     from .separatrices import branches
-    from .sweep import select_parameter_point
+    from .separatrices import select_parameter_point
 
     sep = select_parameter_point(tree["separatrices"].to_dataset(inherit=False),
                                  _param(ds, "alpha"), _param(ds, "omega0"))

@@ -142,36 +142,7 @@ def _separatrices_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset | Non
               for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
     if layout.alpha is None:
         return traced[0][2]
-    return _merge_parameter_points(traced)
-
-
-def _merge_parameter_points(traced: list[tuple[float, float, xr.Dataset]]) -> xr.Dataset:
-    parts = {"point": [], "crossing": []}
-    for a, w, ds in traced:
-        for dim in parts:
-            names = [n for n in ds.variables if ds[n].dims == (dim,)]
-            part = ds[names].assign_coords({f"{dim}_alpha": (dim, np.full(ds.sizes[dim], a)),
-                                            f"{dim}_omega0": (dim, np.full(ds.sizes[dim], w))})
-            parts[dim].append(part.drop_attrs())
-    merged = xr.merge([xr.concat(parts[dim], dim=dim) for dim in parts])
-    attrs = [ds.attrs for *_, ds in traced]
-    merged.attrs = {k: v for k, v in attrs[0].items() if k not in ("alpha", "omega0")}
-    for key, combine in [("discrepancy", max), ("polyline_error", max), ("n_orbits", sum),
-                         ("n_unresolved", sum)]:
-        merged.attrs[key] = combine(a[key] for a in attrs)
-    merged.attrs["warnings"] = "\n".join(a["warnings"] for a in attrs if a.get("warnings"))
-    return merged
-
-
-def select_parameter_point(sep: xr.Dataset, alpha: float, omega0: float) -> xr.Dataset:
-    """The separatrices of one (α, ω0) of a parameter atlas (the group itself otherwise)."""
-    if "point_alpha" not in sep.coords:
-        return sep
-    picks = {}
-    for dim in ("point", "crossing"):
-        picks[dim] = np.flatnonzero((sep[f"{dim}_alpha"].values == alpha)
-                                    & (sep[f"{dim}_omega0"].values == omega0))
-    return sep.isel(picks)
+    return separatrices.merge_parameter_points(traced)
 
 
 def _versions() -> dict:

@@ -1,0 +1,19 @@
+"""Every default of atlas, written once: the essay's Figure 9 problem and the integrator.
+
+The config models (:mod:`atlas.config`), the public functions' keyword defaults and the
+benchmarks all read these, so a default changes in one place.
+"""
+
+import math
+
+ALPHA = 0.1                                 #: damping constant α [s⁻¹]
+OMEGA0 = 1.0                                #: natural angular frequency ω0 [rad s⁻¹]
+THETA0_WINDOW = (-3 * math.pi, 3 * math.pi)  #: θ0 range of the grid [rad]
+THETA_DOT0_WINDOW = (-4.0, 4.0)             #: θ̇0 range of the grid [rad s⁻¹]
+GRID_NUM = 512                              #: points along each grid axis
+DT = 0.01                                   #: RK4 step [s]
+T_MAX = 200.0                               #: integration limit: unresolved after it [s]
+SEPARATRIX_TOL = 1e-12                      #: bisection bracket width of a separatrix point
+MAX_SPACING = 0.05                          #: largest vertex spacing of a separatrix polyline
+TILE_ORBITS = 1 << 18                       #: orbits per tile of a sweep
+OUTPUT = "outputs/default.h5"               #: output file of a config without `output:`
