@@ -62,8 +62,7 @@ def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
     """The separatrices of the parameter point that ``ds`` shows, in red."""
     if "separatrices" not in tree.children:
         return
-    from .separatrices import branches
-    from .separatrices import select_parameter_point
+    from .separatrices import branches, select_parameter_point
 
     sep = select_parameter_point(tree["separatrices"].to_dataset(inherit=False),
                                  _param(ds, "alpha"), _param(ds, "omega0"))

@@ -207,8 +207,7 @@ def test_large_outputs_open_lazily(tmp_path, small_config):
 
 
 def test_parameter_sweep_stores_each_points_separatrices(tmp_path):
-    from atlas.separatrices import trace
-    from atlas.separatrices import select_parameter_point
+    from atlas.separatrices import select_parameter_point, trace
 
     cfg = write_config(tmp_path / "s.yaml", f"""\
 pendulum: {{alpha: [0.2, 1.0], omega0: 1.0}}
