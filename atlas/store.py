@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import h5netcdf
+import h5py
 import numpy as np
 import xarray as xr
 
@@ -151,8 +152,9 @@ def open_partial(path: Path, config_hash: str) -> tuple[h5netcdf.File, Layout, n
     file that is unreadable or was made from a different config.
     """
     try:
+        _discard_summary(path)
         f = h5netcdf.File(path, "a")
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, KeyError) as exc:
         raise InputFileError(f"{path}: cannot resume, the partial file is unreadable "
                              f"({exc.__class__.__name__}); delete it to start over") from None
     if f.attrs.get("config_hash") != config_hash:
@@ -224,17 +226,38 @@ def _write_fractions(f: h5netcdf.File, layout: Layout) -> None:
                      "(unresolved or nonfinite)")
 
 
+#: What :func:`finalize` adds to a file whose tiles are all done.
+_SUMMARY = ("basin_fraction", "basin_fraction_stderr", "unresolved_fraction", "k",
+            "critical_points", "separatrices")
+
+
 def finalize(f: h5netcdf.File, path: Path, output: Path, groups: dict[str, xr.Dataset],
              attrs: dict) -> None:
-    """Complete the partial file at ``path`` and rename it onto ``output``."""
+    """Complete the partial file at ``path`` and rename it onto ``output``.
+
+    ``complete`` is set last, just before the rename: a failure on the way (disk full)
+    leaves a partial file that ``--resume`` finishes (see :func:`_discard_summary`).
+    """
     layout = read_layout(f)
     _write_fractions(f, layout)
     f.attrs.update(attrs)
-    f.attrs["complete"] = np.int8(1)
     f.close()
     for name, ds in groups.items():
         ds.to_netcdf(path, mode="a", group=name, engine="h5netcdf")
+    with h5py.File(path, "a") as h:
+        h.attrs["complete"] = np.int8(1)
     os.replace(path, output)
+
+
+def _discard_summary(path: Path) -> None:
+    """Remove what an interrupted :func:`finalize` may have added, so it can run again."""
+    with h5py.File(path, "a") as h:
+        if "basin_fraction" not in h and "critical_points" not in h and "k" not in h:
+            return
+        for name in _SUMMARY:  # the variables on dim k before k itself
+            if name in h:
+                del h[name]
+        h.attrs["complete"] = np.int8(0)
 
 
 def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:

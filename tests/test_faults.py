@@ -137,3 +137,45 @@ output: {tmp_path / 'huge.h5'}
 """)
     _one_line(run_cli("run", cfg), 2, "huge.h5", "GiB is free")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
+
+
+def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
+    """Disk full at the very end (groups written, rename failing, or a group failing):
+    the partial file is not 'complete', and --resume finishes it."""
+    import errno
+
+    from atlas import store
+    from atlas.errors import StorageError
+
+    out = tmp_path / "fin.h5"
+    cfg = atlas.load_config(write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out)))
+    cfg = cfg.model_copy(update={"separatrices": cfg.separatrices.model_copy(
+        update={"enabled": True})})
+
+    def no_space(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    for broken in ("os.replace", "to_netcdf"):
+        with monkeypatch.context() as m:
+            if broken == "os.replace":
+                m.setattr(store.os, "replace", no_space)
+            else:
+                m.setattr(store.xr.Dataset, "to_netcdf", no_space)
+            try:
+                atlas.run(cfg, quiet=True)
+            except StorageError as exc:
+                assert "No space left on device" in str(exc) and "--resume" in str(exc)
+            else:
+                raise AssertionError("the simulated failure did not surface")
+        partial = out.with_name("fin.h5.partial")
+        info = describe(partial)
+        assert not out.exists() and info["tiles_done"] == 160
+        # only a file whose every part was written is marked complete
+        assert info["complete"] == (broken == "os.replace")
+        tree = atlas.run(cfg, resume=True, quiet=True)
+        assert set(tree.children) == {"critical_points", "separatrices"}
+        assert tree.attrs["complete"] == 1
+        fresh = atlas.run(cfg.model_copy(update={"output": tmp_path / "ref.h5"}), quiet=True)
+        for name in ("attractor", "status", "t_trap", "basin_fraction", "k"):
+            np.testing.assert_array_equal(tree[name].values, fresh[name].values)
+        out.unlink()
