@@ -1,10 +1,10 @@
 """CPU benchmark: the lane-blocked kernel against its peers, side by side in one run.
 
-Default problem (α = 0.1 s⁻¹, ω0 = 1 rad s⁻¹, dt = 0.01 s, t_max = 200 s) on an n × n grid of
-θ0 ∈ [−3π, 3π], θ̇0 ∈ [−4, 4]. Every figure is the median of ``repeats`` timed runs after one
-warm-up run (which also compiles), all in this process; within each round the variants run in
-turn, so they see the same machine load and their ratios are meaningful even where absolute
-times drift (the best of the repeats is kept in the JSON too).
+The default problem of :mod:`atlas.defaults` (the essay's Figure 9: α, ω0, dt, t_max) on an
+n × n grid of its θ0 and θ̇0 window (:func:`default_grid`). Every figure is the median of
+``repeats`` timed runs after one warm-up run (which also compiles), all in this process; within
+each round the variants run in turn, so they see the same machine load and their ratios are
+meaningful even where absolute times drift (the best of the repeats is kept in the JSON too).
 
 * basin map (512², early exit): atlas = :func:`~atlas.kernels.lanes.label_lanes` with the
   trap tested every ``CHECK_EVERY`` steps (what :func:`atlas.label` runs); the straightforward
@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import defaults
 from .kernels import TRAPPED
 from .kernels.lanes import label_lanes, propagate_lanes
 from .kernels.rk4 import label_straightforward, make_rk4_step, propagate_straightforward
@@ -45,8 +46,10 @@ from .labels import CHECK_EVERY, n_checks_for, trap_margin
 
 __all__ = ["run_bench", "format_table", "bench_to_json"]
 
-DEFAULTS = {"alpha": 0.1, "omega0": 1.0, "dt": 0.01, "t_max": 200.0}
-MAP_N = 512
+#: The default problem (:mod:`atlas.defaults`), shared with :mod:`atlas.bench_gpu`.
+DEFAULTS = {"alpha": defaults.ALPHA, "omega0": defaults.OMEGA0, "dt": defaults.DT,
+            "t_max": defaults.T_MAX}
+MAP_N = defaults.GRID_NUM
 SCALING = (256, 512, 1024, 2048, 4096)
 QUICK_SCALING = (256, 512, 1024)
 #: Targets on the 2-core development machine (issue 5).
@@ -58,9 +61,10 @@ TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
 _numpy_step = make_rk4_step(lambda p, delta: np.sin(p + delta), reduce=lambda x: x).py_func
 
 
-def _grid(n):
-    theta0, theta_dot0 = np.meshgrid(np.linspace(-3 * np.pi, 3 * np.pi, n),
-                                     np.linspace(-4.0, 4.0, n))
+def default_grid(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(θ0 [rad], θ̇0 [rad s⁻¹]) of the n × n grid over the default window, flattened."""
+    theta0, theta_dot0 = np.meshgrid(np.linspace(*defaults.THETA0_WINDOW, n),
+                                     np.linspace(*defaults.THETA_DOT0_WINDOW, n))
     return theta0.ravel().copy(), theta_dot0.ravel().copy()
 
 
@@ -190,7 +194,7 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
     sizes = tuple(sizes or (QUICK_SCALING if quick else SCALING))
     lsoda_sample = lsoda_sample or (8 if quick else 32)
     full_steps = n_checks_for(p["t_max"], p["dt"], 1)  # steps to t_max
-    theta0, theta_dot0 = _grid(MAP_N)
+    theta0, theta_dot0 = default_grid(MAP_N)
     n = theta0.size
 
     # basin map, early exit
@@ -239,7 +243,7 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
 
     scaling = []
     for side in sizes:
-        th, v = _grid(side)
+        th, v = default_grid(side)
         s = _median_times({"lanes": _label_run(label_lanes, th, v, CHECK_EVERY, p)},
                           repeats if side <= 1024 else 1)["lanes"][0]
         scaling.append({"n": side, "orbits": th.size, "wall_s": s, "orbits_per_s": th.size / s,

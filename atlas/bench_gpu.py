@@ -1,7 +1,7 @@
 """GPU benchmark: the CUDA kernels of :mod:`atlas.kernels.cuda` on the default problem.
 
-Default parameters (α = 0.1 s⁻¹, ω0 = 1 rad s⁻¹, dt = 0.01 s, t_max = 200 s) on an n × n grid
-of θ0 ∈ [−3π, 3π], θ̇0 ∈ [−4, 4]. For each kernel variant ("fast": wrapped θ and a
+The default problem of :mod:`atlas.defaults` (``bench.DEFAULTS``) on an n × n grid of its
+window (``bench.default_grid``). For each kernel variant ("fast": wrapped θ and a
 reduced-range polynomial sin; "straightforward": one orbit per thread with libdevice sin):
 
 * basin map: kernel time by CUDA events (median of ``repeats`` after one warm-up launch,
@@ -22,21 +22,15 @@ import time
 
 import numpy as np
 
+from .bench import DEFAULTS, default_grid
 from .kernels import TRAPPED, UNRESOLVED
 from .kernels.cuda import VARIANTS, cuda_status, kernels, label_cuda
 from .labels import CHECK_EVERY, n_checks_for, trap_margin
 
 __all__ = ["run_gpu_bench", "format_gpu_rows", "TARGETS"]
 
-DEFAULTS = {"alpha": 0.1, "omega0": 1.0, "dt": 0.01, "t_max": 200.0}
 #: Targets on one H100 at n = 4096 (PERFORMANCE.md; straightforward: ≈ 42 ms, ≈ 110 G steps/s).
 TARGETS = {"label_ms": 30.0, "bulk_gsteps_s": 150.0}
-
-
-def _grid(n):
-    theta0, theta_dot0 = np.meshgrid(np.linspace(-3 * np.pi, 3 * np.pi, n),
-                                     np.linspace(-4.0, 4.0, n))
-    return theta0.ravel().copy(), theta_dot0.ravel().copy()
 
 
 def _event_ms(cuda, launch, repeats):
@@ -147,7 +141,7 @@ def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = DEFAULTS["t
     from numba import cuda
 
     p = dict(DEFAULTS, t_max=t_max)
-    theta0, theta_dot0 = _grid(n)
+    theta0, theta_dot0 = default_grid(n)
     n_checks = n_checks_for(t_max, p["dt"], CHECK_EVERY)
     energy_cap = 2.0 * p["omega0"] ** 2 * (1.0 - trap_margin(p["dt"], p["alpha"], p["omega0"]))
     variants = {v: _bench_variant(cuda, v, theta0, theta_dot0, p, n_checks, energy_cap,

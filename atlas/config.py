@@ -235,10 +235,15 @@ class Config(_Strict):
     output: Path = Path(defaults.OUTPUT)
 
     @model_validator(mode="after")
-    def _stable_step(self):
+    def _runnable(self):
+        """Checks across sections, so that a valid config never fails after work began."""
+        from .labels import MAX_STEPS
         from .model import Pendulum, rk4_stable
 
-        dt = self.integrator.dt
+        dt, t_max = self.integrator.dt, self.integrator.t_max
+        if t_max / dt > MAX_STEPS:
+            raise ValueError(f"integrator: t_max/dt = {t_max / dt:.3g} steps per orbit is "
+                             f"more than the {MAX_STEPS} an orbit may take")
         for a in self.pendulum.alphas:
             for w in self.pendulum.omega0s:
                 if not rk4_stable(Pendulum(a, w), dt):
@@ -246,7 +251,23 @@ class Config(_Strict):
                         f"integrator.dt = {dt:g} is beyond RK4's stability limit for "
                         f"alpha = {a:g}, omega0 = {w:g}; use a smaller dt"
                     )
+        self._check_reach()
         return self
+
+    def _check_reach(self) -> None:
+        """Orbits must end in wells |k| ≤ 32767 (the file's int16 ``attractor``).
+
+        From θ̈ + 2αθ̇ = −ω0² sin θ, the distance an orbit travels is
+        |Δθ| = |θ̇0 − ω0²∫sin θ dt|/(2α), about |θ̇0|/(2α) for fast rotation, whose sin
+        averages out; twice that plus a well of slack bounds the reach used here.
+        """
+        g = self.grid
+        theta = max(abs(g.theta0.start), abs(g.theta0.stop))
+        speed = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))
+        reach = theta + speed / min(self.pendulum.alphas) + 2 * math.pi
+        if reach > 2 * math.pi * 32767:
+            raise ValueError(f"grid: orbits from this window may travel to |θ| ≈ {reach:.3g} "
+                             "rad, beyond the wells |k| ≤ 32767 that an atlas file can index")
 
     def to_json(self) -> str:
         """The validated config as canonical JSON (stored in every output file)."""

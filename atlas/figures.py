@@ -36,10 +36,10 @@ import numpy as np  # noqa: E402
 from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from . import linear  # noqa: E402
+from . import defaults, linear  # noqa: E402
 from .kernels.rk4 import record_straightforward  # noqa: E402
 from .model import Pendulum, critical_points  # noqa: E402
-from .plotting import STYLE, pi_ticks  # noqa: E402
+from .plotting import STYLE, critical_point_markers, pi_ticks  # noqa: E402
 
 __all__ = [
     "fig1_underdamped_angle",
@@ -313,29 +313,18 @@ def fig8_damping_regimes_phase(ax_or_fig=None, *, small=False, omega0=2.0,
 # --------------------------------------------------------------------------- §3 nonlinear
 
 
-def _critical_markers(ax, pendulum: Pendulum, lo: float, hi: float) -> None:
-    """Saddles as open red circles, attractors as filled black dots (essay Figure 9)."""
-    points = critical_points(pendulum, lo, hi)
-    saddles = [c.theta for c in points if c.is_saddle]
-    attractors = [c.theta for c in points if not c.is_saddle]
-    ax.plot(attractors, np.zeros(len(attractors)), "o", color="black", ms=5,
-            label="attractors (2πk, 0)", zorder=5)
-    ax.plot(saddles, np.zeros(len(saddles)), "o", mfc="white", mec="red", mew=1.5, ms=7,
-            label="saddles ((2j+1)π, 0)", zorder=5)
-
-
 @_styled
-def fig9_nonlinear_phase_portrait(ax_or_fig=None, *, small=False, alpha=0.1, omega0=1.0,
-                                  theta_window=(-3 * np.pi, 3 * np.pi),
-                                  theta_dot_window=(-4.0, 4.0), t_max=40.0,
-                                  dt=0.01) -> Figure:
+def fig9_nonlinear_phase_portrait(ax_or_fig=None, *, small=False, alpha=defaults.ALPHA,
+                                  omega0=defaults.OMEGA0, theta_window=defaults.THETA0_WINDOW,
+                                  theta_dot_window=defaults.THETA_DOT0_WINDOW, t_max=40.0,
+                                  dt=defaults.DT) -> Figure:
     """Figure 9: phase portrait of the full eq. (1) by RK4 (blue), with the separatrices of
     the origin's basin — both branches of the stable manifolds of the saddles (±π, 0), from
     :func:`atlas.separatrices.trace` — in red, saddles as open red circles and the attractors
     (0, 0), (±2π, 0) as dots.
 
-    Initial conditions: on the window's four edges (θ̇0 = ±4 rad/s on top and bottom; θ̇0 > 0
-    on the left and < 0 on the right edge, so that every curve enters the window) and at
+    Initial conditions: on the window's four edges (θ̇0 at its top and bottom values there;
+    θ̇0 > 0 on the left and < 0 on the right edge, so that every curve enters the window) and at
     θ0 = nπ ± 0.3 rad, θ̇0 = 0 next to each saddle.
     """
     from .separatrices import branches, trace
@@ -345,7 +334,7 @@ def fig9_nonlinear_phase_portrait(ax_or_fig=None, *, small=False, alpha=0.1, ome
     lo, hi = theta_window
     v_lo, v_hi = theta_dot_window
     n_edge = 4 if small else 16
-    # Curves enter through all four edges: θ̇0 = ±4 on top/bottom, θ̇0 ≷ 0 on the left/right.
+    # Curves enter through all four edges: θ̇0 = v_hi/v_lo on top/bottom, ≷ 0 on the left/right.
     along = (np.arange(n_edge) + 0.5) / n_edge
     top = lo + (hi - lo) * along
     saddles = np.array([c.theta for c in critical_points(pendulum, lo, hi) if c.is_saddle])
@@ -365,7 +354,8 @@ def fig9_nonlinear_phase_portrait(ax_or_fig=None, *, small=False, alpha=0.1, ome
         if abs(saddle_n) == 1:
             ax.plot(th, v, color="red", lw=1.6, label="separatrices of (0, 0)" if first else None)
             first = False
-    _critical_markers(ax, pendulum, lo, hi)
+    points = critical_points(pendulum, lo, hi)
+    critical_point_markers(ax, [c.theta for c in points], [c.is_saddle for c in points])
     ax.set(xlim=theta_window, ylim=theta_dot_window, xlabel=THETA, ylabel=THETA_DOT,
            title=f"Damped pendulum (full equation): α = {alpha:g} s⁻¹, ω0 = {omega0:g} rad/s")
     pi_ticks(ax, lo, hi)

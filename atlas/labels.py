@@ -20,6 +20,7 @@ import numpy as np
 
 from . import defaults
 from .kernels import TRAPPED
+from .model import Pendulum
 
 __all__ = ["LabelResult", "label", "trap_margin", "ATTRACTOR_FILL", "BACKENDS"]
 
@@ -66,10 +67,8 @@ def _kernel(backend: str, kernel: str | None):
             from .kernels.rk4 import label_straightforward
 
             return label_straightforward
-        try:
-            from .kernels.lanes import label_lanes
-        except ImportError:  # the lane-blocked kernel is optional until it lands
-            from .kernels.rk4 import label_straightforward as label_lanes
+        from .kernels.lanes import label_lanes
+
         return label_lanes
     if backend == "cuda":
         from .kernels.cuda import label_cuda
@@ -81,6 +80,29 @@ def _kernel(backend: str, kernel: str | None):
 def n_checks_for(t_max: float, dt: float, check_every: int) -> int:
     """Number of trap tests after the initial one: the run covers ⌈t_max/(c·dt)⌉·c steps."""
     return max(1, math.ceil(t_max / (dt * check_every) - 1e-9))
+
+
+#: Most RK4 steps one orbit may take: step counts are int32 in every kernel.
+MAX_STEPS = np.iinfo(np.int32).max
+
+
+def check_integration(alpha: float, omega0: float, dt: float, t_max: float,
+                      check_every: int = CHECK_EVERY) -> None:
+    """Raise ValueError (one line) unless the labels of these settings can be certified:
+    α > 0 (with α = 0 energy is conserved and nothing settles), ω0 > 0, finite dt > 0 and
+    t_max > 0, and at most ``MAX_STEPS`` steps per orbit."""
+    Pendulum(alpha, omega0)
+    if alpha == 0.0:
+        raise ValueError("alpha = 0: without damping the energy is conserved and no orbit "
+                         "ever settles, so no label can be certified")
+    for name, value in (("dt", dt), ("t_max", t_max)):
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    if check_every < 1:
+        raise ValueError(f"check_every must be >= 1, got {check_every}")
+    if n_checks_for(t_max, dt, check_every) * check_every > MAX_STEPS:
+        raise ValueError(f"t_max/dt = {t_max / dt:.3g} steps exceeds the {MAX_STEPS} steps "
+                         "an orbit may take")
 
 
 def label(
@@ -100,7 +122,10 @@ def label(
     Integrates eq. (1) with fixed-step RK4 (step ``dt`` [s], at most ``t_max`` [s] rounded up
     to a whole number of trap tests) and stops each orbit once certified by the energy trap.
     ``kernel="straightforward"`` selects the plain one-orbit-per-thread CPU kernel.
+    Raises ValueError for settings that cannot give certified labels
+    (:func:`check_integration`) and OverflowError if an orbit reaches a well |k| > 32767.
     """
+    check_integration(alpha, omega0, dt, t_max, check_every)
     theta0, theta_dot0 = np.broadcast_arrays(
         np.asarray(theta0, dtype=np.float64), np.asarray(theta_dot0, dtype=np.float64)
     )
@@ -117,7 +142,8 @@ def label(
         int(check_every), energy_cap, attractor, status, n_trap)
     trapped = status == TRAPPED
     if np.any(np.abs(attractor[trapped]) > np.iinfo(np.int16).max):
-        raise OverflowError("an attractor index |k| exceeds the int16 range of the atlas")
+        raise OverflowError("an orbit reached a well |k| > 32767, beyond the int16 attractor "
+                            "index of the atlas; narrow the θ0/θ̇0 window")
     return LabelResult(
         attractor=np.where(trapped, attractor, ATTRACTOR_FILL).astype(np.int16).reshape(shape),
         status=status.reshape(shape),

@@ -18,7 +18,8 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
 
-__all__ = ["basin_map", "trap_time_map", "fraction_curves", "plot_atlas", "pi_ticks", "STYLE"]
+__all__ = ["basin_map", "trap_time_map", "fraction_curves", "plot_atlas", "pi_ticks",
+           "critical_point_markers", "STYLE"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
@@ -46,16 +47,22 @@ def _param(ds: xr.Dataset, name: str) -> float:
     return float(ds[name]) if name in ds.coords else float(ds.attrs[name])
 
 
-def _critical(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
+def critical_point_markers(ax, theta, is_saddle) -> None:
+    """Mark the critical points (θ [rad], 0) on the θ axis: attractors (2πk, 0) as black dots,
+    saddles ((2j+1)π, 0) as open red circles (essay Figure 9), labelled for the legend."""
+    theta, is_saddle = np.asarray(theta, float), np.asarray(is_saddle, bool)
+    ax.plot(theta[~is_saddle], np.zeros((~is_saddle).sum()), "o", color="black", ms=5,
+            label="attractors (2πk, 0)", zorder=5)
+    ax.plot(theta[is_saddle], np.zeros(is_saddle.sum()), "o", mfc="none",
+            mec=SEPARATRIX_COLOR, mew=1.5, ms=7, label="saddles ((2j+1)π, 0)", zorder=5)
+
+
+def _critical(ax, tree: xr.DataTree) -> None:
+    """The ``/critical_points`` group of ``tree``, if any, as :func:`critical_point_markers`."""
     if "critical_points" not in tree.children:
         return
     cp = tree["critical_points"].to_dataset(inherit=False)
-    saddle = cp["kind"].values == "saddle"
-    theta = cp["theta"].values
-    ax.plot(theta[~saddle], np.zeros((~saddle).sum()), "o", color="black", ms=5,
-            label="attractors (2πk, 0)")
-    ax.plot(theta[saddle], np.zeros(saddle.sum()), "o", mfc="none", mec=SEPARATRIX_COLOR,
-            mew=1.5, ms=7, label="saddles ((2j+1)π, 0)")
+    critical_point_markers(ax, cp["theta"].values, cp["kind"].values == "saddle")
 
 
 def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
@@ -89,7 +96,7 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=np.arange(kmin, kmax + 1))
     cbar.set_label("attractor k: orbit settles at (2πk, 0)")
     _separatrices(ax, tree, ds)
-    _critical(ax, tree, ds)
+    _critical(ax, tree)
     ax.set_xlim(th[0], th[-1])
     ax.set_ylim(v[0], v[-1])
     pi_ticks(ax, th[0], th[-1])

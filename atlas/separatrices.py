@@ -50,6 +50,10 @@ Method (:func:`trace`)
    ``DISCREPANCY_BOUND`` = 10⁻⁸ the summary carries a warning. The same curve measures
    ``polyline_error``, the largest distance from the manifold to the polyline.
 
+:func:`check_settings` rejects, before any work, a ``tol`` below what double precision resolves
+in the window and a ``max_spacing`` finer than the curve is accurate; what can still fail during
+a run raises :class:`SeparatrixError`, one line for the user.
+
 The crossings of the basin boundaries with the axis θ0 = 0 (the initial speeds at which the
 label changes) are located by the same bisection along the θ̇0 axis, after labelling a grid of
 ``AXIS_GRID`` speeds over the window (labels along that axis increase with θ̇0 by steps of one).
@@ -70,6 +74,8 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from . import defaults
+from .errors import AtlasError
 from .kernels import TRAPPED, UNRESOLVED
 from .kernels.rk4 import rk4_step
 from .labels import label
@@ -77,6 +83,8 @@ from .model import Pendulum, critical_points
 
 __all__ = [
     "trace",
+    "check_settings",
+    "SeparatrixError",
     "branches",
     "summary",
     "warnings",
@@ -87,6 +95,8 @@ __all__ = [
     "NO_LABEL",
     "BRANCHES",
     "DISCREPANCY_BOUND",
+    "MIN_TOL_ULPS",
+    "MIN_MAX_SPACING",
     "merge_parameter_points",
     "select_parameter_point",
 ]
@@ -103,6 +113,16 @@ CHECK_RTOL = CHECK_ATOL = 1e-13
 NO_LABEL = np.iinfo(np.int64).min
 #: Number of θ̇0 samples on the axis θ0 = 0 before the crossings are bisected.
 AXIS_GRID = 1024
+#: Smallest ``tol``, in units of the spacing of doubles at the window's largest |θ| or |θ̇|:
+#: a bracket of width tol must still hold the multisection points (up to 7) as distinct,
+#: well-separated doubles, and its midpoint must differ from both ends.
+MIN_TOL_ULPS = 64
+#: Smallest ``max_spacing`` [rad-ish]. At 1e-4 the chord error (≤ max_spacing²/8 ≈ 1.3e-9;
+#: measured 6e-10) already equals the located curve's own O(dt⁴) offset from the exact
+#: manifold at the default dt (6e-10), so a finer polyline adds points but no accuracy; and
+#: the points grow as 1/max_spacing (default window, α = 0.1: 1654 at 0.05, 8e5 and ≈ 20 s
+#: on 2 cores at 1e-4).
+MIN_MAX_SPACING = 1e-4
 
 _FIRST_BRACKET = 32.0  # initial half-width of a bracket, in units of tol
 _GROW = 8.0  # widening factor while a bracket has equal labels at both ends
@@ -117,7 +137,15 @@ _AXIS_TRAVEL = 100.0  # extra t_max for the axis crossings, in units of 1/min(u1
 _MAX_STALLS = 20  # rounds in a row without a certified label inside a bracket
 _SPEED_GROWTH = 0.3  # predictor: max log-growth of the speed between vertices (near the saddle)
 _CHORD_AIM = 0.9  # predictor: aim at this × the allowed chord (curvature varies along it)
-_MAX_VERTICES = 200_000
+_MAX_VERTICES = 1_000_000  # per branch: a branch 100 rad-ish long at MIN_MAX_SPACING
+
+
+class SeparatrixError(AtlasError, RuntimeError):
+    """A separatrix that cannot be certified during a run (a bracket that meets a third basin
+    or finds no certified label, a branch with too many vertices, a failed DOP853 reference):
+    one line naming the point or branch and what to change."""
+
+    exit_code = 1
 
 
 @dataclass(frozen=True)
@@ -266,7 +294,7 @@ def bisect_across(
         return lab, lab != NO_LABEL, lab >= k[idx]
 
     def fail(i, why):
-        return RuntimeError(f"separatrix point near ({base[i, 0]!r}, {base[i, 1]!r}) between "
+        return SeparatrixError(f"separatrix point near ({base[i, 0]!r}, {base[i, 1]!r}) between "
                             f"basins {k[i] - 1} and {k[i]}: {why}")
 
     # Phase 1: a bracket, widened geometrically around s = 0. Each part holds distinct points.
@@ -407,8 +435,9 @@ def _grow(p: Pendulum, window: Window, n: int, branch: str, max_spacing: float,
         inside.append(was_inside)
     while verts and not _gone(p, window, branch, *y):
         if len(verts) > _MAX_VERTICES:
-            raise RuntimeError(f"branch {branch} of saddle {n}π: more than {_MAX_VERTICES} "
-                               "vertices; raise max_spacing or shrink the window")
+            raise SeparatrixError(f"branch {branch} of saddle {n}π: more than {_MAX_VERTICES} "
+                                  "vertices; raise separatrices.max_spacing or shrink the "
+                                  "window")
         (f0, f1), (g0, g1) = _field(p, *y)
         speed = math.hypot(f0, f1)
         kappa = abs(f0 * g1 - f1 * g0) / speed**3  # curvature of the orbit [rad⁻¹]
@@ -516,7 +545,7 @@ def _check(p: Pendulum, window: Window, saddle_n, branch, vertex, theta,
     sol = solve_ivp(rhs, (0.0, t_cap), y0, method="DOP853", rtol=CHECK_RTOL, atol=CHECK_ATOL,
                     dense_output=True, events=gone)
     if sol.status < 0:
-        raise RuntimeError(f"DOP853 reference failed: {sol.message}")
+        raise SeparatrixError(f"DOP853 reference of the separatrix check failed: {sol.message}")
     curve = sol.sol
 
     # foot points: nearest dense sample, then Newton on (c(t) − q)·c'(t) = 0
@@ -562,8 +591,12 @@ def _axis_crossings(labels, window: Window, tol: float):
     v = np.linspace(*window.theta_dot, AXIS_GRID)
     lab = labels(np.zeros_like(v), v)
     v, lab = v[lab != NO_LABEL], lab[lab != NO_LABEL]  # uncertified: no information
+    if lab.size == 0:
+        raise SeparatrixError("no orbit on the axis theta0 = 0 settles: the basin boundaries "
+                              "there cannot be located (dt unstable?)")
     if np.any(np.diff(lab) < 0):
-        raise RuntimeError("labels along theta0 = 0 do not increase with theta_dot0")
+        raise SeparatrixError("labels along theta0 = 0 do not increase with theta_dot0 "
+                              "(dt too large?)")
     k = np.arange(lab[0] + 1, lab[-1] + 1)
     i = np.searchsorted(lab, k)  # first sample in basin ≥ k
     base = np.column_stack([np.zeros(k.size), 0.5 * (v[i - 1] + v[i])])
@@ -609,14 +642,46 @@ def _locate(labels, base, normal, k, vertex, tau, tol):
     return lo, hi
 
 
+def _round_up(x: float) -> float:
+    """``x`` rounded up to two significant digits (a bound that still holds when printed)."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return math.ceil(x / unit) * unit
+
+
+def check_settings(theta_window, theta_dot_window, tol: float, max_spacing: float) -> None:
+    """Raise ValueError, with a one-line reason naming the setting, unless :func:`trace` can
+    honour ``tol`` and ``max_spacing`` [rad-ish] in this window ([rad], [rad s⁻¹]).
+
+    Pure and cheap: run it before any work. Bounds: 0 < ``tol``, and tol ≥ ``MIN_TOL_ULPS``
+    (64) spacings of doubles at the window's largest coordinate (1.1e-13 for |θ| ≤ 3π), below
+    which a bracket cannot be resolved; ``max_spacing`` ≥ ``MIN_MAX_SPACING`` (1e-4), below
+    which the polyline outgrows the accuracy of the curve it joins (see the constant).
+    """
+    for name, value in (("tol", tol), ("max_spacing", max_spacing)):
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
+    theta_max = max(map(abs, window.theta))
+    scale = max(theta_max, *map(abs, window.theta_dot))
+    need = MIN_TOL_ULPS * float(np.spacing(scale))
+    if tol < need:
+        where = "|θ|" if scale == theta_max else "|θ̇|"
+        raise ValueError(f"tol = {tol:g} is below what double precision can resolve at "
+                         f"{where} ≤ {scale:.3g} (needs ≥ {_round_up(need):.2g})")
+    if max_spacing < MIN_MAX_SPACING:
+        raise ValueError(f"max_spacing = {max_spacing:g} is below {MIN_MAX_SPACING:g}: its "
+                         "chord error max_spacing²/8 would fall below the curve's own accuracy "
+                         f"(≈ 1e-9), at {1 / max_spacing:.0e} points per unit of length")
+
+
 def trace(
     pendulum: Pendulum,
     theta_window,
     theta_dot_window,
     *,
-    tol: float = 1e-12,
-    max_spacing: float = 0.05,
-    dt: float = 0.01,
+    tol: float = defaults.SEPARATRIX_TOL,
+    max_spacing: float = defaults.MAX_SPACING,
+    dt: float = defaults.DT,
     backend: str = "cpu",
 ) -> xr.Dataset:
     """Trace both branches of the stable manifold of every saddle (nπ, 0) in the window.
@@ -634,17 +699,16 @@ def trace(
     ``tol``, ``max_spacing``, ``dt``, ``t_max``, ``discrepancy``, ``discrepancy_bound``,
     ``polyline_error``, ``n_orbits``, ``n_unresolved``, ``warnings`` (lines joined by "\\n",
     read with :func:`warnings`) and ``method``.
-    Raises ValueError for α = 0 or bad settings, RuntimeError if a bracket cannot be certified.
+    Raises ValueError for α = 0, a bad window, dt or settings (:func:`check_settings`);
+    :class:`SeparatrixError` (an :class:`~atlas.errors.AtlasError`) if a point or branch
+    cannot be certified during the run.
     """
     p = pendulum
     _require_damping(p)
-    for name, value in (("tol", tol), ("max_spacing", max_spacing), ("dt", dt)):
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
+    check_settings(theta_window, theta_dot_window, tol, max_spacing)
     window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
-    scale = max(map(abs, window.theta + window.theta_dot))
-    if tol < 64 * np.spacing(scale):
-        raise ValueError(f"tol = {tol!r} is below the floating-point resolution of the window")
 
     on_axis = window.theta_dot[0] <= 0.0 <= window.theta_dot[1]
     saddles = [c.n for c in critical_points(p, *window.theta) if c.is_saddle and on_axis]
@@ -686,7 +750,8 @@ def trace(
             "their bracket_width is stored; raise tol")
     if check.discrepancy > DISCREPANCY_BOUND:
         problems.append(f"separatrix points are up to {check.discrepancy:.2e} from the "
-                        f"DOP853 stable manifold (bound {DISCREPANCY_BOUND:.0e}): lower dt")
+                        f"DOP853 stable manifold (bound {DISCREPANCY_BOUND:.0e}): lower "
+                        + ("tol" if tol > DISCREPANCY_BOUND else "dt"))
 
     return xr.Dataset(
         data_vars={

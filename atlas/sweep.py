@@ -16,6 +16,7 @@ import sys
 import time
 from collections.abc import Iterator
 from datetime import datetime, timezone
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -178,24 +179,35 @@ def _attrs(cfg: Config) -> dict:
 
 
 def _check_output_path(cfg: Config, layout: store.Layout) -> None:
+    """Refuse an output that cannot be written or would not fit, before anything is made."""
     out = cfg.output
-    if out.exists() and out.is_dir():
+    if out.is_dir():
         raise AtlasError(f"{out}: the output path is a directory")
-    parent = out.parent
-    if not parent.exists():
-        try:
-            parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise AtlasError(f"{out}: cannot create the output folder ({exc.strerror})") from None
-    if not parent.is_dir():
-        raise AtlasError(f"{out}: the output folder {parent} is not a directory")
-    if not os.access(parent, os.W_OK):
-        raise AtlasError(f"{out}: the output folder {parent} is not writable")
+    existing = next(p for p in (out.parent, *out.parent.parents) if p.exists())
+    if not existing.is_dir():
+        raise AtlasError(f"{out}: the output folder {existing} is not a directory")
+    if not os.access(existing, os.W_OK):
+        raise AtlasError(f"{out}: the output folder {existing} is not writable")
     need = layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
-    free = shutil.disk_usage(parent).free
+    free = shutil.disk_usage(existing).free
     if need > free:
-        raise AtlasError(f"{out}: the output may need up to {need / 2**30:.1f} GiB but only "
-                         f"{free / 2**30:.1f} GiB is free on that disk")
+        raise AtlasError(f"{out}: the output may need up to {_size(need)} but only "
+                         f"{_size(free)} is free on that disk")
+
+
+def _size(n_bytes: int) -> str:
+    for unit in ("B", "KB", "MB", "GB"):
+        if n_bytes < 1000:
+            return f"{n_bytes:.3g} {unit}"
+        n_bytes /= 1000
+    return f"{n_bytes:.3g} TB"
+
+
+def _make_output_folder(out: Path) -> None:
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise AtlasError(f"{out}: cannot create the output folder ({exc.strerror})") from None
 
 
 def _progress(total: int, initial: int, quiet: bool):
@@ -246,11 +258,12 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
     """
     backend = backend or cfg.execution.backend
     layout = layout_of(cfg)
-    _check_output_path(cfg, layout)
     if backend == "cuda":
         from .kernels.cuda import require_cuda
 
         require_cuda()
+    _check_output_path(cfg, layout)
+    _make_output_folder(cfg.output)
     partial = store.partial_path(cfg.output)
     start = time.perf_counter()
     with output_lock(cfg.output):
@@ -267,6 +280,9 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
                 groups["separatrices"] = separatrices
             store.finalize(f, partial, cfg.output, groups,
                            {"run_time_s": time.perf_counter() - start, "backend": backend})
+        except OverflowError as exc:
+            _close_quietly(f)
+            raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:
             _close_quietly(f)
             raise StorageError(f"{partial}: writing failed ({exc.strerror or exc}); the "

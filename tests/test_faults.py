@@ -122,7 +122,7 @@ def test_unwritable_output_paths(tmp_path):
     blocker.write_text("x")
     for output, fragment in [(blocker / "out.h5", "is not a directory"),
                              (tmp_path, "is a directory"),
-                             ("/proc/atlas/out.h5", "cannot create the output folder")]:
+                             ("/proc/atlas/out.h5", "is free on that disk")]:
         cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=output))
         _one_line(run_cli("run", cfg), 2, str(output), fragment)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file", "c.yaml"]
@@ -135,7 +135,7 @@ grid:
   theta_dot0: {{start: -4, stop: 4, num: 1048576}}
 output: {tmp_path / 'huge.h5'}
 """)
-    _one_line(run_cli("run", cfg), 2, "huge.h5", "GiB is free")
+    _one_line(run_cli("run", cfg), 2, "huge.h5", "7.7 TB but only", "is free on that disk")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
 
 
@@ -179,3 +179,17 @@ def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
         for name in ("attractor", "status", "t_trap", "basin_fraction", "k"):
             np.testing.assert_array_equal(tree[name].values, fresh[name].values)
         out.unlink()
+
+
+def test_a_refused_run_creates_no_output_folder(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=tmp_path / "new" / "x.h5"))
+    _one_line(run_cli("run", cfg, "--backend", "cuda", env=env), 2, "backend 'cuda'")
+    huge = write_config(tmp_path / "h.yaml", f"""\
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 1048576}}
+  theta_dot0: {{start: -4, stop: 4, num: 1048576}}
+output: {tmp_path / 'deep' / 'er' / 'huge.h5'}
+""")
+    _one_line(run_cli("run", huge), 2, "is free on that disk")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml", "h.yaml"]

@@ -136,7 +136,7 @@ def test_fig9_portrait_has_red_separatrices_through_the_saddles():
         assert math.hypot(theta - np.pi * np.sign(theta), theta_dot) < 0.05
     # saddles: open red circles at odd multiples of π; attractors at 0, ±2π
     (saddles,) = [m for m in markers(ax) if same_color(m.get_markeredgecolor(), "red")]
-    assert same_color(saddles.get_markerfacecolor(), "white")
+    assert saddles.get_markerfacecolor() == "none"  # open: what lies beneath shows
     np.testing.assert_allclose(saddles.get_xdata(), [-3 * np.pi, -np.pi, np.pi, 3 * np.pi])
     (attractors,) = [m for m in markers(ax) if same_color(m.get_color(), "black")]
     np.testing.assert_allclose(attractors.get_xdata(), [-2 * np.pi, 0.0, 2 * np.pi], atol=1e-15)

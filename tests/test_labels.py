@@ -116,3 +116,19 @@ def test_trapped_orbits_never_leave_their_well():
         propagate_straightforward(theta, theta_dot, ALPHA, OMEGA0, 0.01, 50)
         assert np.all(np.abs(theta) < math.pi)
         assert np.all(p.energy(theta, theta_dot) < cap)
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    ({"alpha": -0.5}, "alpha"), ({"alpha": 0.0}, "no orbit ever settles"),
+    ({"omega0": 0.0}, "omega0"), ({"dt": -0.01}, "dt"), ({"dt": 0.0}, "dt"),
+    ({"t_max": float("nan")}, "t_max"), ({"t_max": 1e9, "dt": 1e-3}, "steps"),
+])
+def test_label_refuses_settings_it_cannot_certify(kwargs, message):
+    args = {"alpha": ALPHA, "omega0": OMEGA0, **kwargs}
+    with pytest.raises(ValueError, match=message):
+        atlas.label(0.5, 0.0, **args)
+
+
+def test_orbits_beyond_the_int16_wells_are_refused():
+    with pytest.raises(OverflowError, match="32767"):
+        atlas.label(2 * np.pi * 40_000, 0.0, alpha=ALPHA, omega0=OMEGA0)

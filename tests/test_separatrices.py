@@ -17,12 +17,14 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import atlas
+from atlas import defaults
 from atlas import separatrices as sep
+from atlas.errors import AtlasError
 from atlas.model import Pendulum
 
 PI = math.pi
-DEFAULT_WINDOW = ((-3 * PI, 3 * PI), (-4.0, 4.0))
-TOL = 1e-12
+DEFAULT_WINDOW = (defaults.THETA0_WINDOW, defaults.THETA_DOT0_WINDOW)
+TOL = defaults.SEPARATRIX_TOL
 REGIMES = {"underdamped": 0.1, "critically damped": 1.0, "overdamped": 2.0}  # ω0 = 1
 
 
@@ -186,12 +188,31 @@ def test_alpha_zero_is_rejected_with_the_reason():
         sep.trace(Pendulum(0.0, 1.0), *DEFAULT_WINDOW)
 
 
+def dop853_axis_crossing(p: Pendulum, n: int) -> float:
+    """θ̇ where the stable manifold of the saddle nπ that arrives from the side of θ = 0 (the
+    left branch for n > 0, the right one for n < 0) meets θ = 0: DOP853 in reversed time
+    from 1e-7 along the stable eigenvector, event θ = 0 (no symmetry used)."""
+    u2 = p.alpha + math.hypot(p.alpha, p.omega0)
+    side = -1.0 if n > 0 else 1.0
+    y0 = np.array([n * PI, 0.0]) + side * 1e-7 * np.array([1.0, -u2]) / math.hypot(1.0, u2)
+
+    def axis(_, y):
+        return y[0]
+
+    axis.terminal = True
+    sol = solve_ivp(lambda _, y: [-y[1], p.omega0**2 * math.sin(y[0]) + 2 * p.alpha * y[1]],
+                    (0, 1e3), y0, method="DOP853", rtol=1e-13, atol=1e-13, events=axis)
+    return float(sol.y_events[0][0, 1])
+
+
 def test_axis_crossings_straddle_a_label_change(traced):
     p = Pendulum(0.1, 1.0)
     ds = traced[0.1]
     crossing = ds["crossing_theta_dot"].values
-    np.testing.assert_allclose(crossing, [-3.51027033, -2.41493822, 2.41493822, 3.51027033],
-                               atol=1e-8)
+    # the boundary between basins k − 1 and k on θ0 = 0 is the manifold of the saddle 2k − 1
+    np.testing.assert_array_equal(ds["k_above"].values, [-1, 0, 1, 2])
+    reference = [dop853_axis_crossing(p, 2 * k - 1) for k in ds["k_above"].values]
+    np.testing.assert_allclose(crossing, reference, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(ds["k_above"].values - ds["k_below"].values, 1)
     assert np.all(ds["crossing_bracket_width"].values < TOL)
     for side, k in ((-1, ds["k_below"].values), (+1, ds["k_above"].values)):
@@ -202,20 +223,11 @@ def test_axis_crossings_straddle_a_label_change(traced):
 
 
 def test_axis_crossing_matches_dop853_manifold():
-    """Where the left branch of π meets θ = 0, from DOP853 in reversed time (event θ = 0)."""
+    """Where the left branch of π meets θ = 0, with no saddle in the window."""
     p = Pendulum(0.1, 1.0)
-    u2 = p.alpha + math.hypot(p.alpha, p.omega0)
-    y0 = np.array([PI, 0.0]) - 1e-7 * np.array([1.0, -u2]) / math.hypot(1.0, u2)
-
-    def axis(_, y):
-        return y[0]
-
-    axis.terminal = True
-    sol = solve_ivp(lambda _, y: [-y[1], math.sin(y[0]) + 2 * p.alpha * y[1]], (0, 100), y0,
-                    method="DOP853", rtol=1e-13, atol=1e-13, events=axis)
     ds = sep.trace(p, (-0.5, 0.5), (0.0, 3.0))  # no saddle inside: only the crossing table
     assert ds.sizes["point"] == 0
-    np.testing.assert_allclose(ds["crossing_theta_dot"].values, [sol.y_events[0][0, 1]],
+    np.testing.assert_allclose(ds["crossing_theta_dot"].values, [dop853_axis_crossing(p, 1)],
                                rtol=0, atol=1e-9)
 
 
@@ -232,8 +244,9 @@ def test_bisect_across_on_a_known_boundary_with_an_uncertified_band():
     direction = np.broadcast_to([0.0, 1.0], base.shape)
     lo, hi = sep.bisect_across(labels, base, direction, 1, tol=TOL, half_width=1e-11)
     assert np.all((lo < boundary) & (boundary < hi) & (hi - lo < TOL))
-    with pytest.raises(RuntimeError, match="raise tol"):
+    with pytest.raises(sep.SeparatrixError, match="raise tol") as failure:
         sep.bisect_across(labels, base, direction, 1, tol=1e-13, half_width=1e-11)
+    assert isinstance(failure.value, AtlasError) and "\n" not in str(failure.value)
 
 
 def test_discrepancy_above_bound_is_reported():
@@ -263,4 +276,47 @@ def test_dataset_round_trips_through_h5netcdf(traced, tmp_path):
     lines = sep.summary(ds)
     assert "4 saddles" in lines[0] and "6 branches" in lines[0]
     assert "within bound" in lines[1]
-    assert "+2.4149382176 (0|1)" in lines[2]
+    assert f"{ds['crossing_theta_dot'].values[2]:+.10f} (0|1)" in lines[2]
+
+
+@pytest.mark.parametrize(("tol", "max_spacing", "culprit"), [
+    (1e-14, 0.05, r"tol = 1e-14 is below .* \|θ\| ≤ 9.42 \(needs ≥ 1.2e-13\)"),
+    (0.0, 0.05, "tol must be"),
+    (1e-12, 5e-5, "max_spacing = 5e-05 is below 0.0001"),
+    (1e-12, math.inf, "max_spacing must be"),
+])
+def test_unusable_settings_are_refused_before_any_work(tol, max_spacing, culprit):
+    with pytest.raises(ValueError, match=culprit) as refused:
+        sep.check_settings(*DEFAULT_WINDOW, tol, max_spacing)
+    assert "\n" not in str(refused.value)
+    with pytest.raises(ValueError, match=culprit):
+        sep.trace(Pendulum(0.1, 1.0), *DEFAULT_WINDOW, tol=tol, max_spacing=max_spacing)
+
+
+def test_the_bounds_scale_with_the_window_and_are_inclusive():
+    sep.check_settings(*DEFAULT_WINDOW, TOL, defaults.MAX_SPACING)  # the defaults pass
+    smallest = sep.MIN_TOL_ULPS * np.spacing(3 * PI)
+    sep.check_settings(*DEFAULT_WINDOW, smallest, sep.MIN_MAX_SPACING)
+    with pytest.raises(ValueError, match="tol"):
+        sep.check_settings(*DEFAULT_WINDOW, np.nextafter(smallest, 0), sep.MIN_MAX_SPACING)
+    with pytest.raises(ValueError, match=r"\|θ̇\| ≤ 40"):  # θ̇ sets the scale here
+        sep.check_settings((-1.0, 1.0), (-40.0, 40.0), smallest, sep.MIN_MAX_SPACING)
+
+
+def test_smallest_accepted_tol_runs_to_the_end():
+    """At the bound, orbits stuck at the saddle in floating point can keep brackets wider
+    than tol (α = 2): trace stores their widths and says so, it does not raise."""
+    window = ((0.0, PI), (0.0, 3.0))
+    tol = sep.MIN_TOL_ULPS * np.spacing(PI)
+    ds = sep.trace(Pendulum(2.0, 1.0), *window, tol=tol)
+    wide = int(np.sum(ds["bracket_width"].values >= tol))
+    assert ds.sizes["point"] > 50 and ds.attrs["discrepancy"] < ds.attrs["discrepancy_bound"]
+    assert (wide == 0) == (sep.warnings(ds) == [])
+
+
+def test_a_failure_during_the_run_is_one_line_for_the_cli(monkeypatch):
+    monkeypatch.setattr(sep, "_MAX_VERTICES", 10)
+    with pytest.raises(sep.SeparatrixError, match="raise separatrices.max_spacing") as failed:
+        sep.trace(Pendulum(0.1, 1.0), *DEFAULT_WINDOW)
+    assert isinstance(failed.value, AtlasError) and failed.value.exit_code == 1
+    assert "\n" not in str(failed.value)
