@@ -36,26 +36,37 @@ def _holder(lock: Path) -> int | None:
         return None
 
 
+def _try_lock(lock: Path) -> bool:
+    """Atomically create ``lock`` already holding our PID: write a private file, then
+    hard-link it into place (link fails if the lock exists), so no other process ever sees
+    a lock without its PID."""
+    tmp = lock.with_name(f"{lock.name}.{os.getpid()}.tmp")
+    tmp.write_text(str(os.getpid()))
+    try:
+        os.link(tmp, lock)
+        return True
+    except FileExistsError:
+        return False
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 @contextlib.contextmanager
 def output_lock(output: Path):
     """Hold ``<output>.lock`` for the duration of the block; refuse if a live run holds it."""
     lock = output.with_name(output.name + ".lock")
     for _ in range(2):
-        try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        if _try_lock(lock):
             break
-        except FileExistsError:
-            pid = _holder(lock)
-            if pid is not None and pid != os.getpid() and _alive(pid):
-                raise OutputLocked(f"{output}: another atlas run (pid {pid}) is writing this "
-                                   f"output; wait for it or remove {lock} if it is stale"
-                                   ) from None
-            lock.unlink(missing_ok=True)  # stale: its writer is gone
+        pid = _holder(lock)
+        if pid is not None and _alive(pid):
+            raise OutputLocked(f"{output}: another atlas run (pid {pid}) is writing this "
+                               f"output; wait for it or remove {lock} if it is stale")
+        lock.unlink(missing_ok=True)  # stale: its writer is gone (or the file is unreadable)
     else:
         raise OutputLocked(f"{output}: could not take the lock {lock}")
     try:
-        os.write(fd, str(os.getpid()).encode())
-        os.close(fd)
         yield
     finally:
-        lock.unlink(missing_ok=True)
+        if _holder(lock) == os.getpid():
+            lock.unlink(missing_ok=True)

@@ -193,3 +193,23 @@ output: {tmp_path / 'deep' / 'er' / 'huge.h5'}
 """)
     _one_line(run_cli("run", huge), 2, "is free on that disk")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml", "h.yaml"]
+
+
+def test_concurrent_lock_attempts_admit_exactly_one(tmp_path):
+    """Many processes racing for one output's lock: exactly one holds it at a time."""
+    script = textwrap.dedent(f"""
+        import sys, time
+        from pathlib import Path
+        from atlas.lock import output_lock, OutputLocked
+        try:
+            with output_lock(Path({str(tmp_path / 'race.h5')!r})):
+                time.sleep(3.0)  # longer than the spread of the racers' start-up
+                print("got it")
+        except OutputLocked:
+            print("refused")
+    """)
+    procs = [subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                              text=True, cwd=REPO) for _ in range(8)]
+    answers = sorted(p.communicate()[0].strip() for p in procs)
+    assert answers == ["got it"] + ["refused"] * 7
+    assert list(tmp_path.iterdir()) == []
