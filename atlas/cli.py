@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -64,10 +65,20 @@ def _cmd_plot(args) -> int:
     return 0
 
 
+def _output_folder(folder: Path) -> Path:
+    """Create ``folder`` for a command's outputs, or one clear AtlasError."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise AtlasError(f"{folder}: cannot create the output folder "
+                         f"({exc.strerror or exc})") from None
+    return folder
+
+
 def _cmd_figures(args) -> int:
     from .figures import write_all
 
-    for path in write_all(Path(args.outdir)):
+    for path in write_all(_output_folder(Path(args.outdir))):
         print(f"wrote {path}")
     return 0
 
@@ -75,7 +86,9 @@ def _cmd_figures(args) -> int:
 def _cmd_bench(args) -> int:
     from .bench import bench_to_json
 
-    bench_to_json(Path(args.output), backend=args.backend, quick=args.quick)
+    output = Path(args.output)
+    _output_folder(output.parent)
+    bench_to_json(output, backend=args.backend, quick=args.quick)
     return 0
 
 
@@ -131,6 +144,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("atlas: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # `atlas info x.h5 | head`: the reader left, nothing is wrong
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":

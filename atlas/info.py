@@ -18,16 +18,16 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
              f" = {n_orbits:,} orbits"]
     if "alpha" in ds.dims:
         lines.append(f"sweep     alpha: {ds.sizes['alpha']} values, omega0: "
-                     f"{ds.sizes['omega0']} values")
+                     f"{ds.sizes['omega0']} values; basin fractions per point:")
+        for a in ds["alpha"].values:
+            for w in ds["omega0"].values:
+                point = ds.sel(alpha=a, omega0=w)
+                lines.append(f"  alpha = {a:g}, omega0 = {w:g}: {_fractions(point)}")
         unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
     else:
         lines.append(f"pendulum  alpha = {ds.attrs['alpha']:g} 1/s, omega0 = "
                      f"{ds.attrs['omega0']:g} rad/s, dt = {ds.attrs['dt']:g} s")
-        fractions = ", ".join(
-            f"k={int(k):+d}: {float(p):.5f}±{float(e):.1e}"
-            for k, p, e in zip(ds["k"].values, ds["basin_fraction"].values,
-                               ds["basin_fraction_stderr"].values) if p > 0)
-        lines.append(f"basins    {fractions}")
+        lines.append(f"basins    {_fractions(ds)}")
         unresolved = int(round(float(ds["unresolved_fraction"]) * n_orbits))
     lines.append(f"unresolved {unresolved} orbits")
     if "run_time_s" in ds.attrs:
@@ -35,6 +35,13 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
     if "separatrices" in tree.children:
         lines += _separatrix_lines(tree["separatrices"].to_dataset(inherit=False))
     return lines
+
+
+def _fractions(ds: xr.Dataset) -> str:
+    """``k=+0: 0.26621±8.6e-04, …`` for the basins of one parameter point."""
+    return ", ".join(f"k={int(k):+d}: {float(p):.5f}±{float(e):.1e}"
+                     for k, p, e in zip(ds["k"].values, ds["basin_fraction"].values,
+                                        ds["basin_fraction_stderr"].values) if p > 0)
 
 
 def _separatrix_lines(sep: xr.Dataset) -> list[str]:

@@ -267,7 +267,9 @@ def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:
     ``chunks={}`` opens lazily with dask (for outputs larger than memory).
     """
     path = Path(path)
-    _check_atlas_file(path)
+    if not _check_atlas_file(path).get("complete", 0):
+        raise InputFileError(f"{path}: a partial atlas (an interrupted run); finish it with "
+                             "`atlas run CONFIG --resume` first")
     return xr.open_datatree(path, engine="h5netcdf", mask_and_scale=False, chunks=chunks)
 
 

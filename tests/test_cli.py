@@ -105,3 +105,24 @@ def test_every_bad_config_through_the_cli(tmp_path, text, message):
     _one_clean_line(run_cli("run", cfg, "-o", out), "bad.yaml", message)
     assert out.read_bytes() == b"an earlier result"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.yaml", "out.h5"]
+
+
+def test_figures_and_bench_refuse_an_output_folder_they_cannot_make(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    _one_clean_line(run_cli("figures", "--outdir", blocker / "figs"), "cannot create")
+    _one_clean_line(run_cli("bench", "--quick", "--output", blocker / "b.json"), "cannot create")
+
+
+def test_plot_and_open_refuse_a_partial_file(small_config, tmp_path):
+    import atlas
+    from atlas import store
+    from atlas.sweep import layout_of
+
+    cfg = atlas.load_config(small_config())
+    partial = store.partial_path(cfg.output)
+    store.create(partial, layout_of(cfg), {}).close()
+    _one_clean_line(run_cli("plot", partial), "a partial atlas", "--resume")
+    assert not partial.with_suffix(".png").exists()
+    with pytest.raises(atlas.InputFileError, match="partial"):
+        atlas.open(partial)
