@@ -237,7 +237,7 @@ class Config(_Strict):
     @model_validator(mode="after")
     def _runnable(self):
         """Checks across sections, so that a valid config never fails after work began."""
-        from .labels import MAX_STEPS
+        from .limits import MAX_STEPS, check_separatrix_settings
         from .model import Pendulum, rk4_stable
 
         dt, t_max = self.integrator.dt, self.integrator.t_max
@@ -252,22 +252,33 @@ class Config(_Strict):
                         f"alpha = {a:g}, omega0 = {w:g}; use a smaller dt"
                     )
         self._check_reach()
+        if self.separatrices.enabled:
+            g = self.grid
+            try:
+                check_separatrix_settings((g.theta0.start, g.theta0.stop),
+                                          (g.theta_dot0.start, g.theta_dot0.stop),
+                                          self.separatrices.tol, self.separatrices.max_spacing)
+            except ValueError as exc:
+                raise ValueError(f"separatrices.{exc}") from None
         return self
 
     def _check_reach(self) -> None:
-        """Orbits must end in wells |k| ≤ 32767 (the file's int16 ``attractor``).
+        """Orbits must end in wells |k| ≤ MAX_WELL (the file's int16 ``attractor``).
 
         From θ̈ + 2αθ̇ = −ω0² sin θ, the distance an orbit travels is
         |Δθ| = |θ̇0 − ω0²∫sin θ dt|/(2α), about |θ̇0|/(2α) for fast rotation, whose sin
         averages out; twice that plus a well of slack bounds the reach used here.
         """
+        from .limits import MAX_WELL
+
         g = self.grid
         theta = max(abs(g.theta0.start), abs(g.theta0.stop))
         speed = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))
         reach = theta + speed / min(self.pendulum.alphas) + 2 * math.pi
-        if reach > 2 * math.pi * 32767:
+        if reach > 2 * math.pi * MAX_WELL:
             raise ValueError(f"grid: orbits from this window may travel to |θ| ≈ {reach:.3g} "
-                             "rad, beyond the wells |k| ≤ 32767 that an atlas file can index")
+                             f"rad, beyond the wells |k| ≤ {MAX_WELL} that an atlas file can "
+                             "index")
 
     def to_json(self) -> str:
         """The validated config as canonical JSON (stored in every output file)."""

@@ -25,3 +25,11 @@ class StorageError(AtlasError):
     """Writing the output failed mid-run (disk full, I/O error); finished tiles are kept."""
 
     exit_code = 1
+
+
+class SeparatrixError(AtlasError, RuntimeError):
+    """A separatrix that cannot be certified during a run (a bracket that meets a third basin
+    or finds no certified label, a branch with too many vertices, a failed DOP853 reference):
+    one line naming the point or branch and what to change."""
+
+    exit_code = 1

@@ -20,6 +20,7 @@ import numpy as np
 
 from . import defaults
 from .kernels import TRAPPED
+from .limits import MAX_STEPS, MAX_WELL
 from .model import Pendulum
 
 __all__ = ["LabelResult", "label", "trap_margin", "ATTRACTOR_FILL", "BACKENDS"]
@@ -82,10 +83,6 @@ def n_checks_for(t_max: float, dt: float, check_every: int) -> int:
     return max(1, math.ceil(t_max / (dt * check_every) - 1e-9))
 
 
-#: Most RK4 steps one orbit may take: step counts are int32 in every kernel.
-MAX_STEPS = np.iinfo(np.int32).max
-
-
 def check_integration(alpha: float, omega0: float, dt: float, t_max: float,
                       check_every: int = CHECK_EVERY) -> None:
     """Raise ValueError (one line) unless the labels of these settings can be certified:
@@ -123,7 +120,7 @@ def label(
     to a whole number of trap tests) and stops each orbit once certified by the energy trap.
     ``kernel="straightforward"`` selects the plain one-orbit-per-thread CPU kernel.
     Raises ValueError for settings that cannot give certified labels
-    (:func:`check_integration`) and OverflowError if an orbit reaches a well |k| > 32767.
+    (:func:`check_integration`) and OverflowError if an orbit reaches a well |k| > MAX_WELL.
     """
     check_integration(alpha, omega0, dt, t_max, check_every)
     theta0, theta_dot0 = np.broadcast_arrays(
@@ -141,9 +138,9 @@ def label(
     run(th, v, float(alpha), float(omega0), float(dt), n_checks_for(t_max, dt, check_every),
         int(check_every), energy_cap, attractor, status, n_trap)
     trapped = status == TRAPPED
-    if np.any(np.abs(attractor[trapped]) > np.iinfo(np.int16).max):
-        raise OverflowError("an orbit reached a well |k| > 32767, beyond the int16 attractor "
-                            "index of the atlas; narrow the θ0/θ̇0 window")
+    if np.any(np.abs(attractor[trapped]) > MAX_WELL):
+        raise OverflowError(f"an orbit reached a well |k| > {MAX_WELL}, beyond the int16 "
+                            "attractor index of the atlas; narrow the θ0/θ̇0 window")
     return LabelResult(
         attractor=np.where(trapped, attractor, ATTRACTOR_FILL).astype(np.int16).reshape(shape),
         status=status.reshape(shape),

@@ -50,9 +50,10 @@ Method (:func:`trace`)
    ``DISCREPANCY_BOUND`` = 10⁻⁸ the summary carries a warning. The same curve measures
    ``polyline_error``, the largest distance from the manifold to the polyline.
 
-:func:`check_settings` rejects, before any work, a ``tol`` below what double precision resolves
-in the window and a ``max_spacing`` finer than the curve is accurate; what can still fail during
-a run raises :class:`SeparatrixError`, one line for the user.
+:func:`atlas.limits.check_separatrix_settings` rejects, before any work, a ``tol`` below what
+double precision resolves in the window and a ``max_spacing`` finer than the curve is
+accurate; what can still fail during a run raises :class:`SeparatrixError`, one line for the
+user.
 
 The crossings of the basin boundaries with the axis θ0 = 0 (the initial speeds at which the
 label changes) are located by the same bisection along the θ̇0 axis, after labelling a grid of
@@ -75,15 +76,15 @@ import numpy as np
 import xarray as xr
 
 from . import defaults
-from .errors import AtlasError
+from .errors import SeparatrixError
 from .kernels import TRAPPED, UNRESOLVED
 from .kernels.rk4 import rk4_step
 from .labels import label
+from .limits import check_separatrix_settings
 from .model import Pendulum, critical_points
 
 __all__ = [
     "trace",
-    "check_settings",
     "SeparatrixError",
     "branches",
     "summary",
@@ -95,8 +96,6 @@ __all__ = [
     "NO_LABEL",
     "BRANCHES",
     "DISCREPANCY_BOUND",
-    "MIN_TOL_ULPS",
-    "MIN_MAX_SPACING",
     "merge_parameter_points",
     "select_parameter_point",
 ]
@@ -113,17 +112,6 @@ CHECK_RTOL = CHECK_ATOL = 1e-13
 NO_LABEL = np.iinfo(np.int64).min
 #: Number of θ̇0 samples on the axis θ0 = 0 before the crossings are bisected.
 AXIS_GRID = 1024
-#: Smallest ``tol``, in units of the spacing of doubles at the window's largest |θ| or |θ̇|:
-#: a bracket of width tol must still hold the multisection points (up to 7) as distinct,
-#: well-separated doubles, and its midpoint must differ from both ends.
-MIN_TOL_ULPS = 64
-#: Smallest ``max_spacing`` [rad-ish]. At 1e-4 the chord error (≤ max_spacing²/8 ≈ 1.3e-9;
-#: measured 6e-10) already equals the located curve's own O(dt⁴) offset from the exact
-#: manifold at the default dt (6e-10), so a finer polyline adds points but no accuracy; and
-#: the points grow as 1/max_spacing (default window, α = 0.1: 1654 at 0.05, 8e5 and ≈ 20 s
-#: on 2 cores at 1e-4).
-MIN_MAX_SPACING = 1e-4
-
 _FIRST_BRACKET = 32.0  # initial half-width of a bracket, in units of tol
 _GROW = 8.0  # widening factor while a bracket has equal labels at both ends
 _MAX_BRACKET = 0.1  # no wider than this [rad-ish]: the predictor is far better than that
@@ -138,14 +126,6 @@ _MAX_STALLS = 20  # rounds in a row without a certified label inside a bracket
 _SPEED_GROWTH = 0.3  # predictor: max log-growth of the speed between vertices (near the saddle)
 _CHORD_AIM = 0.9  # predictor: aim at this × the allowed chord (curvature varies along it)
 _MAX_VERTICES = 1_000_000  # per branch: a branch 100 rad-ish long at MIN_MAX_SPACING
-
-
-class SeparatrixError(AtlasError, RuntimeError):
-    """A separatrix that cannot be certified during a run (a bracket that meets a third basin
-    or finds no certified label, a branch with too many vertices, a failed DOP853 reference):
-    one line naming the point or branch and what to change."""
-
-    exit_code = 1
 
 
 @dataclass(frozen=True)
@@ -642,38 +622,6 @@ def _locate(labels, base, normal, k, vertex, tau, tol):
     return lo, hi
 
 
-def _round_up(x: float) -> float:
-    """``x`` rounded up to two significant digits (a bound that still holds when printed)."""
-    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
-    return math.ceil(x / unit) * unit
-
-
-def check_settings(theta_window, theta_dot_window, tol: float, max_spacing: float) -> None:
-    """Raise ValueError, with a one-line reason naming the setting, unless :func:`trace` can
-    honour ``tol`` and ``max_spacing`` [rad-ish] in this window ([rad], [rad s⁻¹]).
-
-    Pure and cheap: run it before any work. Bounds: 0 < ``tol``, and tol ≥ ``MIN_TOL_ULPS``
-    (64) spacings of doubles at the window's largest coordinate (1.1e-13 for |θ| ≤ 3π), below
-    which a bracket cannot be resolved; ``max_spacing`` ≥ ``MIN_MAX_SPACING`` (1e-4), below
-    which the polyline outgrows the accuracy of the curve it joins (see the constant).
-    """
-    for name, value in (("tol", tol), ("max_spacing", max_spacing)):
-        if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-    window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
-    theta_max = max(map(abs, window.theta))
-    scale = max(theta_max, *map(abs, window.theta_dot))
-    need = MIN_TOL_ULPS * float(np.spacing(scale))
-    if tol < need:
-        where = "|θ|" if scale == theta_max else "|θ̇|"
-        raise ValueError(f"tol = {tol:g} is below what double precision can resolve at "
-                         f"{where} ≤ {scale:.3g} (needs ≥ {_round_up(need):.2g})")
-    if max_spacing < MIN_MAX_SPACING:
-        raise ValueError(f"max_spacing = {max_spacing:g} is below {MIN_MAX_SPACING:g}: its "
-                         "chord error max_spacing²/8 would fall below the curve's own accuracy "
-                         f"(≈ 1e-9), at {1 / max_spacing:.0e} points per unit of length")
-
-
 def trace(
     pendulum: Pendulum,
     theta_window,
@@ -699,7 +647,8 @@ def trace(
     ``tol``, ``max_spacing``, ``dt``, ``t_max``, ``discrepancy``, ``discrepancy_bound``,
     ``polyline_error``, ``n_orbits``, ``n_unresolved``, ``warnings`` (lines joined by "\\n",
     read with :func:`warnings`) and ``method``.
-    Raises ValueError for α = 0, a bad window, dt or settings (:func:`check_settings`);
+    Raises ValueError for α = 0, a bad window, dt or settings
+    (:func:`atlas.limits.check_separatrix_settings`);
     :class:`SeparatrixError` (an :class:`~atlas.errors.AtlasError`) if a point or branch
     cannot be certified during the run.
     """
@@ -707,7 +656,7 @@ def trace(
     _require_damping(p)
     if not (math.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
-    check_settings(theta_window, theta_dot_window, tol, max_spacing)
+    check_separatrix_settings(theta_window, theta_dot_window, tol, max_spacing)
     window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
 
     on_axis = window.theta_dot[0] <= 0.0 <= window.theta_dot[1]

@@ -75,6 +75,8 @@ BAD = [
     ("grid: {theta0: {start: 0, stop: 1}}", "grid.theta0.num: missing"),
     ("grid: {theta0: {start: 0, stop: 1, num: 2.5}}", "grid.theta0.num"),
     ("separatrices: {tol: 0}", "separatrices.tol"),
+    ("separatrices: {tol: 1.0e-14}", "separatrices.tol = 1e-14 is below what double precision"),
+    ("separatrices: {max_spacing: 1.0e-6}", "separatrices.max_spacing = 1e-06 is below 0.0001"),
     ("execution: {backend: gpu}", "execution.backend"),
     ("name: [1, 2]", "name"),
     ("- 1\n- 2", "a config must be a mapping"),

@@ -71,6 +71,7 @@ def test_straightforward_kernel_agrees(small_grid):
     theta0, theta_dot0 = small_grid
     a = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0)
     b = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0, kernel="straightforward")
+    np.testing.assert_array_equal(a.status, b.status)
     np.testing.assert_array_equal(a.attractor, b.attractor)
     np.testing.assert_array_equal(a.t_trap, b.t_trap)
 

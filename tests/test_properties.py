@@ -5,7 +5,7 @@ import math
 
 import numba
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import atlas
@@ -44,8 +44,7 @@ def test_shift_by_2pi_k_maps_label_k_to_k_plus_j(theta0, theta_dot0, alpha, omeg
     d = 1e-6
     around = _label(theta0 + np.array([0, d, -d, 0, 0]), theta_dot0 + np.array([0, 0, 0, d, -d]),
                     alpha, omega0)
-    if not (np.all(around.status == 0) and np.all(around.attractor == around.attractor[0])):
-        return
+    assume(np.all(around.status == 0) and np.all(around.attractor == around.attractor[0]))
     shifted = _label(theta0 + 2 * math.pi * j, theta_dot0, alpha, omega0)
     assert shifted.status[()] == 0 and shifted.attractor[()] == around.attractor[0] + j
 
@@ -81,7 +80,8 @@ def test_energy_never_increases_along_an_orbit(theta0, theta_dot0, alpha, omega0
         propagate_straightforward(theta, theta_dot, alpha, omega0, dt, 1)
         energy.append(p.energy(theta[0], theta_dot[0]))  # E about well 0: smooth in θ
     rise = np.max(np.array(energy) - np.minimum.accumulate(energy))
-    assert rise <= trap_margin(dt, alpha, omega0) * p.saddle_energy
+    # the same 5 % of the margin as tests/test_labels.py
+    assert rise <= 0.05 * trap_margin(dt, alpha, omega0) * p.saddle_energy
 
 
 @settings(max_examples=6, deadline=None)

@@ -219,7 +219,8 @@ output: {tmp_path / 's.h5'}
     proc = run_cli("run", cfg)
     assert proc.returncode == 0, proc.stderr
     assert "separatrices: 2 parameter points" in proc.stdout
-    assert "alpha = 0.2, omega0 = 1: k=" in proc.stdout and "alpha = 1, omega0 = 1: k=" in proc.stdout
+    for alpha in ("0.2", "1"):
+        assert f"alpha = {alpha}, omega0 = 1: k=" in proc.stdout
     sep = atlas.open(tmp_path / "s.h5")["separatrices"].to_dataset(inherit=False)
     for alpha in (0.2, 1.0):
         one = select_parameter_point(sep, alpha, 1.0)

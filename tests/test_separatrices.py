@@ -20,6 +20,7 @@ import atlas
 from atlas import defaults
 from atlas import separatrices as sep
 from atlas.errors import AtlasError
+from atlas.limits import MIN_MAX_SPACING, MIN_TOL_ULPS, check_separatrix_settings
 from atlas.model import Pendulum
 
 PI = math.pi
@@ -287,27 +288,27 @@ def test_dataset_round_trips_through_h5netcdf(traced, tmp_path):
 ])
 def test_unusable_settings_are_refused_before_any_work(tol, max_spacing, culprit):
     with pytest.raises(ValueError, match=culprit) as refused:
-        sep.check_settings(*DEFAULT_WINDOW, tol, max_spacing)
+        check_separatrix_settings(*DEFAULT_WINDOW, tol, max_spacing)
     assert "\n" not in str(refused.value)
     with pytest.raises(ValueError, match=culprit):
         sep.trace(Pendulum(0.1, 1.0), *DEFAULT_WINDOW, tol=tol, max_spacing=max_spacing)
 
 
 def test_the_bounds_scale_with_the_window_and_are_inclusive():
-    sep.check_settings(*DEFAULT_WINDOW, TOL, defaults.MAX_SPACING)  # the defaults pass
-    smallest = sep.MIN_TOL_ULPS * np.spacing(3 * PI)
-    sep.check_settings(*DEFAULT_WINDOW, smallest, sep.MIN_MAX_SPACING)
+    check_separatrix_settings(*DEFAULT_WINDOW, TOL, defaults.MAX_SPACING)  # the defaults pass
+    smallest = MIN_TOL_ULPS * np.spacing(3 * PI)
+    check_separatrix_settings(*DEFAULT_WINDOW, smallest, MIN_MAX_SPACING)
     with pytest.raises(ValueError, match="tol"):
-        sep.check_settings(*DEFAULT_WINDOW, np.nextafter(smallest, 0), sep.MIN_MAX_SPACING)
+        check_separatrix_settings(*DEFAULT_WINDOW, np.nextafter(smallest, 0), MIN_MAX_SPACING)
     with pytest.raises(ValueError, match=r"\|θ̇\| ≤ 40"):  # θ̇ sets the scale here
-        sep.check_settings((-1.0, 1.0), (-40.0, 40.0), smallest, sep.MIN_MAX_SPACING)
+        check_separatrix_settings((-1.0, 1.0), (-40.0, 40.0), smallest, MIN_MAX_SPACING)
 
 
 def test_smallest_accepted_tol_runs_to_the_end():
     """At the bound, orbits stuck at the saddle in floating point can keep brackets wider
     than tol (α = 2): trace stores their widths and says so, it does not raise."""
     window = ((0.0, PI), (0.0, 3.0))
-    tol = sep.MIN_TOL_ULPS * np.spacing(PI)
+    tol = MIN_TOL_ULPS * np.spacing(PI)
     ds = sep.trace(Pendulum(2.0, 1.0), *window, tol=tol)
     wide = int(np.sum(ds["bracket_width"].values >= tol))
     assert ds.sizes["point"] > 50 and ds.attrs["discrepancy"] < ds.attrs["discrepancy_bound"]

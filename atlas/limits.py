@@ -1,0 +1,59 @@
+"""What settings atlas can honour: limits set by double precision and by the file format.
+
+The config validator (:mod:`atlas.config`) checks them before any work, so a valid config
+never fails once its basin map is computed; the numerical modules check them again.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Most RK4 steps one orbit may take: step counts are int32 in every kernel.
+MAX_STEPS = int(np.iinfo(np.int32).max)
+#: Largest |k| of an attractor (2πk, 0): ``attractor`` is int16 in the file.
+MAX_WELL = int(np.iinfo(np.int16).max)
+#: Smallest ``tol``, in units of the spacing of doubles at the window's largest |θ| or |θ̇|:
+#: a bracket of width tol must still hold the multisection points (up to 7) as distinct,
+#: well-separated doubles, and its midpoint must differ from both ends.
+MIN_TOL_ULPS = 64
+#: Smallest ``max_spacing`` [rad-ish]. At 1e-4 the chord error (≤ max_spacing²/8 ≈ 1.3e-9;
+#: measured 6e-10) already equals the located curve's own O(dt⁴) offset from the exact
+#: manifold at the default dt (6e-10), so a finer polyline adds points but no accuracy; and
+#: the points grow as 1/max_spacing (default window, α = 0.1: 1654 at 0.05, 8e5 and ≈ 20 s
+#: on 2 cores at 1e-4).
+MIN_MAX_SPACING = 1e-4
+
+
+def _round_up(x: float) -> float:
+    """``x`` rounded up to two significant digits (a bound that still holds when printed)."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return math.ceil(x / unit) * unit
+
+
+def check_separatrix_settings(theta_window, theta_dot_window, tol: float,
+                              max_spacing: float) -> None:
+    """Raise ValueError, with a one-line reason naming the setting, unless
+    :func:`atlas.separatrices.trace` can honour ``tol`` and ``max_spacing`` [rad-ish] in
+    this window ([rad], [rad s⁻¹]).
+
+    Pure and cheap: run it before any work. Bounds: 0 < ``tol``, and tol ≥ ``MIN_TOL_ULPS``
+    (64) spacings of doubles at the window's largest coordinate (1.1e-13 for |θ| ≤ 3π), below
+    which a bracket cannot be resolved; ``max_spacing`` ≥ ``MIN_MAX_SPACING`` (1e-4), below
+    which the polyline outgrows the accuracy of the curve it joins (see the constant).
+    """
+    for name, value in (("tol", tol), ("max_spacing", max_spacing)):
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    theta_max = max(abs(float(x)) for x in theta_window)
+    scale = max(theta_max, *(abs(float(x)) for x in theta_dot_window))
+    need = MIN_TOL_ULPS * float(np.spacing(scale))
+    if tol < need:
+        where = "|θ|" if scale == theta_max else "|θ̇|"
+        raise ValueError(f"tol = {tol:g} is below what double precision can resolve at "
+                         f"{where} ≤ {scale:.3g} (needs ≥ {_round_up(need):.2g})")
+    if max_spacing < MIN_MAX_SPACING:
+        raise ValueError(f"max_spacing = {max_spacing:g} is below {MIN_MAX_SPACING:g}: its "
+                         "chord error max_spacing²/8 would fall below the curve's own accuracy "
+                         f"(≈ 1e-9), at {1 / max_spacing:.0e} points per unit of length")
