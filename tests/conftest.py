@@ -84,3 +84,18 @@ def run_cli(*args, cwd=None, env=None, timeout=300):
     """Run the real ``atlas`` CLI in a subprocess."""
     return subprocess.run([sys.executable, "-m", "atlas.cli", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True, env=env, timeout=timeout)
+
+
+def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
+    """Make the sweep's ``call``-th tile computation raise ``error`` (a crash mid-run)."""
+    from atlas import sweep
+
+    real, calls = sweep.compute_tile, []
+
+    def crashing(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == call:
+            raise error
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(sweep, "compute_tile", crashing)

@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 import atlas
-from tests.conftest import REPO, run_cli, write_config
+from tests.conftest import REPO, crash_on_tile, run_cli, write_config
 
 LABELS = ("attractor", "status", "t_trap")
 
@@ -71,21 +71,10 @@ def test_resume_with_another_tile_size_keeps_the_files_tiling(tmp_path, monkeypa
     out = tmp_path / "t.h5"
     cfg = atlas.load_config(write_config(tmp_path / "c.yaml",
                                          MANY_TILES.format(t_max=50, output=out)))
-    from atlas import sweep
-
-    calls = []
-
-    def crash_on_fourth(*args, **kwargs):
-        calls.append(1)
-        if len(calls) == 4:
-            raise KeyboardInterrupt
-        return real(*args, **kwargs)
-
-    real = sweep.compute_tile
-    monkeypatch.setattr(sweep, "compute_tile", crash_on_fourth)
-    with pytest.raises(KeyboardInterrupt):
-        atlas.run(cfg, quiet=True)
-    monkeypatch.setattr(sweep, "compute_tile", real)
+    with monkeypatch.context() as m:
+        crash_on_tile(m, 4, KeyboardInterrupt())
+        with pytest.raises(KeyboardInterrupt):
+            atlas.run(cfg, quiet=True)
     bigger = cfg.model_copy(update={"execution": cfg.execution.model_copy(
         update={"tile_orbits": 48 * 7})})
     resumed = atlas.run(bigger, resume=True, quiet=True).to_dataset(inherit=False)
@@ -98,18 +87,7 @@ def test_resume_refuses_a_partial_file_from_another_config(tmp_path, monkeypatch
     out = tmp_path / "x.h5"
     cfg = write_config(tmp_path / "c.yaml", MANY_TILES.format(t_max=50, output=out))
     partial = out.with_name(out.name + ".partial")
-    from atlas import sweep
-
-    calls = []
-
-    def crash_on_third(*args, **kwargs):
-        calls.append(1)
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return real(*args, **kwargs)
-
-    real = sweep.compute_tile
-    monkeypatch.setattr(sweep, "compute_tile", crash_on_third)
+    crash_on_tile(monkeypatch, 3, KeyboardInterrupt())
     with pytest.raises(KeyboardInterrupt):
         atlas.run(atlas.load_config(cfg), quiet=True)
     before = partial.read_bytes()

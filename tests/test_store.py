@@ -8,8 +8,8 @@ import pytest
 import xarray as xr
 
 import atlas
-from atlas import sweep
 from atlas.labels import ATTRACTOR_FILL
+from tests.conftest import crash_on_tile
 
 
 @pytest.fixture(scope="module")
@@ -100,16 +100,7 @@ def test_failed_run_leaves_no_file_at_the_output(written, tmp_path, monkeypatch)
     cfg, _ = written
     out = tmp_path / "fails.h5"
     cfg = cfg.model_copy(update={"output": out})
-    calls = []
-
-    def flaky(*args, **kwargs):
-        calls.append(1)
-        if len(calls) == 3:
-            raise RuntimeError("simulated crash")
-        return real(*args, **kwargs)
-
-    real = sweep.compute_tile
-    monkeypatch.setattr(sweep, "compute_tile", flaky)
+    crash_on_tile(monkeypatch, 3, RuntimeError("simulated crash"))
     with pytest.raises(RuntimeError, match="simulated crash"):
         atlas.run(cfg, quiet=True)
     assert not out.exists()
