@@ -117,15 +117,17 @@ def trap_time_map(tree: xr.DataTree, ax=None, **index):
     positive = t[np.isfinite(t) & (t > 0)]
     lo = positive.min() if positive.size else 1e-2
     hi = max(positive.max() if positive.size else 1.0, lo * 10)
+    cmap = plt.get_cmap("magma").with_extremes(under="0.8", bad="white")
+    # t_trap = 0 (already inside the trap) is drawn below the scale, in grey
     mesh = ax.pcolormesh(ds["theta0"].values, ds["theta_dot0"].values,
-                         np.ma.masked_invalid(np.where(t > 0, t, lo)), cmap="magma",
+                         np.ma.masked_invalid(np.where(t > 0, t, lo / 2)), cmap=cmap,
                          norm=LogNorm(lo, hi), shading="nearest", rasterized=True)
-    ax.figure.colorbar(mesh, ax=ax).set_label("trapping time t_trap [s]")
+    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label("trapping time t_trap [s]")
     _separatrices(ax, tree, ds)
     pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
     ax.set_xlabel("θ0 [rad]")
     ax.set_ylabel("θ̇0 [rad/s]")
-    ax.set_title("Time to certified trapping (white: never trapped)")
+    ax.set_title("Time to certified trapping (grey: trapped at t = 0; white: never)")
     return ax
 
 
