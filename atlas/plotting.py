@@ -62,7 +62,7 @@ def _critical(ax, tree: xr.DataTree) -> None:
     if "critical_points" not in tree.children:
         return
     cp = tree["critical_points"].to_dataset(inherit=False)
-    critical_point_markers(ax, cp["theta"].values, cp["kind"].values == "saddle")
+    critical_point_markers(ax, cp["theta"].values, cp["n"].values % 2 != 0)  # odd n: saddles
 
 
 def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:

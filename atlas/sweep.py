@@ -93,19 +93,19 @@ def _dask_results(cfg, layout, todo) -> Iterator[tuple[int, tuple]]:
 
 def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
     """The ``/critical_points`` group: θ, n, kind and both eigenvalues of every rest state in
-    the θ0 window (per α, ω0 for a parameter atlas; the points are the same for all)."""
+    the θ0 window. In a parameter atlas the kinds and eigenvalues depend on (α, ω0) and carry
+    those leading dims; θ and n are the same for all."""
     lo, hi = float(layout.theta0[0]), float(layout.theta0[-1])
-    per_param = []
-    for ia in range(len(cfg.pendulum.alphas)):
-        for iw in range(len(cfg.pendulum.omega0s)):
-            pts = critical_points(_pendulum(cfg, (ia, iw) if layout.alpha is not None else ()),
-                                  lo, hi)
-            per_param.append(np.array([p.eigenvalues for p in pts], np.complex128)
-                             .reshape(len(pts), 2))
-    eig = np.stack(per_param)
-    lead_dims = ("alpha", "omega0") if layout.alpha is not None else ()
-    lead_shape = (layout.alpha.size, layout.omega0.size) if layout.alpha is not None else ()
-    eig = eig.reshape(*lead_shape, len(pts), 2)
+    per_param = [critical_points(Pendulum(a, w), lo, hi)
+                 for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
+    points = per_param[0]
+    sweep = layout.alpha is not None
+    lead_dims = ("alpha", "omega0") if sweep else ()
+    lead_shape = (layout.alpha.size, layout.omega0.size) if sweep else ()
+    eig = np.array([[p.eigenvalues for p in pts] for pts in per_param], np.complex128)
+    eig = eig.reshape(*lead_shape, len(points), 2)
+    kind = np.array([[p.kind for p in pts] for pts in per_param]).reshape(*lead_shape,
+                                                                           len(points))
     dims = (*lead_dims, "point", "eigen")
     return xr.Dataset(
         {
@@ -113,14 +113,14 @@ def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
                                                  "long_name": "real part of the eigenvalue"}),
             "eigenvalue_imag": (dims, eig.imag, {"units": "s-1",
                                                  "long_name": "imaginary part of the eigenvalue"}),
+            "kind": ((*lead_dims, "point"), kind,
+                     {"long_name": "attractor focus/node/critical node, or saddle"}),
         },
         coords={
-            "theta": ("point", np.array([p.theta for p in pts]),
+            "theta": ("point", np.array([p.theta for p in points]),
                       {"units": "rad", "long_name": "angle of the rest state (n*pi, 0)"}),
-            "n": ("point", np.array([p.n for p in pts], np.int32),
+            "n": ("point", np.array([p.n for p in points], np.int32),
                   {"units": "1", "long_name": "theta = n*pi"}),
-            "kind": ("point", np.array([p.kind for p in pts]),
-                     {"long_name": "attractor focus/node/critical node, or saddle"}),
         },
         attrs={"description": "critical points (n*pi, 0) of eq. (1) in the theta0 window and "
                               "their linearisation eigenvalues (essay section 3, eqs. 22-24)"},

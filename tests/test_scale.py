@@ -129,6 +129,10 @@ output: {output}
     np.testing.assert_allclose(total, 1.0, atol=1e-12)
     cp = tree["critical_points"]
     assert cp["eigenvalue_real"].dims == ("alpha", "omega0", "point", "eigen")
+    # α = 0.05, 0.5 underdamped for both ω0; α = 2 overdamped for both: the kinds follow α
+    attractor_kinds = cp["kind"].isel(point=cp["n"].values % 2 == 0).values
+    assert set(attractor_kinds[:2].ravel()) == {"attractor focus"}
+    assert set(attractor_kinds[2].ravel()) == {"attractor node"}
     for ia, a in enumerate([0.05, 0.5, 2.0]):
         for iw, w in enumerate([1.0, 1.5]):
             single = write_config(tmp_path / "one.yaml", grid.format(
