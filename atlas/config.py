@@ -237,23 +237,24 @@ class Config(_Strict):
     @model_validator(mode="after")
     def _runnable(self):
         """Checks across sections, so that a valid config never fails after work began."""
-        from .limits import MAX_STEPS, check_separatrix_settings
-        from .model import Pendulum, rk4_stable
+        from .labels import check_integration
+        from .limits import check_reach, check_separatrix_settings
 
         dt, t_max = self.integrator.dt, self.integrator.t_max
-        if t_max / dt > MAX_STEPS:
-            raise ValueError(f"integrator: t_max/dt = {t_max / dt:.3g} steps per orbit is "
-                             f"more than the {MAX_STEPS} an orbit may take")
         for a in self.pendulum.alphas:
             for w in self.pendulum.omega0s:
-                if not rk4_stable(Pendulum(a, w), dt):
-                    raise ValueError(
-                        f"integrator.dt = {dt:g} is beyond RK4's stability limit for "
-                        f"alpha = {a:g}, omega0 = {w:g}; use a smaller dt"
-                    )
-        self._check_reach()
+                try:
+                    check_integration(a, w, dt, t_max)
+                except ValueError as exc:
+                    raise ValueError(f"integrator.{exc}") from None
+        g = self.grid
+        try:
+            check_reach(max(abs(g.theta0.start), abs(g.theta0.stop)),
+                        max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop)),
+                        min(self.pendulum.alphas))
+        except ValueError as exc:
+            raise ValueError(f"grid: {exc}") from None
         if self.separatrices.enabled:
-            g = self.grid
             try:
                 check_separatrix_settings((g.theta0.start, g.theta0.stop),
                                           (g.theta_dot0.start, g.theta_dot0.stop),
@@ -261,24 +262,6 @@ class Config(_Strict):
             except ValueError as exc:
                 raise ValueError(f"separatrices.{exc}") from None
         return self
-
-    def _check_reach(self) -> None:
-        """Orbits must end in wells |k| ≤ MAX_WELL (the file's int16 ``attractor``).
-
-        From θ̈ + 2αθ̇ = −ω0² sin θ, the distance an orbit travels is
-        |Δθ| = |θ̇0 − ω0²∫sin θ dt|/(2α), about |θ̇0|/(2α) for fast rotation, whose sin
-        averages out; twice that plus a well of slack bounds the reach used here.
-        """
-        from .limits import MAX_WELL
-
-        g = self.grid
-        theta = max(abs(g.theta0.start), abs(g.theta0.stop))
-        speed = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))
-        reach = theta + speed / min(self.pendulum.alphas) + 2 * math.pi
-        if reach > 2 * math.pi * MAX_WELL:
-            raise ValueError(f"grid: orbits from this window may travel to |θ| ≈ {reach:.3g} "
-                             f"rad, beyond the wells |k| ≤ {MAX_WELL} that an atlas file can "
-                             "index")
 
     def to_json(self) -> str:
         """The validated config as canonical JSON (stored in every output file)."""

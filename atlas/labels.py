@@ -20,8 +20,8 @@ import numpy as np
 
 from . import defaults
 from .kernels import TRAPPED
-from .limits import MAX_STEPS, MAX_WELL
-from .model import Pendulum
+from .limits import MAX_STEPS, MAX_TRAP_MARGIN, MAX_WELL, check_reach
+from .model import Pendulum, rk4_stable
 
 __all__ = ["LabelResult", "label", "trap_margin", "ATTRACTOR_FILL", "BACKENDS"]
 
@@ -85,10 +85,12 @@ def n_checks_for(t_max: float, dt: float, check_every: int) -> int:
 
 def check_integration(alpha: float, omega0: float, dt: float, t_max: float,
                       check_every: int = CHECK_EVERY) -> None:
-    """Raise ValueError (one line) unless the labels of these settings can be certified:
+    """Raise ValueError (one line, naming the setting) unless labels can be certified:
     α > 0 (with α = 0 energy is conserved and nothing settles), ω0 > 0, finite dt > 0 and
-    t_max > 0, and at most ``MAX_STEPS`` steps per orbit."""
-    Pendulum(alpha, omega0)
+    t_max > 0, at most ``MAX_STEPS`` steps per orbit, dt within RK4's stability limit
+    (:func:`atlas.model.rk4_stable`) and fine enough that the trap margin stays
+    ≤ ``MAX_TRAP_MARGIN``."""
+    pendulum = Pendulum(alpha, omega0)
     if alpha == 0.0:
         raise ValueError("alpha = 0: without damping the energy is conserved and no orbit "
                          "ever settles, so no label can be certified")
@@ -98,8 +100,25 @@ def check_integration(alpha: float, omega0: float, dt: float, t_max: float,
     if check_every < 1:
         raise ValueError(f"check_every must be >= 1, got {check_every}")
     if n_checks_for(t_max, dt, check_every) * check_every > MAX_STEPS:
-        raise ValueError(f"t_max/dt = {t_max / dt:.3g} steps exceeds the {MAX_STEPS} steps "
-                         "an orbit may take")
+        raise ValueError(f"t_max: t_max/dt = {t_max / dt:.3g} steps per orbit is more than "
+                         f"the {MAX_STEPS} an orbit may take")
+    where = f"for alpha = {alpha:g}, omega0 = {omega0:g}"
+    if not rk4_stable(pendulum, dt):
+        raise ValueError(f"dt = {dt:g} is beyond RK4's stability limit {where}; use a "
+                         "smaller dt")
+    margin = trap_margin(dt, alpha, omega0)
+    if margin > MAX_TRAP_MARGIN:
+        fine = (MAX_TRAP_MARGIN - 1e-9) ** 0.25 / (alpha + math.hypot(alpha, omega0))
+        raise ValueError(f"dt = {dt:g} is too coarse for certified labels {where}: the energy "
+                         f"trap's safety margin would be {margin:.2g} (at most "
+                         f"{MAX_TRAP_MARGIN:g}); use dt <= {fine:.3g}")
+
+
+def _check_inputs(theta0: np.ndarray, theta_dot0: np.ndarray, alpha: float) -> None:
+    finite_theta = np.abs(theta0[np.isfinite(theta0)])
+    finite_speed = np.abs(theta_dot0[np.isfinite(theta_dot0)])
+    if finite_theta.size and finite_speed.size:
+        check_reach(float(finite_theta.max()), float(finite_speed.max()), alpha)
 
 
 def label(
@@ -120,12 +139,14 @@ def label(
     to a whole number of trap tests) and stops each orbit once certified by the energy trap.
     ``kernel="straightforward"`` selects the plain one-orbit-per-thread CPU kernel.
     Raises ValueError for settings that cannot give certified labels
-    (:func:`check_integration`) and OverflowError if an orbit reaches a well |k| > MAX_WELL.
+    (:func:`check_integration`) or initial conditions whose orbits may reach wells beyond
+    |k| ≤ MAX_WELL (:func:`atlas.limits.check_reach`); OverflowError if one does anyway.
     """
     check_integration(alpha, omega0, dt, t_max, check_every)
     theta0, theta_dot0 = np.broadcast_arrays(
         np.asarray(theta0, dtype=np.float64), np.asarray(theta_dot0, dtype=np.float64)
     )
+    _check_inputs(theta0, theta_dot0, alpha)
     shape = theta0.shape
     th = np.ascontiguousarray(theta0.ravel())
     v = np.ascontiguousarray(theta_dot0.ravel())

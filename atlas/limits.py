@@ -14,6 +14,27 @@ import numpy as np
 MAX_STEPS = int(np.iinfo(np.int32).max)
 #: Largest |k| of an attractor (2πk, 0): ``attractor`` is int16 in the file.
 MAX_WELL = int(np.iinfo(np.int16).max)
+#: Largest relative safety margin m of the energy trap (:func:`atlas.labels.trap_margin`):
+#: beyond it dt is so coarse that the trap would certify little or nothing.
+MAX_TRAP_MARGIN = 0.1
+
+
+def reach(theta_abs: float, speed_abs: float, alpha: float) -> float:
+    """Bound [rad] on |θ| along orbits starting at |θ0| ≤ ``theta_abs``, |θ̇0| ≤ ``speed_abs``.
+
+    From θ̈ + 2αθ̇ = −ω0² sin θ the distance travelled is |θ̇0 − ω0²∫sin θ dt|/(2α), about
+    |θ̇0|/(2α) for fast rotation, whose sin averages out; twice that plus a well of slack is
+    the bound. Orbits must stay within the wells |k| ≤ MAX_WELL that the file can index.
+    """
+    return theta_abs + speed_abs / alpha + 2 * math.pi
+
+
+def check_reach(theta_abs: float, speed_abs: float, alpha: float) -> None:
+    """Raise ValueError (one line) if orbits may reach wells beyond |k| ≤ MAX_WELL."""
+    bound = reach(theta_abs, speed_abs, alpha)
+    if bound > 2 * math.pi * MAX_WELL:
+        raise ValueError(f"orbits from this window may travel to |θ| ≈ {bound:.3g} rad, "
+                         f"beyond the wells |k| ≤ {MAX_WELL} that an atlas file can index")
 #: Smallest ``tol``, in units of the spacing of doubles at the window's largest |θ| or |θ̇|:
 #: a bracket of width tol must still hold the multisection points (up to 7) as distinct,
 #: well-separated doubles, and its midpoint must differ from both ends.

@@ -80,7 +80,7 @@ from .errors import SeparatrixError
 from .kernels import TRAPPED, UNRESOLVED
 from .kernels.rk4 import rk4_step
 from .labels import label
-from .limits import check_separatrix_settings
+from .limits import MAX_STEPS, check_separatrix_settings
 from .model import Pendulum, critical_points
 
 __all__ = [
@@ -207,7 +207,9 @@ class _Labeller:
 
     def __init__(self, p: Pendulum, dt: float, t_max: float, backend: str = "cpu",
                  escalate: bool = False):
-        self.p, self.dt, self.t_max, self.backend = p, dt, t_max, backend
+        # never more steps than an orbit may take (atlas.limits.MAX_STEPS), escalated or not
+        self.longest = 0.99 * MAX_STEPS * dt
+        self.p, self.dt, self.t_max, self.backend = p, dt, min(t_max, self.longest), backend
         self.escalate = escalate
         self.orbits = self.unresolved = self.nonfinite = 0
 
@@ -217,7 +219,8 @@ class _Labeller:
         k, status = res.attractor.astype(np.int64), res.status.copy()
         redo = (status == UNRESOLVED) & self.escalate
         if redo.any():
-            res = label(theta[redo], theta_dot[redo], t_max=_ESCALATION * self.t_max, **kw)
+            res = label(theta[redo], theta_dot[redo],
+                        t_max=min(_ESCALATION * self.t_max, self.longest), **kw)
             k[redo], status[redo] = res.attractor, res.status
         self.orbits += theta.size + int(redo.sum())
         self.unresolved += int(np.sum(status == UNRESOLVED))

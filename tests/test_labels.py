@@ -123,6 +123,8 @@ def test_trapped_orbits_never_leave_their_well():
     ({"alpha": -0.5}, "alpha"), ({"alpha": 0.0}, "no orbit ever settles"),
     ({"omega0": 0.0}, "omega0"), ({"dt": -0.01}, "dt"), ({"dt": 0.0}, "dt"),
     ({"t_max": float("nan")}, "t_max"), ({"t_max": 1e9, "dt": 1e-3}, "steps"),
+    ({"dt": 3.0}, "stability limit"), ({"dt": 1.0}, "too coarse for certified labels"),
+    ({"alpha": 60.0}, "too coarse for certified labels"),
 ])
 def test_label_refuses_settings_it_cannot_certify(kwargs, message):
     args = {"alpha": ALPHA, "omega0": OMEGA0, **kwargs}
@@ -130,6 +132,24 @@ def test_label_refuses_settings_it_cannot_certify(kwargs, message):
         atlas.label(0.5, 0.0, **args)
 
 
-def test_orbits_beyond_the_int16_wells_are_refused():
-    with pytest.raises(OverflowError, match="32767"):
-        atlas.label(2 * np.pi * 40_000, 0.0, alpha=ALPHA, omega0=OMEGA0)
+@pytest.mark.parametrize("theta0,theta_dot0", [(2 * np.pi * 40_000, 0.0), (1e17, 0.0),
+                                               (2 * np.pi * (2**32 + 5), 1.0), (0.0, 3e4)])
+def test_orbits_that_may_pass_the_int16_wells_are_refused(theta0, theta_dot0):
+    with pytest.raises(ValueError, match="32767"):
+        atlas.label([0.0, theta0], [0.0, theta_dot0], alpha=ALPHA, omega0=OMEGA0)
+
+
+def test_the_fast_kernel_hands_huge_angles_to_the_reference_path():
+    """Beyond fast_sin's stated range the lane kernel must give the straightforward kernel's
+    answer (kernels called directly: atlas.label refuses such inputs)."""
+    from atlas.kernels.lanes import label_lanes
+    from atlas.kernels.rk4 import label_straightforward
+
+    theta0 = np.array([2 * np.pi * (2**31 + 5) + 0.1, 1e7 + 0.3, 0.5])
+    outs = []
+    for kernel in (label_lanes, label_straightforward):
+        out = (np.zeros(3, np.int32), np.zeros(3, np.int8), np.zeros(3, np.int32))
+        kernel(theta0, np.zeros(3), ALPHA, OMEGA0, 0.01, 100, 16, 1.9, *out)
+        outs.append(out)
+    for a, b in zip(*outs):
+        np.testing.assert_array_equal(a, b)

@@ -62,7 +62,7 @@ import numba as nb
 import numpy as np
 
 from . import NONFINITE, TRAPPED, UNRESOLVED
-from .fastsin import POLY_RANGE, SIN_FASTMATH, fast_sin, reduce_pi, sin_near
+from .fastsin import EXACT_RANGE, POLY_RANGE, SIN_FASTMATH, fast_sin, reduce_pi, sin_near
 from .rk4 import label_orbit, make_rk4_step, make_well_energy, rk4_step
 
 #: Orbits per lane block (a compile-time constant; see the module docstring).
@@ -101,10 +101,11 @@ def _fits_lanes(theta, theta_dot, alpha, omega0, dt):
     orbit. With α ≥ 0 the energy never grows, so |θ̇| ≤ V = √(θ̇0² + 2ω0²(1 − cos θ0))
     ≤ √(θ̇0² + 4ω0²); a stage velocity exceeds |θ̇| by at most ½dt(ω0² + 2α|k|) per stage.
     The margin 0.43/MAX_STAGE_OFFSET ≈ 1.4 in speed absorbs RK4's small energy error. False
-    for non-finite input (which the reference path reports at its first check)."""
+    for non-finite input (which the reference path reports at its first check) and for
+    |θ0| beyond half of fast_sin's EXACT_RANGE (its accuracy is stated up to there)."""
     speed = math.sqrt(theta_dot * theta_dot + 4.0 * omega0 * omega0)
     offset = dt * (speed * (1.0 + 2.0 * alpha * dt) + dt * omega0 * omega0)
-    return alpha >= 0.0 and math.isfinite(theta) and offset <= MAX_STAGE_OFFSET
+    return alpha >= 0.0 and abs(theta) <= 0.5 * EXACT_RANGE and offset <= MAX_STAGE_OFFSET
 
 
 @nb.njit(nogil=True, fastmath=SIN_FASTMATH)
