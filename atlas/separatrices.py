@@ -10,23 +10,31 @@ Along either branch E > 2ω0² and θ̇ ≠ 0, so every branch is a graph θ̇(�
 conditions just above it (larger θ̇) reach well k = (n+1)/2 while those just below reach
 k − 1 = (n−1)/2. That is the property the method uses.
 
+Eq. (1) is invariant under θ → θ + 2π and under the point reflection (θ, θ̇) → (−θ, −θ̇). So
+every left branch is a copy of L, the left branch of π: that of nπ is L shifted by (n − 1)π;
+every right branch is a copy of R, the right branch of −π: that of nπ is R shifted by
+(n + 1)π; and R = −L. Only L and R are located; every boundary in the window, from saddles
+inside it or outside, is one of their copies.
+
 Method (:func:`trace`)
 ----------------------
-1. *Predictor* (manifold growth): start at distance 10⁻⁷ from the saddle along its stable
-   eigenvector (1, −u2) of the linearisation (essay eqs. 22, 24; the neglected curvature of the
-   manifold is O(10⁻¹⁴) there) and integrate eq. (1) in reversed time with RK4 at step dt/2.
+1. *Predictor* (manifold growth): for L (if the window holds θ̇ > 0) and R (if it holds
+   θ̇ < 0), start at distance 10⁻⁷ from the saddle along its stable eigenvector (1, −u2) of the
+   linearisation (essay eqs. 22, 24; the neglected curvature of the manifold is O(10⁻¹⁴)
+   there) and integrate eq. (1) in reversed time with RK4 at step dt/2.
    Vertices are taken along this orbit with chords ≤ ``max_spacing`` and ≤ max_spacing/√κ
    (κ the curvature in rad⁻¹, computed from the vector field), so the chord error of the
    polyline stays below max_spacing²/8 everywhere; near the saddle the spacing grows
-   geometrically from max_spacing/10. A branch ends at its last exit from the window (it may
-   leave and re-enter through a θ̇ edge; the excursion stays in the polyline), with a vertex
-   placed on the window's edge at every crossing.
+   geometrically from max_spacing/10. A source branch is grown through the window's θ̇ band
+   at every θ (its copies cover any θ range) until its energy exceeds every energy in the
+   window, with a vertex placed on the band's edge at every crossing; only the stretch that
+   its copies in the window use is kept.
 2. *Corrector* (bisection on initial conditions): each predicted vertex is only a guess.
    Across the curve, along the normal of the vector field, certified labels of
    :func:`atlas.labels.label` at step ``dt`` bracket the boundary between basins k − 1 and k;
    the bracket is widened ×8 until its ends carry those labels, then shrunk by bisection (or
    multisection — several labels across each bracket in one kernel call — when few brackets
-   are left), all vertices of all branches in one batch per call, until narrower than
+   are left), all vertices of both branches in one batch per call, until narrower than
    ``tol``. The stored point is the bracket's midpoint, so the labels at ±tol across the curve
    differ. Two passes share the work (:func:`_locate`): every 8th vertex is bisected from
    ±32·tol to tol/8; a spline of those offsets predicts the others so well that their first
@@ -41,12 +49,22 @@ Method (:func:`trace`)
    ``warnings`` attribute.
    The located curve is the basin boundary of the RK4 scheme at step ``dt``, the same one that
    colours the basin map; it differs from the exact manifold by O(dt⁴).
-3. *Independent check* (:func:`check_against_stable_manifold`): the reversed-time ODE is
+3. *Symmetry check*: R is located on its own labels, not reflected from L. The predictor is
+   odd in floating point, so the vertices of R are the reflections of those of L; the largest
+   distance between a located point of R and the reflected located point of L is the attribute
+   ``symmetry_error``, below tol when the labels respect the symmetry (at rounding level in
+   practice: the bisection is symmetric too); above ``SYMMETRY_BOUND``·tol the summary carries
+   a warning.
+4. *Copies*: copy j of L is the left branch of the saddle (1 + 2j)π, copy j of R the right
+   branch of (−1 + 2j)π, both shifted by 2πj. Each copy that enters the window is stored with
+   its points inside it and the one neighbour outside at either end of each inside run, so the
+   polylines reach the window's edges; ``vertex`` keeps the index along the source branch.
+5. *Independent check* (:func:`check_against_stable_manifold`): the reversed-time ODE is
    integrated from the 10⁻⁷ start with scipy's DOP853 (rtol = atol = 10⁻¹³, dense output);
-   the distance from every bisected point to that curve is found by Newton's method on the
-   dense output. Its maximum is the attribute ``discrepancy``: ≈ 6e-10 at α = 0.1, ω0 = 1,
-   dt = 0.01 (≈ 7e-10 at α = 1 and α = 2), falling as dt⁴ — RK4's offset, not bisection
-   error (tests/test_separatrices.py checks it against Richardson's estimate). Above
+   the distance from every bisected point of L and R to that curve is found by Newton's method
+   on the dense output. Its maximum is the attribute ``discrepancy``: ≈ 6e-10 at α = 0.1,
+   ω0 = 1, dt = 0.01 (≈ 7e-10 at α = 1 and α = 2), falling as dt⁴ — RK4's offset, not
+   bisection error (tests/test_separatrices.py checks it against Richardson's estimate). Above
    ``DISCREPANCY_BOUND`` = 10⁻⁸ the summary carries a warning. The same curve measures
    ``polyline_error``, the largest distance from the manifold to the polyline.
 
@@ -55,9 +73,9 @@ double precision resolves in the window and a ``max_spacing`` finer than the cur
 accurate; what can still fail during a run raises :class:`SeparatrixError`, one line for the
 user.
 
-The crossings of the basin boundaries with the axis θ0 = 0 (the initial speeds at which the
-label changes) are located by the same bisection along the θ̇0 axis, after labelling a grid of
-``AXIS_GRID`` speeds over the window (labels along that axis increase with θ̇0 by steps of one).
+The crossing of every boundary in the window with the axis θ0 = 0 (the initial speed at which
+the label changes there, inside the window or not) is located by the same bisection along the
+θ̇0 axis, from the predictor's value of L at θ = −(|n| − 1)π (:func:`_axis_crossings`).
 
 References: Nusse & Yorke, "A procedure for finding numerical trajectories on chaotic saddles",
 Physica D 36 (1989) 137 (straddle orbits: bisection between initial conditions of different
@@ -80,8 +98,8 @@ from .errors import SeparatrixError
 from .kernels import TRAPPED, UNRESOLVED
 from .kernels.rk4 import rk4_step
 from .labels import label
-from .limits import MAX_STEPS, check_separatrix_settings
-from .model import Pendulum, critical_points
+from .limits import MAX_STEPS, MAX_WELL, check_separatrix_settings
+from .model import Pendulum
 
 __all__ = [
     "trace",
@@ -96,6 +114,7 @@ __all__ = [
     "NO_LABEL",
     "BRANCHES",
     "DISCREPANCY_BOUND",
+    "SYMMETRY_BOUND",
     "merge_parameter_points",
     "select_parameter_point",
 ]
@@ -110,8 +129,9 @@ START_DISTANCE = 1e-7
 CHECK_RTOL = CHECK_ATOL = 1e-13
 #: ``attractor`` of an orbit without a certified label, as seen by the bisection.
 NO_LABEL = np.iinfo(np.int64).min
-#: Number of θ̇0 samples on the axis θ0 = 0 before the crossings are bisected.
-AXIS_GRID = 1024
+#: Largest accepted distance between the bisected right branch of −π and the point reflection of
+#: the bisected left branch of π, in units of tol (expected: below 1, see :func:`_symmetry_error`).
+SYMMETRY_BOUND = 4.0
 _FIRST_BRACKET = 32.0  # initial half-width of a bracket, in units of tol
 _GROW = 8.0  # widening factor while a bracket has equal labels at both ends
 _MAX_BRACKET = 0.1  # no wider than this [rad-ish]: the predictor is far better than that
@@ -120,12 +140,11 @@ _MAX_SECTIONS = 7
 _COARSE_STRIDE = 8  # every 8th vertex is bisected first, to tol/_COARSE_TOL
 _COARSE_TOL = 8.0
 _FINE_BRACKET = 0.45  # half-width of the other vertices' first bracket, in units of tol
-_ESCALATION = 4.0  # an unresolved orbit is labelled once more with this × t_max
-_AXIS_TRAVEL = 100.0  # extra t_max for the axis crossings, in units of 1/min(u1, ω0)
 _MAX_STALLS = 20  # rounds in a row without a certified label inside a bracket
 _SPEED_GROWTH = 0.3  # predictor: max log-growth of the speed between vertices (near the saddle)
 _CHORD_AIM = 0.9  # predictor: aim at this × the allowed chord (curvature varies along it)
 _MAX_VERTICES = 1_000_000  # per branch: a branch 100 rad-ish long at MIN_MAX_SPACING
+_FAR = 2 * math.pi * MAX_WELL  # [rad] the θ reach of an atlas: a source branch's θ range
 
 
 @dataclass(frozen=True)
@@ -195,9 +214,7 @@ def _gone(p: Pendulum, window: Window, branch: str, theta: float, theta_dot: flo
 
 class _Labeller:
     """Certified labels (:func:`atlas.labels.label`) with ``NO_LABEL`` where an orbit is not
-    trapped — never taken as either side. With ``escalate`` an unresolved orbit is first
-    relabelled with a ``_ESCALATION`` times longer t_max (for orbits whose travel time is not
-    known in advance).
+    trapped — never taken as either side.
 
     Why orbits stay unresolved although t_max covers the lingering time ln(1/δ)/u1 down to
     δ ≈ 1e-24: an orbit that arrives at the saddle θs within |φ| < ulp(θs)/(2·dt·u1) of it
@@ -205,24 +222,17 @@ class _Labeller:
     of θ, so θ never changes again: a fixed point of the floating-point map. Bisection treats
     such samples as unknown and brackets around them (``unresolved`` counts them)."""
 
-    def __init__(self, p: Pendulum, dt: float, t_max: float, backend: str = "cpu",
-                 escalate: bool = False):
-        # never more steps than an orbit may take (atlas.limits.MAX_STEPS), escalated or not
-        self.longest = 0.99 * MAX_STEPS * dt
-        self.p, self.dt, self.t_max, self.backend = p, dt, min(t_max, self.longest), backend
-        self.escalate = escalate
+    def __init__(self, p: Pendulum, dt: float, t_max: float, backend: str = "cpu"):
+        # never more steps than an orbit may take (atlas.limits.MAX_STEPS)
+        self.p, self.dt, self.backend = p, dt, backend
+        self.t_max = min(t_max, 0.99 * MAX_STEPS * dt)
         self.orbits = self.unresolved = self.nonfinite = 0
 
     def __call__(self, theta: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
-        kw = dict(alpha=self.p.alpha, omega0=self.p.omega0, dt=self.dt, backend=self.backend)
-        res = label(theta, theta_dot, t_max=self.t_max, **kw)
-        k, status = res.attractor.astype(np.int64), res.status.copy()
-        redo = (status == UNRESOLVED) & self.escalate
-        if redo.any():
-            res = label(theta[redo], theta_dot[redo],
-                        t_max=min(_ESCALATION * self.t_max, self.longest), **kw)
-            k[redo], status[redo] = res.attractor, res.status
-        self.orbits += theta.size + int(redo.sum())
+        res = label(theta, theta_dot, alpha=self.p.alpha, omega0=self.p.omega0, dt=self.dt,
+                    t_max=self.t_max, backend=self.backend)
+        k, status = res.attractor.astype(np.int64), res.status
+        self.orbits += theta.size
         self.unresolved += int(np.sum(status == UNRESOLVED))
         self.nonfinite += int(np.sum((status != TRAPPED) & (status != UNRESOLVED)))
         return np.where(status == TRAPPED, k, NO_LABEL)
@@ -393,13 +403,21 @@ def _edge_point(p: Pendulum, window: Window, y, span: float, dt_p: float):
 
 @dataclass(frozen=True)
 class _Predicted:
-    """Predicted vertices of one branch: state and reversed time from the start point."""
+    """Predicted vertices of one branch: state, reversed time from the start point and index
+    along the branch (0 its first vertex, next to the saddle)."""
 
     n: int
     branch: str
     theta: np.ndarray
     theta_dot: np.ndarray
     tau: np.ndarray
+    vertex: np.ndarray
+
+    def part(self, first: int, last: int) -> _Predicted:
+        """The vertices first..last (inclusive)."""
+        cut = slice(first, last + 1)
+        return _Predicted(self.n, self.branch, self.theta[cut], self.theta_dot[cut],
+                          self.tau[cut], self.vertex[cut])
 
 
 def _grow(p: Pendulum, window: Window, n: int, branch: str, max_spacing: float,
@@ -444,7 +462,9 @@ def _grow(p: Pendulum, window: Window, n: int, branch: str, max_spacing: float,
         inside.append(now_inside)
     keep = np.flatnonzero(inside)
     arr = np.array(verts[keep[0]:keep[-1] + 1] if keep.size else [], float).reshape(-1, 3)
-    return _Predicted(n, branch, arr[:, 0], arr[:, 1], arr[:, 2])
+    first = int(keep[0]) if keep.size else 0
+    return _Predicted(n, branch, arr[:, 0], arr[:, 1], arr[:, 2],
+                      np.arange(first, first + arr.shape[0]))
 
 
 # --------------------------------------------------------------------------- check
@@ -499,7 +519,9 @@ def _check(p: Pendulum, window: Window, saddle_n, branch, vertex, theta,
     of eq. (1) (:func:`_to_reference`). The distance of each point to that curve is found by
     Newton's method for the foot point on the dense output (accurate to ≈ 1e-13).
 
-    ``branch`` holds flag values (0 left, 1 right); ``vertex`` orders the points of a branch.
+    ``branch`` holds flag values (0 left, 1 right); ``vertex`` orders the points of a branch,
+    and the polyline joins consecutive vertices only (a branch may leave the window and come
+    back: the points in between are not stored). The window bounds the energy of the points.
     """
     from scipy.integrate import solve_ivp
     from scipy.spatial import cKDTree
@@ -510,10 +532,9 @@ def _check(p: Pendulum, window: Window, saddle_n, branch, vertex, theta,
         return ManifoldCheck(np.zeros(0), 0.0)
     x, v = _to_reference(saddle_n, branch, theta, theta_dot)
     w2, a2 = p.omega0**2, 2.0 * p.alpha
-    # the reference has left every (mapped) window once θ is below all mapped left edges
-    keys = set(zip(saddle_n.tolist(), branch.tolist(), strict=True))
-    theta_end = min((window.theta[0] - (n - 1) * np.pi) if b == 0
-                    else ((n + 1) * np.pi - window.theta[1]) for n, b in keys)
+    # the reference runs one radian past the farthest mapped point (θ falls along it), so
+    # every foot point lies inside it, or until no point of the window's energy is left
+    theta_end = float(x.min()) - 1.0
     energy_end = window.max_energy(p.omega0)
 
     def rhs(t, y):
@@ -546,7 +567,8 @@ def _check(p: Pendulum, window: Window, saddle_n, branch, vertex, theta,
 
     # polyline: sample the manifold between consecutive vertices, distance to the chord
     order = np.lexsort((vertex, branch, saddle_n))
-    same = (np.diff(saddle_n[order]) == 0) & (np.diff(branch[order]) == 0)
+    same = ((np.diff(saddle_n[order]) == 0) & (np.diff(branch[order]) == 0)
+            & (np.diff(vertex[order]) == 1))
     i0, i1 = order[:-1][same], order[1:][same]
     frac = np.linspace(0.0, 1.0, 17)[1:-1]
     ts = t[i0, None] + (t[i1] - t[i0])[:, None] * frac
@@ -569,45 +591,111 @@ def _require_damping(p: Pendulum) -> None:
             "settles, so there are no basins of attraction to bound")
 
 
-def _axis_crossings(labels, window: Window, tol: float):
-    """θ̇0 where the label changes along θ0 = 0, with the basins below and above."""
-    v = np.linspace(*window.theta_dot, AXIS_GRID)
-    lab = labels(np.zeros_like(v), v)
-    v, lab = v[lab != NO_LABEL], lab[lab != NO_LABEL]  # uncertified: no information
-    if lab.size == 0:
-        raise SeparatrixError("no orbit on the axis theta0 = 0 settles: the basin boundaries "
-                              "there cannot be located (dt unstable?)")
-    if np.any(np.diff(lab) < 0):
-        raise SeparatrixError("labels along theta0 = 0 do not increase with theta_dot0 "
-                              "(dt too large?)")
-    k = np.arange(lab[0] + 1, lab[-1] + 1)
-    i = np.searchsorted(lab, k)  # first sample in basin ≥ k
-    base = np.column_stack([np.zeros(k.size), 0.5 * (v[i - 1] + v[i])])
-    direction = np.broadcast_to([0.0, 1.0], base.shape)
-    lo, hi = bisect_across(labels, base, direction, k, tol=tol,
-                           half_width=0.5 * (v[i] - v[i - 1]), strict=False)
-    return base[:, 1] + 0.5 * (lo + hi), hi - lo, k
+def _linger(p: Pendulum, tol: float) -> float:
+    """Time [s] an orbit within δ of a stable manifold lingers at its saddle, ≈ ln(1/δ)/u1,
+    with room for δ down to ≈ tol² and the fall into the well after it."""
+    return 2.0 * (math.log(1.0 / tol) + 5.0) / p.saddle_eigenvalues()[0]
 
 
-def _locate(labels, base, normal, k, vertex, tau, tol):
+def _band(window: Window) -> Window:
+    """The window's θ̇ band over the θ reach of an atlas: where a source branch is needed, since
+    its copies shifted by multiples of 2π cover every θ range. Growth in it ends by energy."""
+    return Window((-_FAR, _FAR), window.theta_dot)
+
+
+def _sources(window: Window) -> list[tuple[int, str]]:
+    """The source branches whose copies can enter the window: the left branch of π (θ̇ > 0
+    along it) if the window holds θ̇ > 0, the right branch of −π (θ̇ < 0) if it holds θ̇ < 0."""
+    return [(n, b) for n, b, present in ((1, "left", window.theta_dot[1] > 0.0),
+                                         (-1, "right", window.theta_dot[0] < 0.0)) if present]
+
+
+def _copies(theta: np.ndarray, theta_dot: np.ndarray, window: Window,
+            reach: int) -> Iterator[tuple[int, np.ndarray]]:
+    """The copies θ + 2πj of a source branch that enter the window: yields (j, mask) with
+    mask = its vertices inside the window plus ``reach`` neighbours on either side of every
+    inside run (the one just outside makes the polyline reach the window's edge)."""
+    if theta.size == 0:
+        return
+    turn = 2.0 * math.pi
+    for j in range(math.ceil((window.theta[0] - theta.max()) / turn),
+                   math.floor((window.theta[1] - theta.min()) / turn) + 1):
+        inside = window.margin(theta + turn * j, theta_dot) >= 0
+        if inside.any():
+            mask = inside.copy()
+            for r in range(1, reach + 1):
+                mask[r:] |= inside[:-r]
+                mask[:-r] |= inside[r:]
+            yield j, mask
+
+
+def _needed(g: _Predicted, window: Window) -> _Predicted:
+    """The stretch of a grown source branch that its copies in the window use, with two
+    vertices to spare at each end (the located points move by ≈ 1e-9 from the predicted)."""
+    used = np.zeros(g.theta.size, bool)
+    for _, mask in _copies(g.theta, g.theta_dot, window, reach=2):
+        used |= mask
+    idx = np.flatnonzero(used)
+    return g.part(int(idx[0]), int(idx[-1])) if idx.size else g.part(0, -1)
+
+
+def _left_branch_at(p: Pendulum, thetas: np.ndarray, dt_p: float):
+    """θ̇ [rad s⁻¹] and reversed time τ [s] where the predictor of the left branch of π — RK4
+    in reversed time at step ``dt_p`` from ``START_DISTANCE`` along the stable eigenvector —
+    passes each θ < π of ``thetas`` [rad]: marching step by step, then Newton on the step that
+    crosses (:func:`_edge_point`, with θ = target the only edge in reach). Along the branch θ
+    falls monotonically, so each θ is passed once."""
+    y, tau = _saddle_start(p, 1, "left", START_DISTANCE), 0.0
+    speed, when = np.empty(thetas.size), np.empty(thetas.size)
+    for i in np.argsort(thetas)[::-1]:
+        while (z := _flow_back(p, *y, dt_p, dt_p))[0] > thetas[i]:
+            y, tau = z, tau + dt_p
+        line = Window((float(thetas[i]), _FAR), (-_FAR, _FAR))
+        crossing, t = _edge_point(p, line, y, dt_p, dt_p)
+        speed[i], when[i] = crossing[1], tau + t
+    return speed, when
+
+
+def _axis_crossings(p: Pendulum, saddles: np.ndarray, tol: float, dt: float, backend: str):
+    """θ̇0 [rad s⁻¹] where the stable manifold of each saddle nπ meets the axis θ0 = 0, the
+    boundary between basins (n − 1)/2 below and (n + 1)/2 above.
+
+    The branch arriving from the side of θ = 0 meets it: for n ≥ 1 the left branch of nπ, the
+    left branch of π shifted by (n − 1)π, at θ̇ = L(−(n − 1)π); for n ≤ −1 the right branch,
+    the reflection of L shifted by (n + 1)π, at θ̇ = −L((n + 1)π). The predictor gives L there
+    (:func:`_left_branch_at`); the crossing is bisected along the θ̇0 axis on certified labels,
+    with t_max covering the travel time to the saddle. Returns (θ̇0, bracket width, k above,
+    the labeller)."""
+    speed, travel = _left_branch_at(p, -(np.abs(saddles) - 1) * np.pi, 0.5 * dt)
+    labels = _Labeller(p, dt, travel.max(initial=0.0) + _linger(p, tol), backend)
+    predicted = np.sign(saddles) * speed
+    base = np.column_stack([np.zeros(saddles.size), predicted])
+    k_above = (saddles + 1) // 2
+    lo, hi = bisect_across(labels, base, np.broadcast_to([0.0, 1.0], base.shape), k_above,
+                           tol=tol, half_width=_FIRST_BRACKET * tol, strict=False)
+    return predicted + 0.5 * (lo + hi), hi - lo, k_above, labels
+
+
+def _locate(labels, base, normal, k, run, tau, tol):
     """Bisect across every predicted vertex, in two passes that share the work.
 
     The offset s* of the label boundary from the predictor along the normal is a smooth
     function of the predictor's time τ (both curves are smooth; at dt = 0.01 s* ≲ 1e-9). Every
-    ``_COARSE_STRIDE``-th vertex of each branch (and its last) is bisected from a small first
-    bracket, widened as needed, to tol/``_COARSE_TOL``; a cubic spline of those offsets over τ
-    then predicts the others to ≈ tol/16, so their first bracket, ±0.45·tol around the
-    prediction, is usually final: two labels per vertex. Returns (s_lo, s_hi) along ``normal``.
+    ``_COARSE_STRIDE``-th vertex of each run (consecutive vertices with one ``run`` value; and
+    its last) is bisected from a small first bracket, widened as needed, to tol/``_COARSE_TOL``;
+    a cubic spline of those offsets over τ then predicts the others to ≈ tol/16, so their first
+    bracket, ±0.45·tol around the prediction, is usually final: two labels per vertex. Returns
+    (s_lo, s_hi) along ``normal``.
     """
     from scipy.interpolate import CubicSpline
 
-    start = np.flatnonzero(vertex == 0)
-    stop = np.append(start[1:], vertex.size)[:start.size]
-    coarse = np.zeros(vertex.size, bool)
+    start = np.flatnonzero(np.diff(run, prepend=np.nan) != 0)
+    stop = np.append(start[1:], run.size)
+    coarse = np.zeros(run.size, bool)
     for a, b in zip(start, stop, strict=True):
         stride = _COARSE_STRIDE if b - a >= 4 * _COARSE_STRIDE else 1
         coarse[a:b:stride] = coarse[b - 1] = True
-    lo, hi = np.empty(vertex.size), np.empty(vertex.size)
+    lo, hi = np.empty(run.size), np.empty(run.size)
     lo[coarse], hi[coarse] = bisect_across(labels, base[coarse], normal[coarse], k[coarse],
                                            tol=tol, target=tol / _COARSE_TOL,
                                            half_width=_FIRST_BRACKET * tol, strict=False)
@@ -625,6 +713,45 @@ def _locate(labels, base, normal, k, vertex, tau, tol):
     return lo, hi
 
 
+def _symmetry_error(run: np.ndarray, tau: np.ndarray, point: np.ndarray) -> float:
+    """Largest distance [rad-ish] between a located point of the right branch of −π (run 1)
+    and the point reflection of the located point of the left branch of π (run 0) with the
+    same predictor time τ; NaN if they share none (one source only).
+
+    The predictor is odd in floating point (rounding is symmetric, sin is odd, the vertex
+    spacing depends on |f| only), so the predicted vertices of the two pair up exactly. The
+    normal of a pair is one vector, so both brackets lie on one line; if the label boundary is
+    symmetric, as eq. (1) is, both brackets — each narrower than tol — hold its crossing with
+    that line and the midpoints differ by less than tol. The bisection's sample points are
+    symmetric about the vertex too, so labels that are odd in floating point give an error at
+    rounding level; labels that break the symmetry show as an error of order tol or more."""
+    _, i, j = np.intersect1d(tau[run == 0], tau[run == 1], return_indices=True)
+    if i.size == 0:
+        return math.nan
+    gap = point[run == 0][i] + point[run == 1][j]
+    return float(np.hypot(gap[:, 0], gap[:, 1]).max())
+
+
+def _place(saddle_n, branch, vertex, run, point, width, window: Window) -> dict:
+    """The copies of the located source branches that enter the window, as per-point arrays:
+    copy j of the left branch of π is the left branch of the saddle (1 + 2j)π, copy j of the
+    right branch of −π the right branch of (−1 + 2j)π, both shifted by 2πj; each keeps its
+    points inside the window and one neighbour outside at either end of each inside run."""
+    parts = []
+    for r in np.unique(run):
+        src = np.flatnonzero(run == r)
+        for j, keep in _copies(point[src, 0], point[src, 1], window, reach=1):
+            i = src[keep]
+            parts.append(dict(theta=point[i, 0] + 2.0 * math.pi * j, theta_dot=point[i, 1],
+                              width=width[i], saddle_n=saddle_n[i] + 2 * j, branch=branch[i],
+                              vertex=vertex[i]))
+    parts.sort(key=lambda c: (int(c["saddle_n"][0]), int(c["branch"][0])))
+    names = ("theta", "theta_dot", "width", "saddle_n", "branch", "vertex")
+    return {name: np.concatenate([c[name] for c in parts]) if parts else
+            np.zeros(0, saddle_n.dtype if name in ("saddle_n", "branch", "vertex") else float)
+            for name in names}
+
+
 def trace(
     pendulum: Pendulum,
     theta_window,
@@ -635,7 +762,8 @@ def trace(
     dt: float = defaults.DT,
     backend: str = "cpu",
 ) -> xr.Dataset:
-    """Trace both branches of the stable manifold of every saddle (nπ, 0) in the window.
+    """Trace every basin boundary in the window: the branches of the stable manifolds of the
+    saddles (nπ, 0), inside the window or not, that enter it.
 
     ``theta_window`` = (θmin, θmax) [rad], ``theta_dot_window`` = (θ̇min, θ̇max) [rad s⁻¹];
     ``tol``: bisection tolerance, the width [rad-ish] across the curve below which a point is
@@ -645,11 +773,13 @@ def trace(
     Method, accuracy and references: see the module docstring. Returns the ``/separatrices``
     group: per ``point`` the coordinates ``saddle_theta``, ``saddle_n``, ``branch`` (0 left,
     1 right), ``vertex`` and the variables ``theta``, ``theta_dot``, ``bracket_width``; per
-    ``crossing`` of the axis θ0 = 0 the variables ``crossing_theta_dot``, ``k_below``,
-    ``k_above``, ``crossing_bracket_width``; attributes: ``alpha``, ``omega0``, the windows,
-    ``tol``, ``max_spacing``, ``dt``, ``t_max``, ``discrepancy``, ``discrepancy_bound``,
-    ``polyline_error``, ``n_orbits``, ``n_unresolved``, ``warnings`` (lines joined by "\\n",
-    read with :func:`warnings`) and ``method``.
+    ``crossing`` of the axis θ0 = 0 (one per boundary, inside the window or not) the variables
+    ``crossing_theta_dot``, ``k_below``, ``k_above``, ``crossing_bracket_width``,
+    ``crossing_in_window``; attributes: ``alpha``, ``omega0``, the windows, ``tol``,
+    ``max_spacing``, ``dt``, ``t_max``, ``n_boundaries``, ``symmetry_error``,
+    ``symmetry_bound``, ``discrepancy``, ``discrepancy_bound``, ``polyline_error``,
+    ``n_orbits``, ``n_unresolved``, ``warnings`` (lines joined by "\\n", read with
+    :func:`warnings`) and ``method``.
     Raises ValueError for α = 0, a bad window, dt or settings
     (:func:`atlas.limits.check_separatrix_settings`);
     :class:`SeparatrixError` (an :class:`~atlas.errors.AtlasError`) if a point or branch
@@ -662,32 +792,34 @@ def trace(
     check_separatrix_settings(theta_window, theta_dot_window, tol, max_spacing)
     window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
 
-    on_axis = window.theta_dot[0] <= 0.0 <= window.theta_dot[1]
-    saddles = [c.n for c in critical_points(p, *window.theta) if c.is_saddle and on_axis]
-    grown = [g for n in saddles for b in BRANCHES
-             if (g := _grow(p, window, n, b, max_spacing, 0.5 * dt)).theta.size]
-    cat = (lambda f: np.concatenate([f(g) for g in grown])) if grown else (lambda f: np.zeros(0))
-    saddle_n = cat(lambda g: np.full(g.theta.size, g.n)).astype(np.int32)
-    branch = cat(lambda g: np.full(g.theta.size, BRANCHES.index(g.branch))).astype(np.int8)
-    vertex = cat(lambda g: np.arange(g.theta.size)).astype(np.int32)
-    base = np.column_stack([cat(lambda g: g.theta), cat(lambda g: g.theta_dot)])
-    tau = cat(lambda g: g.tau)
-    tau_max = tau.max(initial=0.0)
+    # the two source branches, over the stretch their copies in the window use
+    band = _band(window)
+    grown = [g for n, b in _sources(window)
+             if (g := _needed(_grow(p, band, n, b, max_spacing, 0.5 * dt), window)).theta.size]
+    def cat(f):
+        return np.concatenate([f(r, g) for r, g in enumerate(grown)]) if grown else np.zeros(0)
 
-    # an orbit within δ of the manifold lingers ≈ ln(1/δ)/u1 at the saddle after reaching it
-    u1 = p.saddle_eigenvalues()[0]
-    t_max = tau_max + 2.0 * (math.log(1.0 / tol) + 5.0) / u1
+    run = cat(lambda r, g: np.full(g.theta.size, r)).astype(np.int32)
+    saddle_n = cat(lambda r, g: np.full(g.theta.size, g.n)).astype(np.int32)
+    branch = cat(lambda r, g: np.full(g.theta.size, BRANCHES.index(g.branch))).astype(np.int8)
+    vertex = cat(lambda r, g: g.vertex).astype(np.int32)
+    base = np.column_stack([cat(lambda r, g: g.theta), cat(lambda r, g: g.theta_dot)])
+    tau = cat(lambda r, g: g.tau)
+
     # vertices: t_max covers their travel τ and lingering down to δ ≈ tol²; unresolved ones
     # are stuck in floating point (see _Labeller), so a longer t_max would not help them
-    labels = _Labeller(p, dt, t_max, backend)
+    labels = _Labeller(p, dt, tau.max(initial=0.0) + _linger(p, tol), backend)
     normal = np.column_stack(_normal(p, base[:, 0], base[:, 1]))
-    lo, hi = _locate(labels, base, normal, (saddle_n + 1) // 2, vertex, tau, tol)
+    lo, hi = _locate(labels, base, normal, (saddle_n + 1) // 2, run, tau, tol)
     point = base + 0.5 * (lo + hi)[:, None] * normal
-    # the axis θ0 = 0 also meets manifolds of saddles outside the window: travel unknown
-    axis_labels = _Labeller(p, dt, t_max + _AXIS_TRAVEL / min(u1, p.omega0), backend,
-                            escalate=True)
-    crossing, crossing_width, k_above = _axis_crossings(axis_labels, window, tol)
-    check = _check(p, window, saddle_n, branch, vertex, point[:, 0], point[:, 1])
+    check = _check(p, band, saddle_n, branch, vertex, point[:, 0], point[:, 1])
+    symmetry_error = _symmetry_error(run, tau, point)
+    placed = _place(saddle_n, branch, vertex, run, point, hi - lo, window)
+    saddles = np.unique(placed["saddle_n"]).astype(np.int64)
+    crossing, crossing_width, k_above, axis_labels = _axis_crossings(p, saddles, tol, dt,
+                                                                     backend)
+    crossing_in_window = (window.margin(0.0, crossing) >= 0).astype(np.int8)
+
     problems = []
     nonfinite = labels.nonfinite + axis_labels.nonfinite
     if nonfinite:
@@ -700,17 +832,23 @@ def trace(
             f"(widest {widths.max():.1e}): certified labels stop short of the curve where "
             "orbits stall at a saddle in floating point (large alpha/omega0 or |theta|); "
             "their bracket_width is stored; raise tol")
+    if symmetry_error > SYMMETRY_BOUND * tol:
+        problems.append(f"the right branch of -pi is up to {symmetry_error:.1e} from the point "
+                        f"reflection of the left branch of pi (bound {SYMMETRY_BOUND:g} tol): "
+                        "the labels are not symmetric under (theta, theta_dot) -> (-theta, "
+                        "-theta_dot)")
     if check.discrepancy > DISCREPANCY_BOUND:
         problems.append(f"separatrix points are up to {check.discrepancy:.2e} from the "
                         f"DOP853 stable manifold (bound {DISCREPANCY_BOUND:.0e}): lower "
                         + ("tol" if tol > DISCREPANCY_BOUND else "dt"))
 
+    stored_n = placed["saddle_n"].astype(np.int32)
     return xr.Dataset(
         data_vars={
-            "theta": ("point", point[:, 0], {"units": "rad", "long_name": "angle theta"}),
-            "theta_dot": ("point", point[:, 1],
+            "theta": ("point", placed["theta"], {"units": "rad", "long_name": "angle theta"}),
+            "theta_dot": ("point", placed["theta_dot"],
                           {"units": "rad s-1", "long_name": "angular velocity theta_dot"}),
-            "bracket_width": ("point", hi - lo, {
+            "bracket_width": ("point", placed["width"], {
                 "units": "1", "long_name": "final bisection bracket width across the curve "
                 "(phase-plane distance, rad and rad s-1 mixed)"}),
             "crossing_theta_dot": ("crossing", crossing, {
@@ -722,18 +860,22 @@ def trace(
                         {"units": "1", "long_name": "attractor k just above the crossing"}),
             "crossing_bracket_width": ("crossing", crossing_width, {
                 "units": "rad s-1", "long_name": "final bisection bracket width"}),
+            "crossing_in_window": ("crossing", crossing_in_window, {
+                "long_name": "whether the crossing (0, theta_dot0) lies in the window",
+                "flag_values": np.array([0, 1], np.int8), "flag_meanings": "outside inside"}),
         },
         coords={
-            "saddle_theta": ("point", saddle_n * np.pi,
+            "saddle_theta": ("point", stored_n * np.pi,
                              {"units": "rad", "long_name": "theta of the saddle (n*pi, 0)"}),
-            "saddle_n": ("point", saddle_n, {"units": "1", "long_name": "saddle at n*pi"}),
-            "branch": ("point", branch, {
+            "saddle_n": ("point", stored_n, {"units": "1", "long_name": "saddle at n*pi"}),
+            "branch": ("point", placed["branch"].astype(np.int8), {
                 "long_name": "branch of the stable manifold",
                 "flag_values": np.array([0, 1], np.int8), "flag_meanings": "left right",
                 "comment": "left: arrives with theta_dot > 0 from theta < n*pi; right: "
                            "arrives with theta_dot < 0 from theta > n*pi"}),
-            "vertex": ("point", vertex,
-                       {"units": "1", "long_name": "index along the branch, 0 nearest the saddle"}),
+            "vertex": ("point", placed["vertex"].astype(np.int32), {
+                "units": "1", "long_name": "index along the branch, 0 nearest the saddle",
+                "comment": "gaps where the branch leaves the window and comes back"}),
         },
         attrs={
             "alpha": p.alpha,
@@ -743,7 +885,10 @@ def trace(
             "tol": float(tol),
             "max_spacing": float(max_spacing),
             "dt": float(dt),
-            "t_max": t_max,
+            "t_max": max(labels.t_max, axis_labels.t_max),
+            "n_boundaries": int(saddles.size),
+            "symmetry_error": symmetry_error,
+            "symmetry_bound": SYMMETRY_BOUND * tol,
             "discrepancy": check.discrepancy,
             "discrepancy_bound": DISCREPANCY_BOUND,
             "polyline_error": check.polyline_error,
@@ -751,26 +896,31 @@ def trace(
             "n_unresolved": labels.unresolved + axis_labels.unresolved,
             "warnings": "\n".join(problems),
             "method": (
-                "stable manifolds of the saddles: vertices predicted by reversed-time RK4 "
-                "(step dt/2) from 1e-7 along the stable eigenvector (essay eqs. 22, 24), spacing "
-                "<= max_spacing and <= max_spacing/sqrt(curvature); each vertex located by "
-                "bisection/multisection across the curve on certified RK4 labels (step dt) "
-                "until the bracket is narrower than tol; checked against DOP853 (rtol = atol = "
-                "1e-13) in reversed time: discrepancy = max distance of the points to it, "
-                "polyline_error = max distance of it to the polyline"),
+                "stable manifolds of the saddles: the left branch of pi and the right branch "
+                "of -pi, vertices predicted by reversed-time RK4 (step dt/2) from 1e-7 along "
+                "the stable eigenvector (essay eqs. 22, 24), spacing <= max_spacing and <= "
+                "max_spacing/sqrt(curvature); each vertex located by bisection/multisection "
+                "across the curve on certified RK4 labels (step dt) until the bracket is "
+                "narrower than tol; every other branch is a copy shifted by a multiple of 2 pi "
+                "(symmetry_error: the right branch of -pi vs the point reflection of the left "
+                "branch of pi); checked against DOP853 (rtol = atol = 1e-13) in reversed time: "
+                "discrepancy = max distance of the points to it, polyline_error = max distance "
+                "of it to the polyline"),
         },
     )
 
 
 def branches(ds: xr.Dataset) -> Iterator[tuple[int, str, np.ndarray, np.ndarray]]:
-    """Yield (saddle_n, "left"|"right", theta [rad], theta_dot [rad s⁻¹]) per branch, the
-    arrays ordered from the saddle outward; for plotting."""
+    """Yield (saddle_n, "left"|"right", theta [rad], theta_dot [rad s⁻¹]) per polyline, the
+    arrays ordered from the saddle outward; for plotting. A branch that leaves the window and
+    comes back (its ``vertex`` skips the points outside) yields one polyline per visit."""
     n, b, vtx = (ds[name].values for name in ("saddle_n", "branch", "vertex"))
     theta, theta_dot = ds["theta"].values, ds["theta_dot"].values
     for key in sorted(set(zip(n.tolist(), b.tolist(), strict=True))):
         sel = np.flatnonzero((n == key[0]) & (b == key[1]))
         sel = sel[np.argsort(vtx[sel], kind="stable")]
-        yield key[0], BRANCHES[key[1]], theta[sel], theta_dot[sel]
+        for piece in np.split(sel, np.flatnonzero(np.diff(vtx[sel]) != 1) + 1):
+            yield key[0], BRANCHES[key[1]], theta[piece], theta_dot[piece]
 
 
 def warnings(ds: xr.Dataset) -> list[str]:
@@ -786,25 +936,35 @@ def max_discrepancy(ds: xr.Dataset) -> float:
 
 def summary(ds: xr.Dataset) -> list[str]:
     """Short human-readable lines for ``atlas info``."""
-    found = list(branches(ds))
-    saddles = sorted({n for n, *_ in found})
+    found = {(n, b) for n, b, *_ in branches(ds)}
+    saddles = sorted({n for n, _ in found})
     bound = float(ds.attrs["discrepancy_bound"])
     disc = max_discrepancy(ds)
+    symmetry = float(ds.attrs.get("symmetry_error", math.nan))
+    symmetry_bound = float(ds.attrs.get("symmetry_bound", math.nan))
     lines = [
-        f"separatrices: {len(saddles)} saddles (n = {', '.join(map(str, saddles)) or '-'}), "
-        f"{len(found)} branches, {ds.sizes.get('point', 0)} points; bisection tol "
-        f"{float(ds.attrs['tol']):.0e}, max spacing {float(ds.attrs['max_spacing']):g}",
+        f"separatrices: {len(saddles)} basin boundaries (saddles n = "
+        f"{', '.join(map(str, saddles)) or '-'}), {len(found)} branches, "
+        f"{ds.sizes.get('point', 0)} points; bisection tol {float(ds.attrs['tol']):.0e}, "
+        f"max spacing {float(ds.attrs['max_spacing']):g}",
+        "symmetry: right branch of -pi vs reflected left branch of pi: "
+        + (f"max distance {symmetry:.1e} ({'within' if symmetry <= symmetry_bound else 'EXCEEDS'}"
+           f" bound {symmetry_bound:.0e})" if symmetry == symmetry else
+           "not checked (the window holds one sign of theta_dot only)"),
         f"check vs DOP853 stable manifold: max distance {disc:.1e} "
         f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e}); "
         f"polyline error {float(ds.attrs['polyline_error']):.1e}; "
         f"{int(ds.attrs['n_orbits'])} orbits labelled, {int(ds.attrs['n_unresolved'])} "
         "uncertified (left out, never counted as either side)",
     ]
-    cross = [f"{v:+.10f} ({int(lo)}|{int(hi)})" for v, lo, hi in
-             zip(ds["crossing_theta_dot"].values, ds["k_below"].values, ds["k_above"].values,
-                 strict=True)]
+    inside = ds["crossing_in_window"].values if "crossing_in_window" in ds else None
+    cross = [f"{v:+.10f} ({int(lo)}|{int(hi)}){'' if inside is None or inside[i] else '*'}"
+             for i, (v, lo, hi) in enumerate(zip(ds["crossing_theta_dot"].values,
+                                                 ds["k_below"].values, ds["k_above"].values,
+                                                 strict=True))]
     lines.append("basin boundaries on theta0 = 0: theta_dot0 = "
-                 + (", ".join(cross) if cross else "none") + " rad/s (k below|above)")
+                 + (", ".join(cross) if cross else "none") + " rad/s (k below|above; "
+                 "* outside the window)")
     lines += [f"warning: {w}" for w in warnings(ds)]
     return lines
 
@@ -824,8 +984,9 @@ def merge_parameter_points(traced: list[tuple[float, float, xr.Dataset]]) -> xr.
     attrs = [ds.attrs for *_, ds in traced]
     merged.attrs = {k: v for k, v in attrs[0].items() if k not in ("alpha", "omega0")}
     for key, combine in [("discrepancy", max), ("polyline_error", max), ("n_orbits", sum),
-                         ("n_unresolved", sum)]:
-        merged.attrs[key] = combine(a[key] for a in attrs)
+                         ("n_unresolved", sum), ("n_boundaries", max),
+                         ("symmetry_error", np.fmax.reduce)]:
+        merged.attrs[key] = combine([a[key] for a in attrs])
     merged.attrs["warnings"] = "\n".join(a["warnings"] for a in attrs if a.get("warnings"))
     return merged
 

@@ -101,21 +101,39 @@ def test_bisection_agrees_with_backward_integration(traced, regime):
     assert ds.attrs["polyline_error"] < ds.attrs["max_spacing"] ** 2 / 8
 
 
+def window_margin(window, theta, theta_dot):
+    """Distance inside the window along the axes (≥ 0 inside, < 0 outside)."""
+    (t_lo, t_hi), (v_lo, v_hi) = window
+    return np.minimum(np.minimum(theta - t_lo, t_hi - theta),
+                      np.minimum(theta_dot - v_lo, v_hi - theta_dot))
+
+
 def test_points_cover_each_branch_from_saddle_to_window_edge(traced):
     ds = traced[0.1]
-    (t_lo, t_hi), (v_lo, v_hi) = DEFAULT_WINDOW
-    found = {(n, b): (th, v) for n, b, th, v in sep.branches(ds)}
-    # saddles ±π, ±3π; the right branch of 3π and the left branch of −3π lie outside
-    assert set(found) == {(-3, "right"), (-1, "left"), (-1, "right"), (1, "left"),
-                          (1, "right"), (3, "left")}
-    for (n, b), (th, v) in found.items():
-        assert math.hypot(th[0] - n * PI, v[0]) < ds.attrs["max_spacing"]  # near the saddle
-        assert np.all(np.sign(v) == (1 if b == "left" else -1))
-        assert np.all(np.diff(th) < 0) if b == "left" else np.all(np.diff(th) > 0)
-        edge = min(th[-1] - t_lo, t_hi - th[-1], v[-1] - v_lo, v_hi - v[-1])
-        assert abs(edge) < 1e-9
-        spacing = np.hypot(np.diff(th), np.diff(v))
-        assert spacing.max() <= ds.attrs["max_spacing"]
+    spacing_max = ds.attrs["max_spacing"]
+    found = {}
+    for n, b, th, v in sep.branches(ds):
+        found.setdefault((n, b), []).append((th, v))
+    # saddles ±π, ±3π inside; the right branch of 3π and the left branch of −3π lie outside,
+    # and the left branches of 5π, 7π (right of −5π, −7π) enter from beyond the window
+    assert set(found) == {(-7, "right"), (-5, "right"), (-3, "right"), (-1, "left"),
+                          (-1, "right"), (1, "left"), (1, "right"), (3, "left"), (5, "left"),
+                          (7, "left")}
+    assert ds.attrs["n_boundaries"] == 8
+    for (n, b), pieces in found.items():
+        for th, v in pieces:
+            assert np.all(np.sign(v) == (1 if b == "left" else -1))
+            assert np.all(np.diff(th) < 0) if b == "left" else np.all(np.diff(th) > 0)
+            assert np.hypot(np.diff(th), np.diff(v)).max() <= spacing_max
+            margin = window_margin(DEFAULT_WINDOW, th, v)
+            assert np.all(margin[1:-1] > -1e-9)  # inside, or on an edge within the curve's accuracy
+            # each end: next to the saddle, on the window's edge, or the one point beyond it
+            for end in (0, -1):
+                at_saddle = math.hypot(th[end] - n * PI, v[end]) < spacing_max
+                assert at_saddle or -spacing_max < margin[end] < 1e-9
+        # the branch of a saddle inside the window starts next to it
+        if abs(n) <= 3:
+            assert math.hypot(pieces[0][0][0] - n * PI, pieces[0][1][0]) < spacing_max
 
 
 @pytest.mark.parametrize("alpha", [0.1, 2.0])
@@ -158,13 +176,23 @@ def test_halving_dt_shifts_points_as_rk4_order_four():
     assert 0.5 * richardson < ds.attrs["discrepancy"] < 2 * richardson + 2 * TOL
 
 
-def test_point_reflection_symmetry(traced):
-    found = {(n, b): (th, v) for n, b, th, v in sep.branches(traced[0.1])}
-    for (n, b), (th, v) in found.items():
-        mirror = found[(-n, "right" if b == "left" else "left")]
-        assert mirror[0].size == th.size
-        np.testing.assert_allclose(-mirror[0], th, rtol=0, atol=TOL)
-        np.testing.assert_allclose(-mirror[1], v, rtol=0, atol=TOL)
+@pytest.mark.parametrize("alpha", REGIMES.values())
+def test_point_reflection_symmetry(traced, alpha):
+    """The right branch of −π is bisected on its own labels: it is the point reflection of the
+    left branch of π within the bisection tolerance, as the attribute says and the stored
+    copies (in the symmetric default window, vertex by vertex) show."""
+    ds = traced[alpha]
+    assert 0.0 <= ds.attrs["symmetry_error"] < TOL
+    assert ds.attrs["symmetry_bound"] == sep.SYMMETRY_BOUND * TOL
+    n, b, vertex = (ds[name].values for name in ("saddle_n", "branch", "vertex"))
+    theta, theta_dot = ds["theta"].values, ds["theta_dot"].values
+    for key in set(zip(n.tolist(), b.tolist(), strict=True)):
+        here = np.flatnonzero((n == key[0]) & (b == key[1]))
+        there = np.flatnonzero((n == -key[0]) & (b == 1 - key[1]))
+        here, there = here[np.argsort(vertex[here])], there[np.argsort(vertex[there])]
+        np.testing.assert_array_equal(vertex[here], vertex[there])
+        np.testing.assert_allclose(-theta[there], theta[here], rtol=0, atol=TOL)
+        np.testing.assert_allclose(-theta_dot[there], theta_dot[here], rtol=0, atol=TOL)
 
 
 def test_approaches_undamped_separatrix_as_alpha_vanishes():
@@ -207,13 +235,20 @@ def dop853_axis_crossing(p: Pendulum, n: int) -> float:
 
 
 def test_axis_crossings_straddle_a_label_change(traced):
+    """One crossing per boundary entering the window (saddles ±1, …, ±7), also those beyond
+    the window's θ̇ range; each where DOP853 puts that saddle's own branch on θ = 0, within
+    RK4's offset from the exact manifold at dt = 0.01 (the discrepancy, ≈ 6e-10)."""
     p = Pendulum(0.1, 1.0)
     ds = traced[0.1]
     crossing = ds["crossing_theta_dot"].values
     # the boundary between basins k − 1 and k on θ0 = 0 is the manifold of the saddle 2k − 1
-    np.testing.assert_array_equal(ds["k_above"].values, [-1, 0, 1, 2])
+    np.testing.assert_array_equal(ds["k_above"].values, [-3, -2, -1, 0, 1, 2, 3, 4])
+    np.testing.assert_array_equal(2 * ds["k_above"].values - 1, np.unique(ds["saddle_n"]))
     reference = [dop853_axis_crossing(p, 2 * k - 1) for k in ds["k_above"].values]
     np.testing.assert_allclose(crossing, reference, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(ds["crossing_in_window"].values,
+                                  np.abs(crossing) <= DEFAULT_WINDOW[1][1])
+    assert ds["crossing_in_window"].values.sum() == 4
     np.testing.assert_array_equal(ds["k_above"].values - ds["k_below"].values, 1)
     assert np.all(ds["crossing_bracket_width"].values < TOL)
     for side, k in ((-1, ds["k_below"].values), (+1, ds["k_above"].values)):
@@ -224,12 +259,16 @@ def test_axis_crossings_straddle_a_label_change(traced):
 
 
 def test_axis_crossing_matches_dop853_manifold():
-    """Where the left branch of π meets θ = 0, with no saddle in the window."""
+    """Where the left branch of π meets θ = 0, with no saddle in the window: the window
+    holds a piece of that branch only, and its crossing."""
     p = Pendulum(0.1, 1.0)
-    ds = sep.trace(p, (-0.5, 0.5), (0.0, 3.0))  # no saddle inside: only the crossing table
-    assert ds.sizes["point"] == 0
+    ds = sep.trace(p, (-0.5, 0.5), (0.0, 3.0))
+    assert set(zip(ds["saddle_n"].values.tolist(), ds["branch"].values.tolist())) == {(1, 0)}
+    assert ds.sizes["point"] > 10 and ds.attrs["n_boundaries"] == 1
     np.testing.assert_allclose(ds["crossing_theta_dot"].values, [dop853_axis_crossing(p, 1)],
                                rtol=0, atol=1e-9)
+    assert ds["crossing_in_window"].values.tolist() == [1]
+    assert math.isnan(ds.attrs["symmetry_error"])  # θ̇ ≥ 0: the right branch is not needed
 
 
 def test_bisect_across_on_a_known_boundary_with_an_uncertified_band():
@@ -275,9 +314,11 @@ def test_dataset_round_trips_through_h5netcdf(traced, tmp_path):
     for name in ("tol", "max_spacing", "dt", "discrepancy", "discrepancy_bound", "method"):
         assert name in ds.attrs
     lines = sep.summary(ds)
-    assert "4 saddles" in lines[0] and "6 branches" in lines[0]
-    assert "within bound" in lines[1]
-    assert f"{ds['crossing_theta_dot'].values[2]:+.10f} (0|1)" in lines[2]
+    assert "8 basin boundaries" in lines[0] and "10 branches" in lines[0]
+    assert "symmetry" in lines[1] and "within bound" in lines[1]
+    assert "within bound" in lines[2]
+    assert f"{ds['crossing_theta_dot'].values[4]:+.10f} (0|1)," in lines[3]
+    assert f"{ds['crossing_theta_dot'].values[7]:+.10f} (3|4)*" in lines[3]
 
 
 @pytest.mark.parametrize(("tol", "max_spacing", "culprit"), [
@@ -321,3 +362,120 @@ def test_a_failure_during_the_run_is_one_line_for_the_cli(monkeypatch):
         sep.trace(Pendulum(0.1, 1.0), *DEFAULT_WINDOW)
     assert isinstance(failed.value, AtlasError) and failed.value.exit_code == 1
     assert "\n" not in str(failed.value)
+
+
+# --------------------------------------------------------------------------- completeness
+
+OFF_CENTRE = ((PI / 3, 11 * PI / 2), (-4.0, 4.0))
+#: (α, ω0, dt, window): each regime, ω0 ≠ 1 (at a dt that keeps RK4's offset below the
+#: discrepancy bound), a window off the origin, one holding θ̇ > 0 only.
+MAPS = {
+    "underdamped": (0.1, 1.0, 0.01, DEFAULT_WINDOW),
+    "critically damped": (1.0, 1.0, 0.01, DEFAULT_WINDOW),
+    "overdamped": (2.0, 1.0, 0.01, DEFAULT_WINDOW),
+    "omega0 = 2": (0.3, 2.0, 0.005, ((-3 * PI, 3 * PI), (-8.0, 8.0))),
+    "off-centre": (0.1, 1.0, 0.01, OFF_CENTRE),
+    "theta_dot > 0": (0.1, 1.0, 0.01, ((-3 * PI, 3 * PI), (1.0, 4.0))),
+}
+GRID = 96
+
+
+def distance_to_polylines(ds: xr.Dataset, q: np.ndarray) -> np.ndarray:
+    """Distance [rad-ish] from each point q (N, 2) to the nearest segment of the stored
+    polylines (:func:`atlas.separatrices.branches`)."""
+    pieces = [np.column_stack([th, v]) for *_, th, v in sep.branches(ds) if th.size > 1]
+    a = np.concatenate([c[:-1] for c in pieces])
+    e = np.concatenate([c[1:] for c in pieces]) - a
+    best = np.empty(len(q))
+    for chunk in np.array_split(np.arange(len(q)), max(1, len(q) // 128)):
+        d = q[chunk, None, :] - a[None]
+        t = np.clip((d * e).sum(-1) / (e * e).sum(-1), 0.0, 1.0)
+        best[chunk] = np.linalg.norm(d - t[..., None] * e, axis=-1).min(axis=1)
+    return best
+
+
+@pytest.fixture(scope="module", params=list(MAPS))
+def mapped(request):
+    """(pendulum, dt, window, trace, cell centres, certified labels on a GRID² basin map)."""
+    alpha, omega0, dt, window = MAPS[request.param]
+    p = Pendulum(alpha, omega0)
+    ds = sep.trace(p, *window, dt=dt)
+    (t_lo, t_hi), (v_lo, v_hi) = window
+    theta = t_lo + (np.arange(GRID) + 0.5) * (t_hi - t_lo) / GRID
+    theta_dot = v_lo + (np.arange(GRID) + 0.5) * (v_hi - v_lo) / GRID
+    th, v = np.meshgrid(theta, theta_dot, indexing="ij")
+    res = atlas.label(th, v, alpha=alpha, omega0=omega0, dt=dt, t_max=200.0)
+    k = np.where(res.status == 0, res.attractor.astype(np.int64), sep.NO_LABEL)
+    return p, dt, window, ds, (th, v), k
+
+
+def test_every_label_change_on_a_basin_map_lies_on_a_stored_boundary(mapped):
+    """Completeness: between any two 4-neighbouring cells with different certified labels a
+    basin boundary passes, so a stored polyline comes within one cell diagonal of the pair's
+    midpoint (it crosses the segment joining their centres)."""
+    p, dt, window, ds, (th, v), k = mapped
+    assert sep.warnings(ds) == []
+    diagonal = math.hypot(th[1, 0] - th[0, 0], v[0, 1] - v[0, 0])
+    mids = []
+    for axis in (0, 1):
+        a = [slice(None)] * 2
+        b = [slice(None)] * 2
+        a[axis], b[axis] = slice(None, -1), slice(1, None)
+        a, b = tuple(a), tuple(b)
+        change = (k[a] != k[b]) & (k[a] != sep.NO_LABEL) & (k[b] != sep.NO_LABEL)
+        mids.append(np.column_stack([0.5 * (th[a] + th[b])[change],
+                                     0.5 * (v[a] + v[b])[change]]))
+    mids = np.concatenate(mids)
+    assert len(mids) > 100
+    assert distance_to_polylines(ds, mids).max() <= diagonal
+
+
+def test_every_stored_segment_separates_neighbouring_basins(mapped):
+    """Soundness: across the middle of every segment inside the window, offset ±δ along the
+    normal (δ four times the chord-error bound max_spacing²/8), the certified labels differ by
+    one, the higher — (n + 1)/2 for the saddle nπ — on the larger-θ̇ side."""
+    p, dt, window, ds, _, _ = mapped
+    delta = ds.attrs["max_spacing"] ** 2 / 2
+    assert ds.attrs["polyline_error"] < delta / 4
+    mids, above = [], []
+    for n, _, th, v in sep.branches(ds):
+        inside = window_margin(window, th, v) >= 0
+        both = inside[:-1] & inside[1:]
+        mids.append(np.column_stack([0.5 * (th[:-1] + th[1:])[both],
+                                     0.5 * (v[:-1] + v[1:])[both]]))
+        above.append(np.full(int(both.sum()), (n + 1) // 2))
+    mids, above = np.concatenate(mids), np.concatenate(above)
+    assert len(mids) > 100
+    normal = field_normal(p, mids[:, 0], mids[:, 1])
+    for side, k in ((+1, above), (-1, above - 1)):
+        res = atlas.label(mids[:, 0] + side * delta * normal[:, 0],
+                          mids[:, 1] + side * delta * normal[:, 1], alpha=p.alpha,
+                          omega0=p.omega0, dt=dt, t_max=ds.attrs["t_max"])
+        assert np.all(res.status == 0)
+        np.testing.assert_array_equal(res.attractor, k)
+
+
+def test_crossing_table_lists_every_boundary_entering_an_off_centre_window():
+    """θ0 ∈ [π/3, 11π/2] holds the saddles 1, 3, 5 and meets the right branches of −3π, −π and
+    the left branches of 7π, 9π: each has its crossing of θ0 = 0 (outside this window), where
+    DOP853 puts that saddle's own branch, within RK4's offset at dt = 0.01 (≈ 6e-10)."""
+    p = Pendulum(0.1, 1.0)
+    ds = sep.trace(p, *OFF_CENTRE)
+    saddles = np.unique(ds["saddle_n"].values)
+    np.testing.assert_array_equal(saddles, [-3, -1, 1, 3, 5, 7, 9])
+    assert ds.attrs["n_boundaries"] == saddles.size
+    np.testing.assert_array_equal(ds["k_above"].values, (saddles + 1) // 2)
+    np.testing.assert_array_equal(ds["k_below"].values, (saddles - 1) // 2)
+    reference = [dop853_axis_crossing(p, n) for n in saddles]
+    np.testing.assert_allclose(ds["crossing_theta_dot"].values, reference, rtol=0, atol=1e-9)
+    assert not ds["crossing_in_window"].values.any()
+    assert np.all(ds["crossing_bracket_width"].values < TOL)
+
+
+def test_a_window_below_theta_dot_zero_uses_right_branches_only():
+    ds = sep.trace(Pendulum(0.1, 1.0), DEFAULT_WINDOW[0], (-4.0, -1.0))
+    assert {b for _, b, *_ in sep.branches(ds)} == {"right"}
+    assert np.all(ds["theta_dot"].values < 0)
+    assert math.isnan(ds.attrs["symmetry_error"])
+    assert "not checked" in sep.summary(ds)[1]
+    assert sep.warnings(ds) == []
