@@ -514,10 +514,11 @@ def _check(p: Pendulum, window: Window, saddle_n, branch, vertex, theta,
 
     The left branch of the saddle (π, 0) is integrated in reversed time, θ' = −θ̇,
     θ̇' = ω0² sin θ + 2αθ̇, with scipy's DOP853 (rtol = atol = 1e-13, dense output) from
-    10⁻⁷ along the stable eigenvector (linearisation error 10⁻¹⁴), until every branch asked
-    for has left the window for good; all other branches are its images under the symmetries
-    of eq. (1) (:func:`_to_reference`). The distance of each point to that curve is found by
-    Newton's method for the foot point on the dense output (accurate to ≈ 1e-13).
+    10⁻⁷ along the stable eigenvector (linearisation error 10⁻¹⁴), until it is one radian past
+    the farthest point or beyond the window's energies; all other branches are its images
+    under the symmetries of eq. (1) (:func:`_to_reference`). The distance of each point to
+    that curve is found by Newton's method for the foot point on the dense output (accurate
+    to ≈ 1e-13).
 
     ``branch`` holds flag values (0 left, 1 right); ``vertex`` orders the points of a branch,
     and the polyline joins consecutive vertices only (a branch may leave the window and come
@@ -690,7 +691,7 @@ def _locate(labels, base, normal, k, run, tau, tol):
     from scipy.interpolate import CubicSpline
 
     start = np.flatnonzero(np.diff(run, prepend=np.nan) != 0)
-    stop = np.append(start[1:], run.size)
+    stop = np.append(start[1:], run.size)[:start.size]
     coarse = np.zeros(run.size, bool)
     for a, b in zip(start, stop, strict=True):
         stride = _COARSE_STRIDE if b - a >= 4 * _COARSE_STRIDE else 1
@@ -732,24 +733,19 @@ def _symmetry_error(run: np.ndarray, tau: np.ndarray, point: np.ndarray) -> floa
     return float(np.hypot(gap[:, 0], gap[:, 1]).max())
 
 
-def _place(saddle_n, branch, vertex, run, point, width, window: Window) -> dict:
-    """The copies of the located source branches that enter the window, as per-point arrays:
-    copy j of the left branch of π is the left branch of the saddle (1 + 2j)π, copy j of the
-    right branch of −π the right branch of (−1 + 2j)π, both shifted by 2πj; each keeps its
-    points inside the window and one neighbour outside at either end of each inside run."""
-    parts = []
+def _place(run: np.ndarray, point: np.ndarray, window: Window):
+    """The copies of the located source branches (``run`` 0, 1) that enter the window: each
+    keeps its points inside the window and the one neighbour outside at either end of each
+    inside run. Returns, per stored point, its index into the source arrays and the copy j
+    (the shift 2πj [rad]): copy j of the left branch of π is the left branch of the saddle
+    (1 + 2j)π, copy j of the right branch of −π the right branch of (−1 + 2j)π."""
+    picks, copy = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
     for r in np.unique(run):
         src = np.flatnonzero(run == r)
         for j, keep in _copies(point[src, 0], point[src, 1], window, reach=1):
-            i = src[keep]
-            parts.append(dict(theta=point[i, 0] + 2.0 * math.pi * j, theta_dot=point[i, 1],
-                              width=width[i], saddle_n=saddle_n[i] + 2 * j, branch=branch[i],
-                              vertex=vertex[i]))
-    parts.sort(key=lambda c: (int(c["saddle_n"][0]), int(c["branch"][0])))
-    names = ("theta", "theta_dot", "width", "saddle_n", "branch", "vertex")
-    return {name: np.concatenate([c[name] for c in parts]) if parts else
-            np.zeros(0, saddle_n.dtype if name in ("saddle_n", "branch", "vertex") else float)
-            for name in names}
+            picks.append(src[keep])
+            copy.append(np.full(int(keep.sum()), j))
+    return np.concatenate(picks), np.concatenate(copy)
 
 
 def trace(
@@ -814,8 +810,11 @@ def trace(
     point = base + 0.5 * (lo + hi)[:, None] * normal
     check = _check(p, band, saddle_n, branch, vertex, point[:, 0], point[:, 1])
     symmetry_error = _symmetry_error(run, tau, point)
-    placed = _place(saddle_n, branch, vertex, run, point, hi - lo, window)
-    saddles = np.unique(placed["saddle_n"]).astype(np.int64)
+    source, copy = _place(run, point, window)
+    stored_n = (saddle_n[source] + 2 * copy).astype(np.int32)
+    order = np.lexsort((vertex[source], branch[source], stored_n))
+    source, copy, stored_n = source[order], copy[order], stored_n[order]
+    saddles = np.unique(stored_n).astype(np.int64)
     crossing, crossing_width, k_above, axis_labels = _axis_crossings(p, saddles, tol, dt,
                                                                      backend)
     crossing_in_window = (window.margin(0.0, crossing) >= 0).astype(np.int8)
@@ -842,13 +841,13 @@ def trace(
                         f"DOP853 stable manifold (bound {DISCREPANCY_BOUND:.0e}): lower "
                         + ("tol" if tol > DISCREPANCY_BOUND else "dt"))
 
-    stored_n = placed["saddle_n"].astype(np.int32)
     return xr.Dataset(
         data_vars={
-            "theta": ("point", placed["theta"], {"units": "rad", "long_name": "angle theta"}),
-            "theta_dot": ("point", placed["theta_dot"],
+            "theta": ("point", point[source, 0] + 2.0 * math.pi * copy,
+                      {"units": "rad", "long_name": "angle theta"}),
+            "theta_dot": ("point", point[source, 1],
                           {"units": "rad s-1", "long_name": "angular velocity theta_dot"}),
-            "bracket_width": ("point", placed["width"], {
+            "bracket_width": ("point", (hi - lo)[source], {
                 "units": "1", "long_name": "final bisection bracket width across the curve "
                 "(phase-plane distance, rad and rad s-1 mixed)"}),
             "crossing_theta_dot": ("crossing", crossing, {
@@ -868,12 +867,12 @@ def trace(
             "saddle_theta": ("point", stored_n * np.pi,
                              {"units": "rad", "long_name": "theta of the saddle (n*pi, 0)"}),
             "saddle_n": ("point", stored_n, {"units": "1", "long_name": "saddle at n*pi"}),
-            "branch": ("point", placed["branch"].astype(np.int8), {
+            "branch": ("point", branch[source], {
                 "long_name": "branch of the stable manifold",
                 "flag_values": np.array([0, 1], np.int8), "flag_meanings": "left right",
                 "comment": "left: arrives with theta_dot > 0 from theta < n*pi; right: "
                            "arrives with theta_dot < 0 from theta > n*pi"}),
-            "vertex": ("point", placed["vertex"].astype(np.int32), {
+            "vertex": ("point", vertex[source], {
                 "units": "1", "long_name": "index along the branch, 0 nearest the saddle",
                 "comment": "gaps where the branch leaves the window and comes back"}),
         },
@@ -950,7 +949,7 @@ def summary(ds: xr.Dataset) -> list[str]:
         "symmetry: right branch of -pi vs reflected left branch of pi: "
         + (f"max distance {symmetry:.1e} ({'within' if symmetry <= symmetry_bound else 'EXCEEDS'}"
            f" bound {symmetry_bound:.0e})" if symmetry == symmetry else
-           "not checked (the window holds one sign of theta_dot only)"),
+           "not checked (the window needs one of them only)"),
         f"check vs DOP853 stable manifold: max distance {disc:.1e} "
         f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e}); "
         f"polyline error {float(ds.attrs['polyline_error']):.1e}; "

@@ -479,3 +479,12 @@ def test_a_window_below_theta_dot_zero_uses_right_branches_only():
     assert math.isnan(ds.attrs["symmetry_error"])
     assert "not checked" in sep.summary(ds)[1]
     assert sep.warnings(ds) == []
+
+
+def test_a_window_that_no_boundary_enters_gives_empty_tables():
+    """θ̇ ∈ [2.6, 2.7] at θ ∈ [0, 0.1] lies between the left branches of π (θ̇ ≈ 2.41 there) and
+    3π (≈ 3.51): no curve, no crossing, nothing bisected."""
+    ds = sep.trace(Pendulum(0.1, 1.0), (0.0, 0.1), (2.6, 2.7))
+    assert ds.sizes["point"] == ds.sizes["crossing"] == 0
+    assert ds.attrs["n_boundaries"] == 0 and ds.attrs["n_orbits"] == 0
+    assert sep.warnings(ds) == [] and "none" in sep.summary(ds)[3]
