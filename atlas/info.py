@@ -10,8 +10,8 @@ from . import store
 
 
 def summary_lines(tree: xr.DataTree) -> list[str]:
-    """Grid, parameters, basin fractions ± standard error, unresolved count, run time, and
-    the separatrices' summary."""
+    """Grid, parameters, exact basin fractions, grid fractions with their error, d_cert and
+    the certified share, unresolved count, run time, and the separatrices' summary."""
     ds = tree.to_dataset(inherit=False)
     n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
     lines = [f"grid      {ds.sizes['theta0']} x {ds.sizes['theta_dot0']} (theta0 x theta_dot0)"
@@ -22,12 +22,13 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
         for a in ds["alpha"].values:
             for w in ds["omega0"].values:
                 point = ds.sel(alpha=a, omega0=w)
-                lines.append(f"  alpha = {a:g}, omega0 = {w:g}: {_fractions(point)}")
+                lines.append(f"  alpha = {a:g}, omega0 = {w:g}:")
+                lines += ["    " + line for line in _basin_lines(point)]
         unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
     else:
         lines.append(f"pendulum  alpha = {ds.attrs['alpha']:g} 1/s, omega0 = "
                      f"{ds.attrs['omega0']:g} rad/s, dt = {ds.attrs['dt']:g} s")
-        lines.append(f"basins    {_fractions(ds)}")
+        lines += _basin_lines(ds)
         unresolved = int(round(float(ds["unresolved_fraction"]) * n_orbits))
     lines.append(f"unresolved {unresolved} orbits")
     if "run_time_s" in ds.attrs:
@@ -37,11 +38,33 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
     return lines
 
 
-def _fractions(ds: xr.Dataset) -> str:
-    """``k=+0: 0.26621±8.6e-04, …`` for the basins of one parameter point."""
-    return ", ".join(f"k={int(k):+d}: {float(p):.5f}±{float(e):.1e}"
-                     for k, p, e in zip(ds["k"].values, ds["basin_fraction"].values,
-                                        ds["basin_fraction_stderr"].values) if p > 0)
+def _basin_lines(ds: xr.Dataset) -> list[str]:
+    """The basins of one parameter point: exact area fractions first, then the grid counts
+    with their error bound and measured error, then d_cert and the certified share."""
+    present = ds["basin_fraction_exact"].values + ds["basin_fraction"].values > 0
+    ks = ds["k"].values[present]
+    exact = ds["basin_fraction_exact"].values[present]
+    exact_err = ds["basin_fraction_exact_error"].values[present]
+    grid = ds["basin_fraction"].values[present]
+    bound = ds["basin_fraction_grid_error_bound"].values[present]
+    measured = ds["basin_fraction_grid_error"].values[present]
+    lines = ["basins    k   area fraction (exact)        grid count   grid error: bound, "
+             "measured"]
+    lines += [f"          {int(k):+d}  {e:.14f} ± {ee:.0e}   {g:.6f}     {b:.1e}, {m:.1e}"
+              for k, e, ee, g, b, m in zip(ks, exact, exact_err, grid, bound, measured)]
+    d_cert = float(ds["d_cert"])
+    share = float(ds["certified_fraction"])
+    if d_cert == d_cert:  # not NaN
+        lines.append(f"certified d_cert = {d_cert:.1e} (rad-ish): {share:.4%} of the grid "
+                     "is certified for the exact equation (status trapped); the rest of the "
+                     "labels holds for the RK4 map only (near_boundary)")
+    else:
+        lines.append("certified d_cert not measured (separatrices disabled): labels are "
+                     "certified for the RK4 map only (status near_boundary)")
+    if int(ds["side_mismatches"]):
+        lines.append(f"warning   {int(ds['side_mismatches'])} labels beyond d_cert disagree "
+                     "with the exact boundaries")
+    return lines
 
 
 def _separatrix_lines(sep: xr.Dataset) -> list[str]:

@@ -3,7 +3,11 @@
 * :func:`basin_map` — colour by attractor k, separatrices in red, saddles as open circles,
   attractors as filled dots;
 * :func:`trap_time_map` — the certified trapping time on a log colour scale;
-* :func:`fraction_curves` — basin fractions against a swept parameter, with error bars.
+* :func:`boundary_distance_map` — each state's distance to the nearest basin boundary (how
+  far it is from tipping into another well), with the band d_cert where labels hold for the
+  RK4 map only;
+* :func:`fraction_curves` — exact basin fractions against a swept parameter, with the grid
+  counts and their error bounds.
 """
 
 from __future__ import annotations
@@ -18,8 +22,10 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
 
-__all__ = ["basin_map", "trap_time_map", "fraction_curves", "plot_atlas", "pi_ticks",
-           "critical_point_markers", "STYLE"]
+from .kernels import NEAR_BOUNDARY, TRAPPED  # noqa: E402
+
+__all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curves",
+           "plot_atlas", "pi_ticks", "critical_point_markers", "STYLE"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
@@ -84,7 +90,7 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4.8))
     k = ds["attractor"].values.astype(float)
-    k[ds["status"].values != 0] = np.nan
+    k[~np.isin(ds["status"].values, (TRAPPED, NEAR_BOUNDARY))] = np.nan
     finite = k[np.isfinite(k)]
     kmin, kmax = (int(finite.min()), int(finite.max())) if finite.size else (0, 0)
     levels = np.arange(kmin, kmax + 2) - 0.5
@@ -131,8 +137,35 @@ def trap_time_map(tree: xr.DataTree, ax=None, **index):
     return ax
 
 
+def boundary_distance_map(tree: xr.DataTree, ax=None, **index):
+    """Draw ``boundary_distance`` on a log colour scale, the separatrices, and in white the
+    states closer than d_cert (labels certified for the RK4 map only)."""
+    ds = _single(tree.to_dataset(inherit=False), **index)
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 4.8))
+    d = ds["boundary_distance"].values.astype(float)
+    d_cert = float(ds["d_cert"])
+    positive = d[np.isfinite(d) & (d > 0)]
+    lo = max(positive.min() if positive.size else 1e-12, d_cert if d_cert > 0 else 0, 1e-12)
+    hi = max(positive.max() if positive.size else 1.0, lo * 10)
+    cmap = plt.get_cmap("viridis").with_extremes(under="white", bad="0.5")
+    mesh = ax.pcolormesh(ds["theta0"].values, ds["theta_dot0"].values,
+                         np.ma.masked_invalid(d), cmap=cmap, norm=LogNorm(lo, hi),
+                         shading="nearest", rasterized=True)
+    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
+        "distance to the nearest basin boundary (rad-ish)")
+    _separatrices(ax, tree, ds)
+    pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
+    ax.set_xlabel("θ0 [rad]")
+    ax.set_ylabel("θ̇0 [rad/s]")
+    cert = f"d_cert = {d_cert:.1e}" if d_cert == d_cert else "d_cert not measured"
+    ax.set_title(f"Distance to tipping into another well (white: closer than {cert})")
+    return ax
+
+
 def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7):
-    """Basin fraction of each k against the swept parameter ``dim``, with standard errors.
+    """Exact basin fraction of each k against the swept parameter ``dim`` (lines), with the
+    grid counts and their error bounds (markers with error bars).
 
     The ``max_curves`` largest basins get a curve each; the rest are summed into one
     "other k" curve. A dashed line marks critical damping α = ω0 when α is swept.
@@ -143,24 +176,25 @@ def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: 
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4.5))
     x = ds[dim].values
-    p = ds["basin_fraction"].transpose(dim, "k").values
-    se = ds["basin_fraction_stderr"].transpose(dim, "k").values
-    shown = np.sort(np.argsort(p.max(axis=0))[::-1][:max_curves])
-    for j in shown:
-        ax.errorbar(x, p[:, j], yerr=se[:, j], marker="o", ms=3, capsize=2,
-                    label=f"k = {int(ds['k'].values[j]):+d}")
-    rest = np.setdiff1d(np.arange(p.shape[1]), shown)
+    exact = ds["basin_fraction_exact"].transpose(dim, "k").values
+    grid = ds["basin_fraction"].transpose(dim, "k").values
+    bound = ds["basin_fraction_grid_error_bound"].transpose(dim, "k").values
+    shown = np.sort(np.argsort(exact.max(axis=0))[::-1][:max_curves])
+    rest = np.setdiff1d(np.arange(exact.shape[1]), shown)
+    curves = [(exact[:, j], grid[:, j], bound[:, j], f"k = {int(ds['k'].values[j]):+d}", None)
+              for j in shown]
     if rest.size:
-        n = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
-        q = p[:, rest].sum(axis=1)
-        ax.errorbar(x, q, yerr=np.sqrt(q * (1 - q) / n), marker="s", ms=3, capsize=2,
-                    color="0.5", ls="--", label=f"other k ({rest.size})")
+        curves.append((exact[:, rest].sum(axis=1), grid[:, rest].sum(axis=1),
+                       bound[:, rest].sum(axis=1), f"other k ({rest.size})", "0.5"))
+    for e, g, b, label, color in curves:
+        line, = ax.plot(x, e, "-", color=color, label=label)
+        ax.errorbar(x, g, yerr=b, fmt="o", ms=3, capsize=2, color=line.get_color())
     if dim == "alpha":
         ax.axvline(float(ds["omega0"]), color="0.3", ls=":", lw=1, label="α = ω0 (critical)")
     ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
     ax.set_xlabel("damping α [1/s]" if dim == "alpha" else "ω0 [rad/s]")
-    ax.set_ylabel("basin fraction of the grid")
-    ax.set_title("Basin fractions (error bars: one standard error)")
+    ax.set_ylabel("basin fraction of the window")
+    ax.set_title("Basin fractions: exact areas (lines), grid counts with error bounds (dots)")
     ax.legend(ncol=2)
     return ax
 
@@ -172,7 +206,8 @@ def plot_atlas(tree: xr.DataTree, path: Path) -> list[Path]:
     ds = tree.to_dataset(inherit=False)
     with plt.rc_context(STYLE):
         jobs = [(path.with_suffix(".png"), basin_map),
-                (path.with_name(path.stem + "_t_trap.png"), trap_time_map)]
+                (path.with_name(path.stem + "_t_trap.png"), trap_time_map),
+                (path.with_name(path.stem + "_boundary_distance.png"), boundary_distance_map)]
         if "alpha" in ds.dims:
             swept = "alpha" if ds.sizes["alpha"] > 1 else "omega0"
             jobs.append((path.with_name(path.stem + "_fractions.png"),

@@ -6,14 +6,17 @@ This is the only module that touches HDF5. A run writes into ``<output>.partial`
    tile row band) and a ``tile_done`` record;
 2. :func:`write_tile` writes each finished tile by region and marks it done, then flushes,
    so a crash loses at most the tile in flight and ``--resume`` redoes only missing tiles;
-3. :func:`finalize` adds the basin fractions and the small groups (``/critical_points``,
+3. the sweep certifies each tile (:func:`read_labels`, :func:`write_certificate`);
+4. :func:`finalize` adds the summary variables and the small groups (``/critical_points``,
    ``/separatrices``) and renames the file onto the output path, so the output path only ever
    holds a complete file.
 
 Layout (SPEC.md): root dims ``theta_dot0``, ``theta0`` (leading ``alpha``, ``omega0`` for a
 parameter atlas); ``attractor`` int16 (``_FillValue`` where not trapped), ``status`` int8
-(CF flags), ``t_trap`` float32 [s]; ``basin_fraction`` and ``basin_fraction_stderr`` over
-``k``; provenance attributes.
+(CF flags), ``t_trap`` float32 [s]; ``boundary_distance`` float32; per basin ``k`` the exact
+area fractions and the grid counts with their errors (:data:`BASIN_VARIABLES`); per parameter
+point d_cert and the other certificate figures (:data:`POINT_VARIABLES`); provenance
+attributes.
 """
 
 from __future__ import annotations
@@ -34,8 +37,11 @@ from .labels import ATTRACTOR_FILL
 __all__ = ["Layout", "create", "open_partial", "write_tile", "finalize", "open_atlas",
            "partial_path", "describe", "read_layout"]
 
-STATUS_FLAGS = {"flag_values": np.array([0, 1, 2], np.int8),
-                "flag_meanings": "trapped unresolved nonfinite"}
+STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3], np.int8),
+                "flag_meanings": "trapped unresolved nonfinite near_boundary",
+                "comment": "trapped: certified for the exact equation (energy trap of the RK4 "
+                           "map, and farther than d_cert from every basin boundary); "
+                           "near_boundary: trapped, certified for the RK4 map only"}
 _COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
 SCHEMA = "atlas-basin-map/1"
 
@@ -115,6 +121,11 @@ def create(path: Path, layout: Layout, attrs: dict) -> h5netcdf.File:
                                        **STATUS_FLAGS}),
             "t_trap": (np.float32, np.float32(np.nan), {
                 "long_name": "time at which the orbit was certified trapped", "units": "s"}),
+            "boundary_distance": (np.float32, np.float32(np.nan), {
+                "long_name": "Euclidean distance in the (theta, theta_dot) plane to the "
+                             "nearest basin boundary",
+                "units": "1", "comment": "rad and rad s-1 taken as one unit; boundaries are "
+                "the stable manifolds of the saddles integrated by DOP853 (rtol 1e-13)"}),
         }
         for name, (dtype, fill, var_attrs) in specs.items():
             var = f.create_variable(name, layout.dims, dtype, fillvalue=fill, chunks=chunks,
@@ -184,62 +195,97 @@ def write_tile(f: h5netcdf.File, layout: Layout, index: int, attractor, status, 
     _sync(f)
 
 
-def _basin_counts(f: h5netcdf.File, layout: Layout) -> tuple[dict, np.ndarray]:
-    """Per parameter point: {k: count} of trapped orbits and the number of orbits not trapped,
-    read back tile by tile so memory stays bounded by one tile."""
-    counts = [dict() for _ in range(layout.n_params)]
-    untrapped = np.zeros(layout.n_params, np.int64)
-    for index in range(layout.n_tiles):
-        params, rows = layout.tile(index)
-        region = (*params, rows, slice(None))
-        status = f.variables["status"][region]
-        k = f.variables["attractor"][region][status == 0]
-        p = index // layout.bands
-        for value, count in zip(*np.unique(k, return_counts=True)):
-            counts[p][int(value)] = counts[p].get(int(value), 0) + int(count)
-        untrapped[p] += int(np.count_nonzero(status != 0))
-    return counts, untrapped
+def read_labels(f: h5netcdf.File, layout: Layout, index: int):
+    """(attractor, status) of tile ``index``, each shaped (rows, n_theta0)."""
+    params, rows = layout.tile(index)
+    region = (*params, rows, slice(None))
+    return f.variables["attractor"][region], f.variables["status"][region]
 
 
-def _write_fractions(f: h5netcdf.File, layout: Layout) -> None:
-    counts, untrapped = _basin_counts(f, layout)
-    ks = sorted(set().union(*counts)) or [0]
-    n_orbits = layout.theta0.size * layout.theta_dot0.size
-    table = np.array([[c.get(k, 0) for k in ks] for c in counts], np.float64)
-    p = table / n_orbits
+def write_certificate(f: h5netcdf.File, layout: Layout, index: int, status,
+                      boundary_distance) -> None:
+    """Write tile ``index``'s certified status and boundary distances."""
+    params, rows = layout.tile(index)
+    region = (*params, rows, slice(None))
+    f.variables["status"][region] = status
+    f.variables["boundary_distance"][region] = boundary_distance
+
+
+#: Per-basin summary variables (dims: the parameter dims, then ``k``), and their attributes.
+BASIN_VARIABLES = {
+    "basin_fraction_exact": {
+        "long_name": "area fraction of the window in the basin of k",
+        "comment": "from the exact basin boundaries (stable manifolds integrated by DOP853, "
+                   "rtol 1e-13): integral of the clipped boundary curves over theta"},
+    "basin_fraction_exact_error": {
+        "long_name": "error estimate of basin_fraction_exact",
+        "comment": "change of the result from rtol 1e-12 to 1e-13 (about 10x the error)"},
+    "basin_fraction": {
+        "long_name": "fraction of the grid points labelled k (a count, not an area)"},
+    "basin_fraction_grid_error_bound": {
+        "long_name": "bound on |basin_fraction - basin_fraction_exact|",
+        "comment": "from the grid cells: a certified cell farther than its half-diagonal "
+                   "from every boundary counts |1/N - a/A|, every other cell max(1/N, a/A) "
+                   "in each basin it may meet; first order in the cell size"},
+    "basin_fraction_grid_error": {
+        "long_name": "measured |basin_fraction - basin_fraction_exact|"},
+}
+#: Per-parameter-point summary variables and their attributes.
+POINT_VARIABLES = {
+    "unresolved_fraction": {"long_name": "fraction of the grid without a well label "
+                                         "(unresolved or nonfinite)"},
+    "certified_fraction": {"long_name": "fraction of the grid whose label is certified for "
+                                        "the exact equation (status trapped)"},
+    "d_cert": {"long_name": "distance to the basin boundaries beyond which RK4 labels are "
+                            "certified for the exact equation",
+               "comment": "10 x (boundary shift + bisection tol + reference error); NaN: "
+                          "not measured (separatrices disabled), no label certified"},
+    "boundary_shift": {"long_name": "largest distance of the RK4 map's basin boundary "
+                                    "(bisected) from the exact one"},
+    "boundary_reference_error": {"long_name": "error estimate of the DOP853 basin "
+                                              "boundaries (change from rtol 1e-12 to 1e-13)"},
+    "trap_margin": {"long_name": "relative safety margin m of the energy trap"},
+    "side_mismatches": {"long_name": "labels farther than d_cert from every boundary whose "
+                                     "RK4 label differs from the exact side (expected 0)"},
+}
+
+
+def _write_summary(f: h5netcdf.File, layout: Layout, points: list[dict]) -> None:
+    """The summary of every parameter point (in the order of ``layout``'s points): per-basin
+    variables over ``k`` (the union of every point's basins, 0 where a basin is absent) and
+    per-point scalars, both with the parameter dims leading."""
+    ks = sorted({int(k) for p in points for k in p["k"]}) or [0]
     lead = () if layout.alpha is None else (layout.alpha.size, layout.omega0.size)
     lead_dims = layout.dims[:-2]
     f.dimensions["k"] = len(ks)
     f.create_variable("k", ("k",), np.int16, data=np.array(ks, np.int16)).attrs.update(
         long_name="attractor index: the rest state (2*pi*k, 0)", units="1")
-    for name, values, attrs in [
-        ("basin_fraction", p, {"long_name": "fraction of the grid in the basin of k"}),
-        ("basin_fraction_stderr", np.sqrt(p * (1 - p) / n_orbits),
-         {"long_name": "standard error of basin_fraction, sqrt(p(1-p)/N)"}),
-    ]:
+    for name, attrs in BASIN_VARIABLES.items():
+        table = np.zeros((len(points), len(ks)))
+        for row, p in zip(table, points):
+            row[np.searchsorted(ks, p["k"])] = p[name]
         var = f.create_variable(name, (*lead_dims, "k"), np.float64,
-                                data=values.reshape(*lead, len(ks)))
+                                data=table.reshape(*lead, len(ks)))
         var.attrs.update(units="1", **attrs)
-    var = f.create_variable("unresolved_fraction", lead_dims, np.float64,
-                            data=(untrapped / n_orbits).reshape(lead))
-    var.attrs.update(units="1", long_name="fraction of the grid not certified "
-                     "(unresolved or nonfinite)")
+    for name, attrs in POINT_VARIABLES.items():
+        values = np.array([p[name] for p in points], np.float64).reshape(lead)
+        var = f.create_variable(name, lead_dims, np.float64, data=values)
+        var.attrs.update(units="1", **attrs)
 
 
 #: What :func:`finalize` adds to a file whose tiles are all done.
-_SUMMARY = ("basin_fraction", "basin_fraction_stderr", "unresolved_fraction", "k",
-            "critical_points", "separatrices")
+_SUMMARY = (*BASIN_VARIABLES, *POINT_VARIABLES, "k", "critical_points", "separatrices")
 
 
-def finalize(f: h5netcdf.File, path: Path, output: Path, groups: dict[str, xr.Dataset],
-             attrs: dict) -> None:
-    """Complete the partial file at ``path`` and rename it onto ``output``.
+def finalize(f: h5netcdf.File, path: Path, output: Path, points: list[dict],
+             groups: dict[str, xr.Dataset], attrs: dict) -> None:
+    """Complete the partial file at ``path`` with the summary of every parameter point
+    (:func:`_write_summary`), the groups and attributes, and rename it onto ``output``.
 
     ``complete`` is set last, just before the rename: a failure on the way (disk full)
     leaves a partial file that ``--resume`` finishes (see :func:`_discard_summary`).
     """
-    layout = read_layout(f)
-    _write_fractions(f, layout)
+    _write_summary(f, read_layout(f), points)
     f.attrs.update(attrs)
     f.close()
     for name, ds in groups.items():
@@ -252,7 +298,7 @@ def finalize(f: h5netcdf.File, path: Path, output: Path, groups: dict[str, xr.Da
 def _discard_summary(path: Path) -> None:
     """Remove what an interrupted :func:`finalize` may have added, so it can run again."""
     with h5py.File(path, "a") as h:
-        if "basin_fraction" not in h and "critical_points" not in h and "k" not in h:
+        if not any(name in h for name in _SUMMARY):
             return
         for name in _SUMMARY:  # the variables on dim k before k itself
             if name in h:

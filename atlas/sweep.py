@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from . import store
+from .certificate import labelled
 from .config import Config, config_hash
 from .errors import AtlasError, StorageError
 from .labels import CHECK_EVERY, label, trap_margin
@@ -127,23 +128,64 @@ def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
     )
 
 
-def _separatrices_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset | None:
+def _trace_separatrices(cfg: Config) -> list[xr.Dataset | None]:
+    """The traced separatrices of every parameter point (None each when disabled)."""
+    points = [Pendulum(a, w) for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
+    if not cfg.separatrices.enabled:
+        return [None] * len(points)
+    from . import separatrices
+
+    g = cfg.grid
+    window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
+    return [separatrices.trace(p, *window, tol=cfg.separatrices.tol,
+                               max_spacing=cfg.separatrices.max_spacing, dt=cfg.integrator.dt)
+            for p in points]
+
+
+def _separatrices_group(cfg: Config, traced: list[xr.Dataset | None]) -> xr.Dataset | None:
     """The ``/separatrices`` group; for a parameter atlas, every (α, ω0)'s curves and
     crossings concatenated, tagged by ``point_alpha``/``point_omega0`` and
     ``crossing_alpha``/``crossing_omega0``."""
-    if not cfg.separatrices.enabled:
+    if traced[0] is None:
         return None
+    if not cfg.pendulum.is_sweep:
+        return traced[0]
     from . import separatrices
 
-    window = ((float(layout.theta0[0]), float(layout.theta0[-1])),
-              (float(layout.theta_dot0[0]), float(layout.theta_dot0[-1])))
-    traced = [(a, w, separatrices.trace(Pendulum(a, w), *window, tol=cfg.separatrices.tol,
-                                        max_spacing=cfg.separatrices.max_spacing,
-                                        dt=cfg.integrator.dt))
-              for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
-    if layout.alpha is None:
-        return traced[0][2]
-    return separatrices.merge_parameter_points(traced)
+    params = [(a, w) for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
+    return separatrices.merge_parameter_points(
+        [(a, w, ds) for (a, w), ds in zip(params, traced)])
+
+
+def _certify(f, cfg: Config, layout: store.Layout, traced: list[xr.Dataset | None]):
+    """Certify every tile for the exact equation (:mod:`atlas.certificate`): rewrite its
+    status and boundary distances, and return each parameter point's summary."""
+    from .certificate import Certifier
+
+    points = []
+    for p_index, sep in enumerate(traced):
+        first = p_index * layout.bands
+        p = _pendulum(cfg, layout.tile(first)[0])
+        shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
+                      if sep is not None else (np.nan, np.nan))
+        cert = Certifier(p, layout.theta0, layout.theta_dot0, shift, tol)
+        untrapped = 0
+        for index in range(first, first + layout.bands):
+            attractor, status = store.read_labels(f, layout, index)
+            status, distance = cert.tile(layout.tile(index)[1], attractor, status)
+            store.write_certificate(f, layout, index, status, distance)
+            untrapped += int(np.count_nonzero(~labelled(status)))
+        n = cert.n_points
+        points.append({**cert.fractions(), "unresolved_fraction": untrapped / n,
+                       "certified_fraction": cert.certified / n, "d_cert": cert.d_cert,
+                       "boundary_shift": shift, "side_mismatches": cert.mismatched,
+                       "boundary_reference_error": cert.reference_error,
+                       "trap_margin": trap_margin(cfg.integrator.dt, p.alpha, p.omega0)})
+        if cert.mismatched:
+            log.warning("alpha = %g, omega0 = %g: %d labels farther than d_cert from every "
+                        "boundary disagree with the exact side; they are flagged near_boundary",
+                        p.alpha, p.omega0, cert.mismatched)
+    return points
 
 
 def _versions() -> dict:
@@ -173,8 +215,7 @@ def _attrs(cfg: Config) -> dict:
         **_versions(),
     }
     if not cfg.pendulum.is_sweep:
-        a, w = cfg.pendulum.alphas[0], cfg.pendulum.omega0s[0]
-        attrs.update(alpha=a, omega0=w, trap_margin=trap_margin(cfg.integrator.dt, a, w))
+        attrs.update(alpha=cfg.pendulum.alphas[0], omega0=cfg.pendulum.omega0s[0])
     return attrs
 
 
@@ -274,11 +315,13 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
                                f"({exc.strerror or exc})") from None
         try:
             _compute_into(f, cfg, layout, todo, backend, quiet)
+            traced = _trace_separatrices(cfg)
+            points = _certify(f, cfg, layout, traced)
             groups = {"critical_points": critical_points_dataset(cfg, layout)}
-            separatrices = _separatrices_dataset(cfg, layout)
+            separatrices = _separatrices_group(cfg, traced)
             if separatrices is not None:
                 groups["separatrices"] = separatrices
-            store.finalize(f, partial, cfg.output, groups,
+            store.finalize(f, partial, cfg.output, points, groups,
                            {"run_time_s": time.perf_counter() - start, "backend": backend})
         except OverflowError as exc:
             _close_quietly(f)

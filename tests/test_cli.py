@@ -30,11 +30,13 @@ def test_run_info_plot_end_to_end(small_config, tmp_path):
     assert "24 x 16" in proc.stdout and "basins" in proc.stdout and "unresolved 0" in proc.stdout
     info = run_cli("info", out)
     assert info.returncode == 0, info.stderr
-    assert "complete" in info.stdout and "k=+0" in info.stdout and "alpha = 0.1" in info.stdout
+    assert "complete" in info.stdout and "alpha = 0.1" in info.stdout
+    assert "area fraction (exact)" in info.stdout and "d_cert" in info.stdout
     plot = run_cli("plot", out)
     assert plot.returncode == 0, plot.stderr
     assert (tmp_path / "small.png").stat().st_size > 10_000
     assert (tmp_path / "small_t_trap.png").stat().st_size > 10_000
+    assert (tmp_path / "small_boundary_distance.png").stat().st_size > 10_000
 
 
 def test_bad_config_exits_2_and_writes_nothing(tmp_path):

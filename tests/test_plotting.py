@@ -52,18 +52,23 @@ def test_fraction_curves_one_per_basin_with_error_bars(sweep_tree):
     tree, _ = sweep_tree
     ax = fraction_curves(tree, max_curves=3)
     bars = [c for c in ax.containers if c.has_yerr]
-    assert len(bars) == 4  # three largest basins + "other k"
-    p0 = tree["basin_fraction"].sel(k=0).isel(omega0=0).values
-    k0 = next(c for c in bars if c.get_label() == "k = +0")
-    np.testing.assert_array_equal(k0.lines[0].get_ydata(), p0)
-    np.testing.assert_array_equal(k0.lines[0].get_xdata(), [0.1, 0.5, 2.0])
+    assert len(bars) == 4  # three largest basins + "other k": grid counts with bounds
+    curves = {line.get_label(): line for line in ax.lines
+              if line.get_label().startswith(("k =", "other k"))}
+    assert len(curves) == 4  # and the exact fractions as lines
+    point = tree.to_dataset(inherit=False).sel(k=0).isel(omega0=0)
+    np.testing.assert_array_equal(curves["k = +0"].get_ydata(), point["basin_fraction_exact"])
+    np.testing.assert_array_equal(curves["k = +0"].get_xdata(), [0.1, 0.5, 2.0])
+    grid = next(c for c in bars if c.lines[0].get_color() == curves["k = +0"].get_color())
+    np.testing.assert_array_equal(grid.lines[0].get_ydata(), point["basin_fraction"])
     plt.close("all")
 
 
 def test_plot_atlas_writes_the_figures(sweep_tree):
     tree, path = sweep_tree
     written = plot_atlas(tree, path)
-    assert [p.name for p in written] == ["s.png", "s_t_trap.png", "s_fractions.png"]
+    assert [p.name for p in written] == ["s.png", "s_t_trap.png", "s_boundary_distance.png",
+                                         "s_fractions.png"]
     assert all(p.stat().st_size > 10_000 for p in written)
 
 

@@ -202,7 +202,7 @@ output: {tmp_path / 's.h5'}
     assert proc.returncode == 0, proc.stderr
     assert "separatrices: 2 parameter points" in proc.stdout
     for alpha in ("0.2", "1"):
-        assert f"alpha = {alpha}, omega0 = 1: k=" in proc.stdout
+        assert f"alpha = {alpha}, omega0 = 1:" in proc.stdout
     sep = atlas.open(tmp_path / "s.h5")["separatrices"].to_dataset(inherit=False)
     for alpha in (0.2, 1.0):
         one = select_parameter_point(sep, alpha, 1.0)

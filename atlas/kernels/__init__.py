@@ -21,3 +21,6 @@ first check that sees it.
 """
 
 TRAPPED, UNRESOLVED, NONFINITE = 0, 1, 2
+#: Status set after labelling (never by a kernel): trapped, but not certified for the exact
+#: equation (closer than d_cert to a basin boundary; see :mod:`atlas.certificate`).
+NEAR_BOUNDARY = 3

@@ -1,0 +1,212 @@
+"""Labels certified for the exact equation, and the honest error of grid-counted fractions.
+
+The energy trap (:mod:`atlas.labels`) certifies that the orbit of the *RK4 map* at step dt
+stays in its well. Before it is trapped, that orbit carries RK4's global error, so next to a
+basin boundary the exact equation's orbit may end in the other well. The RK4 map's basin
+boundaries are displaced from the exact ones — the stable manifolds of the saddles,
+integrated independently by DOP853 (:mod:`atlas.manifold`) — by at most ``shift``, which
+:func:`atlas.separatrices.trace` measures: the largest distance of its bisected boundary
+points (located on RK4 labels to within ``tol``) from the DOP853 manifold. A label is
+therefore certified for the exact equation when
+
+* the RK4 label is the basin on whose side of the exact boundaries the point lies, and
+* the point's distance to the nearest exact boundary exceeds
+
+      d_cert = SAFETY · (shift + tol + reference_error),
+
+  with ``reference_error`` the measured change of the reference from rtol 1e-12 to 1e-13.
+
+Why SAFETY = 10: the shift is measured at every traced vertex, at most ``max_spacing`` apart
+along the whole boundary; it is the smooth O(dt⁴) offset of the RK4 scheme (it interpolates
+between vertices by a cubic spline to ≈ tol/16, see :mod:`atlas.separatrices`), so between
+vertices it exceeds its largest vertex value by far less than tenfold; the copies of the
+traced branches are exact images of them (the RK4 map commutes with θ → θ + 2π and
+(θ, θ̇) → (−θ, −θ̇) up to the rounding of θ, ≈ 1e-15). Trapped labels that fail either test
+get the status ``near_boundary``: certified for the RK4 map only.
+
+A grid count is not an area. The grid fraction f_k = (points labelled k)/N differs from the
+exact area fraction F_k = Σ_cells area(cell ∩ basin k)/A by the sum over cells of
+1{label = k}/N − area(cell ∩ basin k)/A. A cell (the part of the window nearest its grid
+point) whose point is certified and farther than the cell's half-diagonal from every boundary
+lies wholly in its basin: it contributes |1/N − a/A| (a its area). Every other cell — cut by
+a boundary, uncertified or unresolved — contributes at most max(1/N, a/A) to each basin it
+may meet (the labelled one, the exact side, and those of every boundary within the
+half-diagonal). The sum is ``basin_fraction_grid_error_bound``, a bound of first order in
+the cell size; ``basin_fraction_grid_error`` is the measured |f_k − F_k|.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+
+import numpy as np
+
+from .kernels import NEAR_BOUNDARY, TRAPPED
+from .manifold import RTOL_CHECK, StableManifold, basin_areas
+from .model import Pendulum
+
+__all__ = ["SAFETY", "cert_distance", "Certifier", "labelled"]
+
+#: Safety factor of d_cert over the measured RK4-vs-exact boundary shift (module docstring).
+SAFETY = 10.0
+#: First search radius around the grid for boundaries [rad-ish]; grown while needed.
+_FIRST_MARGIN = 1.0
+
+
+def cert_distance(shift: float, tol: float, reference_error: float) -> float:
+    """d_cert [rad-ish]: the distance from the exact boundaries beyond which RK4 labels are
+    labels of the exact equation (module docstring). NaN when ``shift`` was not measured."""
+    return SAFETY * (shift + tol + reference_error)
+
+
+def labelled(status):
+    """Where an orbit has a well label: certified for the ODE (trapped) or for the RK4 map
+    only (near_boundary)."""
+    status = np.asarray(status)
+    return (status == TRAPPED) | (status == NEAR_BOUNDARY)
+
+
+class Certifier:
+    """Boundary distances, certificates and grid-error tallies of one parameter point's
+    basin map, tile by tile: grid axes ``theta0`` [rad] (columns) and ``theta_dot0``
+    [rad s⁻¹] (rows), the window being their ranges; ``shift`` [rad-ish], the measured
+    distance of the RK4 map's boundaries from the exact ones, located to ``tol`` (NaN when
+    not measured: then no label is certified for the exact equation)."""
+
+    def __init__(self, pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float):
+        self.pendulum = pendulum
+        self.theta0, self.theta_dot0 = np.asarray(theta0, float), np.asarray(theta_dot0, float)
+        self.window = ((self.theta0[0], self.theta0[-1]), (self.theta_dot0[0],
+                                                           self.theta_dot0[-1]))
+        self.areas = basin_areas(pendulum, *self.window)
+        self.reference_error = self._reference_error()
+        self.d_cert = cert_distance(shift, tol, self.reference_error)
+        d_theta = np.diff(self.window[0])[0] / (self.theta0.size - 1)
+        d_speed = np.diff(self.window[1])[0] / (self.theta_dot0.size - 1)
+        self.half_diagonal = 0.5 * math.hypot(d_theta, d_speed)
+        self.n_points = self.theta0.size * self.theta_dot0.size
+        area = np.diff(self.window[0])[0] * np.diff(self.window[1])[0]
+        # cell areas a/A: interior cells dθ·dθ̇, half of that on an edge, a quarter at corners
+        self._col_weight = _edge_weights(self.theta0.size) * d_theta
+        self._row_weight = _edge_weights(self.theta_dot0.size) * d_speed / area
+        self._indices: dict[float, object] = {}
+        self.counts = defaultdict(int)
+        self.bound = defaultdict(float)
+        self.certified = self.mismatched = 0
+
+    def _reference_error(self) -> float:
+        """Largest distance between the reference manifolds at rtol 1e-12 and 1e-13 over the
+        window's θ̇ band: the DOP853 reference's own error, overestimated about tenfold."""
+        speed = max(abs(v) for v in self.window[1])
+        fine = StableManifold(self.pendulum, speed)
+        coarse = StableManifold(self.pendulum, speed, RTOL_CHECK)
+        box = ((coarse.theta.min() - 1.0, math.pi + 1.0), (-speed, speed))
+        inside = coarse.theta_dot <= speed  # both integrations end just beyond it
+        dist, _ = fine.index(box).nearest(coarse.theta[inside], coarse.theta_dot[inside])
+        return float(dist.max(initial=0.0))
+
+    def _index(self, margin: float):
+        """The boundary index of the window grown by ``margin`` (cached)."""
+        if margin not in self._indices:
+            (t0, t1), (v0, v1) = self.window
+            speed = max(abs(v0), abs(v1)) + margin
+            manifold = StableManifold(self.pendulum, speed)
+            self._indices[margin] = manifold.index(((t0 - margin, t1 + margin),
+                                                    (v0 - margin, v1 + margin)))
+        return self._indices[margin]
+
+    def distance(self, theta, theta_dot):
+        """Distance [rad-ish] of each point to the nearest exact basin boundary, and that
+        boundary's saddle n. Boundaries are searched within a margin around the window,
+        grown until it exceeds every distance found (so none nearer can lie outside it)."""
+        margin = _FIRST_MARGIN
+        dist, n = self._index(margin).nearest(theta, theta_dot)
+        while True:
+            far = ~(dist <= margin)
+            if not far.any():
+                return dist, n
+            finite = dist[far][np.isfinite(dist[far])]
+            margin = 2.0 * max(margin, finite.max(initial=0.0))
+            dist[far], n[far] = self._index(margin).nearest(theta[far], theta_dot[far])
+
+    def certify(self, theta, theta_dot, attractor, status):
+        """Certify labelled points (arrays broadcast to one shape; θ [rad], θ̇ [rad s⁻¹]):
+        returns (status, with ``near_boundary`` where a trapped label is not certified for
+        the exact equation; boundary distance [rad-ish]; the exact side k; the saddle n of
+        the nearest boundary)."""
+        theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
+        full = np.broadcast_shapes(theta.shape, theta_dot.shape, np.shape(status))
+        side = self._index(_FIRST_MARGIN).manifold.side(theta, theta_dot, self.areas.saddles)
+        theta, theta_dot = np.broadcast_to(theta, full), np.broadcast_to(theta_dot, full)
+        dist, n_near = self.distance(theta, theta_dot)
+        has_label = labelled(status)
+        agree = has_label & (np.asarray(attractor, np.int64) == side)
+        certified = agree & (dist > self.d_cert)
+        status = np.where(has_label & ~certified, NEAR_BOUNDARY, status).astype(np.int8)
+        return status, dist, np.broadcast_to(side, full), n_near
+
+    def tile(self, rows: slice, attractor, status):
+        """Certify the grid rows ``rows`` (arrays shaped (rows, columns)) with
+        :meth:`certify` and add them to the tallies; returns (status, boundary distance
+        as float32)."""
+        theta, theta_dot = self.theta0[None, :], self.theta_dot0[rows][:, None]
+        new_status, dist, side, n_near = self.certify(theta, theta_dot, attractor, status)
+        has_label = labelled(status)
+        k = attractor.astype(np.int64)
+        agree = has_label & (k == side)
+        self.certified += int(np.count_nonzero(new_status == TRAPPED))
+        self.mismatched += int(np.count_nonzero(has_label & ~agree & (dist > self.d_cert)))
+        theta, theta_dot = np.broadcast_arrays(theta, theta_dot)
+        self._tally(rows, k, has_label, side, agree & (dist > self.half_diagonal),
+                    theta, theta_dot, n_near)
+        return new_status, dist.astype(np.float32)
+
+    def _tally(self, rows, k, has_label, side, clean, theta, speed, n_near):
+        weight = self._row_weight[rows][:, None] * self._col_weight[None, :]  # a/A
+        per_point = 1.0 / self.n_points
+        for value, count in zip(*np.unique(k[has_label], return_counts=True)):
+            self.counts[int(value)] += int(count)
+        # clean cells: wholly in their basin, off only by their weight
+        gap = np.abs(per_point - weight)
+        for value in np.unique(k[clean]):
+            self.bound[int(value)] += float(gap[clean & (k == value)].sum())
+        # the other cells: at most max(1/N, a/A) in every basin they may meet
+        doubt = ~clean
+        lo_n, hi_n = self._index(_FIRST_MARGIN).saddles_within(
+            theta[doubt], speed[doubt], self.half_diagonal)
+        near = n_near[doubt]
+        lo_n = np.where(lo_n == 0, near, np.minimum(lo_n, near))
+        hi_n = np.where(hi_n == 0, near, np.maximum(hi_n, near))
+        k_lo = np.minimum((lo_n - 1) // 2, side[doubt])
+        k_hi = np.maximum((hi_n + 1) // 2, side[doubt])
+        own = has_label[doubt]
+        k_lo = np.where(own, np.minimum(k_lo, k[doubt]), k_lo)
+        k_hi = np.where(own, np.maximum(k_hi, k[doubt]), k_hi)
+        worst = np.maximum(per_point, weight[doubt])
+        for value in range(int(k_lo.min(initial=0)), int(k_hi.max(initial=-1)) + 1):
+            self.bound[value] += float(worst[(k_lo <= value) & (value <= k_hi)].sum())
+
+    def fractions(self) -> dict[str, np.ndarray]:
+        """Per basin k (every k the window meets or a label names): exact fraction and its
+        error, grid fraction, its error bound and its measured error."""
+        ks = sorted(set(self.areas.k.tolist()) | set(self.counts))
+        exact = dict(zip(self.areas.k.tolist(), self.areas.fraction))
+        error = dict(zip(self.areas.k.tolist(), self.areas.error))
+        grid = np.array([self.counts.get(k, 0) for k in ks]) / self.n_points
+        exact_values = np.array([exact.get(k, 0.0) for k in ks])
+        return {
+            "k": np.array(ks),
+            "basin_fraction_exact": exact_values,
+            "basin_fraction_exact_error": np.array([error.get(k, 0.0) for k in ks]),
+            "basin_fraction": grid,
+            "basin_fraction_grid_error_bound": np.array([self.bound.get(k, 0.0) for k in ks]),
+            "basin_fraction_grid_error": np.abs(grid - exact_values),
+        }
+
+
+def _edge_weights(num: int) -> np.ndarray:
+    """1 for interior grid points, ½ for the two end points (their cells are half cells)."""
+    w = np.ones(num)
+    w[[0, -1]] = 0.5
+    return w

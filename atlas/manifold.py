@@ -1,0 +1,386 @@
+"""The exact basin boundaries: the stable manifolds of the saddles, integrated by DOP853.
+
+Every basin boundary of eq. (1) is the stable manifold of a saddle ((2j+1)π, 0) (essay §3,
+Figure 9). Eq. (1) is invariant under θ → θ + 2π and under (θ, θ̇) → (−θ, −θ̇), so one curve
+determines them all: the *left branch* L of the saddle (π, 0), which arrives at the saddle
+with θ̇ > 0 from θ < π. Followed away from the saddle (reversed time τ) its energy
+E = ½θ̇² + ω0²(1 − cos θ) grows (dE/dτ = 2αθ̇² ≥ 0) and stays above 2ω0², so θ̇ > 0 and θ
+decreases monotonically: L is a graph θ̇ = L(u) over u ∈ (−∞, π]. The boundary through the
+saddle nπ (n odd) is then the graph over all θ
+
+    S_n(θ) = L(θ − (n − 1)π)        for θ ≤ nπ   (left branch, the shift of L),
+    S_n(θ) = −L((n + 1)π − θ)       for θ ≥ nπ   (right branch, the point reflection),
+
+with S_n < S_{n+2} everywhere; the basin of the rest state (2πk, 0) is the strip
+S_{2k−1}(θ) < θ̇ < S_{2k+1}(θ).
+
+:class:`StableManifold` integrates L once — scipy's DOP853 (rtol = atol = 1e-13, dense output)
+in reversed time from 10⁻⁷ along the stable eigenvector (essay eqs. 22, 24; the neglected
+curvature is O(10⁻¹⁴)) until θ̇ exceeds a stated speed — together with the quadrature
+Q(τ) = ∫₀^τ θ̇² dτ' = ∫ θ̇ dθ (Green's theorem along the curve). From it:
+
+* :meth:`StableManifold.boundary` — S_n(θ) by Newton's method on the dense output;
+* :meth:`StableManifold.nearest_boundary` — the Euclidean distance in the (θ, θ̇) plane from any
+  point to the nearest basin boundary, and which one (foot point by Newton's method);
+* :meth:`StableManifold.side` — the basin k of the exact equation each point lies in;
+* :func:`basin_areas` — the area fraction of a window in each basin, from
+  ∫ clip(S_n(θ), θ̇min, θ̇max) dθ, integrated exactly piecewise (Q between the points where a
+  boundary crosses the window's θ̇ edges, constants outside); the error estimate is the change
+  from rtol = 1e-12 to 1e-13.
+
+References: Krauskopf et al., "A survey of methods for computing (un)stable manifolds of
+vector fields", Int. J. Bifurcation Chaos 15 (2005) 763; Hairer, Nørsett & Wanner, *Solving
+ODEs I*, §II.5–6 (DOP853 and its dense output).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import Pendulum
+
+__all__ = ["StableManifold", "basin_areas", "BasinAreas", "RTOL", "START_DISTANCE"]
+
+#: Relative and absolute tolerance of the DOP853 reference.
+RTOL = 1e-13
+#: The tolerance whose result is compared with :data:`RTOL`'s for the error estimate.
+RTOL_CHECK = 1e-12
+#: Distance from the saddle of the first integrated point [rad-ish].
+START_DISTANCE = 1e-7
+#: Arc-length spacing of the samples used to seed foot-point searches [rad-ish].
+SAMPLE_SPACING = 0.02
+_NEWTON = 6  # iterations for foot points and inverse functions (quadratic convergence)
+
+
+class _DenseOutput:
+    """DOP853's dense output (Hairer, Nørsett & Wanner, §II.6) of a whole solution, evaluated
+    for many times at once: the same polynomial as scipy's ``Dop853DenseOutput``, its
+    coefficients stacked over the steps, so one call costs a few array operations."""
+
+    def __init__(self, solution):
+        parts = solution.interpolants
+        self.t = np.asarray(solution.ts, float)
+        self.t_old = np.array([q.t_old for q in parts])
+        self.h = np.array([q.h for q in parts])
+        self.y_old = np.array([q.y_old for q in parts])  # (steps, 3)
+        self.F = np.array([q.F for q in parts])[:, ::-1]  # (steps, 7, 3), highest first
+
+    def __call__(self, tau):
+        tau = np.asarray(tau, float)
+        step = np.clip(np.searchsorted(self.t, tau.ravel(), side="right") - 1, 0,
+                       self.h.size - 1)
+        x = ((tau.ravel() - self.t_old[step]) / self.h[step])[:, None]
+        y = np.zeros((x.shape[0], self.y_old.shape[1]))
+        for i in range(self.F.shape[1]):
+            y += self.F[step, i]
+            y *= x if i % 2 == 0 else 1.0 - x
+        y += self.y_old[step]
+        return y.T.reshape(self.y_old.shape[1], *tau.shape)
+
+
+class StableManifold:
+    """The left branch L of the saddle (π, 0) of ``pendulum``, integrated until θ̇ > ``speed``
+    [rad s⁻¹]; beyond that point L(u) > speed for ever (its energy exceeds ½speed² + 2ω0² and
+    only grows). Requires α > 0.
+    """
+
+    def __init__(self, pendulum: Pendulum, speed: float, rtol: float = RTOL):
+        from scipy.integrate import solve_ivp
+
+        p = self.pendulum = pendulum
+        if not p.alpha > 0:
+            raise ValueError("the stable manifolds bound basins only for alpha > 0")
+        self.speed = float(speed)
+        self.u2 = -p.saddle_eigenvalues()[1]
+        e_theta, e_theta_dot = p.saddle_stable_direction()
+        start = (math.pi - START_DISTANCE * e_theta, -START_DISTANCE * e_theta_dot)
+        # ∫ θ̇ dθ along the straight piece from the start point to the saddle
+        q0 = 0.5 * start[1] * START_DISTANCE * e_theta
+        e_stop = 0.5 * self.speed**2 + p.saddle_energy
+
+        def rhs(_, y):  # eq. (1) in reversed time, and ∫ θ̇² dτ
+            return [-y[1], -p.acceleration(y[0], y[1]), y[1] * y[1]]
+
+        def beyond(_, y):
+            return p.energy(y[0], y[1]) - e_stop
+
+        beyond.terminal, beyond.direction = True, 1
+        t_cap = 1e4 * (1.0 / p.alpha + 1.0 / p.omega0)
+        sol = solve_ivp(rhs, (0.0, t_cap), [*start, q0], method="DOP853", rtol=rtol,
+                        atol=rtol, dense_output=True, events=beyond)
+        if sol.status != 1:
+            raise RuntimeError(f"the stable manifold did not reach speed {speed:g} "
+                               f"({sol.message})")
+        self._sol = _DenseOutput(sol.sol)
+        self.tau_end = float(sol.t[-1])
+        self.start = start
+        self.theta_end = float(sol.y[0, -1])  # L(u) > speed for u < theta_end
+        # samples at arc length ≤ SAMPLE_SPACING, from the saddle outward
+        steps = np.hypot(np.diff(sol.y[0]), np.diff(sol.y[1]))
+        pieces = np.maximum(1, np.ceil(steps / SAMPLE_SPACING)).astype(int)
+        tau = np.concatenate([np.linspace(a, b, m, endpoint=False)
+                              for a, b, m in zip(sol.t[:-1], sol.t[1:], pieces)] + [sol.t[-1:]])
+        self.tau = tau
+        self.theta, self.theta_dot, _ = self._sol(tau)
+
+    # ------------------------------------------------------------------ on the curve
+
+    def _state(self, tau):
+        """(θ, θ̇, Q) on L at reversed time τ ∈ [0, tau_end] [s]."""
+        return self._sol(np.clip(tau, 0.0, self.tau_end))
+
+    def _tau_at_theta(self, u):
+        """τ where L passes θ = u, for theta_end ≤ u ≤ θ(0) (θ decreases along L)."""
+        u = np.asarray(u, float)
+        tau = np.interp(-u, -self.theta, self.tau)
+        for _ in range(_NEWTON):
+            theta, theta_dot, _ = self._state(tau)
+            tau = np.clip(tau + (theta - u) / theta_dot, 0.0, self.tau_end)  # dθ/dτ = −θ̇
+        return tau
+
+    def _tau_at_speed(self, level: float) -> np.ndarray:
+        """Every τ where θ̇(τ) = ``level`` on L (θ̇ oscillates while it grows)."""
+        diff = self.theta_dot - level
+        i = np.flatnonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)
+        a, b = self.tau[i], self.tau[i + 1]
+        for _ in range(60):  # bisection: robust where θ̇ turns near the level
+            mid = 0.5 * (a + b)
+            above = self._state(mid)[1] > level
+            rising = diff[i] < 0
+            b = np.where(above == rising, mid, b)
+            a = np.where(above == rising, a, mid)
+        return 0.5 * (a + b)
+
+    def left(self, u):
+        """L(u) [rad s⁻¹] for u ≤ π [rad]; +inf where L is faster than ``speed``."""
+        u = np.atleast_1d(np.asarray(u, float))
+        out = np.full(u.shape, np.inf)
+        line = u >= self.start[0]  # the straight piece next to the saddle
+        out[line] = self.u2 * (math.pi - u[line])
+        mid = (u >= self.theta_end) & ~line
+        out[mid] = self._state(self._tau_at_theta(u[mid]))[1]
+        return out
+
+    def boundary(self, n: int, theta):
+        """S_n(θ) [rad s⁻¹]: the basin boundary through the saddle (nπ, 0), n odd, at θ
+        [rad] (±inf where it is faster than ``speed``)."""
+        theta = np.asarray(theta, float)
+        return np.where(theta <= n * math.pi, self.left(theta - (n - 1) * math.pi),
+                        -self.left((n + 1) * math.pi - theta))
+
+    # ------------------------------------------------------------------ areas
+
+    def clipped_integral(self, u1: float, u2: float, lo: float, hi: float) -> float:
+        """∫ clip(L(u), lo, hi) du over [u1, u2] ⊂ (−∞, π], lo ≤ hi ≤ ``speed`` [rad s⁻¹].
+
+        Exact up to the dense output's accuracy: the interval is cut where L crosses lo or hi
+        and at the ends of the integrated piece; on each part the integrand is a constant
+        or L itself, whose integral is a difference of Q (∫ θ̇ dθ = ∫ θ̇² dτ along L)."""
+        if not u1 < u2:
+            return 0.0
+        cuts = [u1, u2, self.start[0], self.theta_end]
+        for level in (lo, hi):
+            cuts += list(self._state(self._tau_at_speed(level))[0])
+        cuts = np.unique(np.clip(cuts, u1, u2))
+        total = 0.0
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            value = float(self.left(0.5 * (a + b))[0])
+            if not lo < value < hi:  # constant on this part: L does not cross lo or hi
+                total += (lo if value <= lo else hi) * (b - a)
+            elif a >= self.start[0]:  # straight piece: L = u2 (π − u)
+                total += 0.5 * self.u2 * ((math.pi - a) ** 2 - (math.pi - b) ** 2)
+            else:
+                q_a, q_b = self._state(self._tau_at_theta(np.array([a, b])))[2]
+                total += q_a - q_b
+        return total
+
+    def boundary_integral(self, n: int, theta_window, theta_dot_window) -> float:
+        """∫ clip(S_n(θ), θ̇min, θ̇max) dθ over the θ window [rad² s⁻¹]."""
+        (a, b), (lo, hi) = theta_window, theta_dot_window
+        saddle = n * math.pi
+        shift_left, shift_right = (n - 1) * math.pi, (n + 1) * math.pi
+        total = 0.0
+        if a < saddle:  # left branch: S_n(θ) = L(θ − (n−1)π)
+            total += self.clipped_integral(a - shift_left, min(b, saddle) - shift_left, lo, hi)
+        if b > saddle:  # right branch: clip(−L(w), lo, hi) = −clip(L(w), −hi, −lo)
+            total -= self.clipped_integral(shift_right - b, shift_right - max(a, saddle),
+                                           -hi, -lo)
+        return total
+
+    # ------------------------------------------------------------------ distances
+
+    def _copies(self, box):
+        """Samples of every boundary copy inside ``box`` = ((θ0, θ1), (v0, v1)):
+        (θ, θ̇, n, branch 0 left / 1 right, sample index)."""
+        (t0, t1), (v0, v1) = box
+        out = []
+        for branch, sign in ((0, 1.0), (1, -1.0)):
+            theta, speed = sign * self.theta, sign * self.theta_dot
+            in_band = (speed >= v0) & (speed <= v1)
+            if not in_band.any():
+                continue
+            lo, hi = theta[in_band].min(), theta[in_band].max()
+            # left copy of saddle n: θ + (n − 1)π; right copy: −θ + (n + 1)π
+            offset = -1 if branch == 0 else 1
+            n_lo = math.floor((t0 - hi) / math.pi) - offset - 2
+            n_hi = math.ceil((t1 - lo) / math.pi) - offset + 2
+            for n in range(n_lo | 1, n_hi + 1, 2):
+                shifted = theta + (n + offset) * math.pi
+                keep = np.flatnonzero(in_band & (shifted >= t0) & (shifted <= t1))
+                if keep.size:
+                    out.append((shifted[keep], speed[keep], np.full(keep.size, n),
+                                np.full(keep.size, branch), keep))
+        if not out:
+            return None
+        return tuple(np.concatenate(parts) for parts in zip(*out))
+
+    def _foot_distance(self, x, v, i):
+        """Distance from points (x, v), in L's own frame, to L near sample ``i``: Newton's
+        method for the foot point on the dense output, kept within the neighbouring samples,
+        and the straight piece to the saddle for the first samples."""
+        lo = self.tau[np.maximum(i - 1, 0)]
+        hi = self.tau[np.minimum(i + 1, self.tau.size - 1)]
+        tau = self.tau[i].copy()
+        p = self.pendulum
+        w2, a2 = p.omega0**2, 2.0 * p.alpha
+        for _ in range(_NEWTON):  # Newton on g(τ) = (c(τ) − q)·c'(τ) = 0
+            theta, theta_dot, _ = self._state(tau)
+            d0, d1 = -theta_dot, -p.acceleration(theta, theta_dot)  # c' (reversed flow)
+            dd0, dd1 = -d1, w2 * np.cos(theta) * d0 + a2 * d1  # c'' = J c'
+            g = (theta - x) * d0 + (theta_dot - v) * d1
+            slope = d0 * d0 + d1 * d1 + (theta - x) * dd0 + (theta_dot - v) * dd1
+            # near a centre of curvature g' ≤ 0: fall back to the Gauss–Newton step
+            slope = np.where(slope > 0, slope, d0 * d0 + d1 * d1)
+            tau = np.clip(tau - g / slope, lo, hi)
+        theta, theta_dot, _ = self._state(tau)
+        dist = np.hypot(theta - x, theta_dot - v)
+        dist = np.minimum(dist, np.hypot(self.theta[i] - x, self.theta_dot[i] - v))
+        near = i <= 1  # the segment from the saddle (π, 0) to the first integrated point
+        if near.any():
+            ax, av = self.start[0] - math.pi, self.start[1]
+            s = np.clip(((x[near] - math.pi) * ax + v[near] * av) / (ax * ax + av * av), 0, 1)
+            seg = np.hypot(math.pi + s * ax - x[near], s * av - v[near])
+            dist[near] = np.minimum(dist[near], seg)
+        return dist
+
+    def index(self, box) -> BoundaryIndex:
+        """A search index over every boundary passing through ``box`` = ((θ0, θ1), (v0, v1))
+        [rad, rad s⁻¹]; ``box``'s θ̇ range must lie within ±``speed``."""
+        return BoundaryIndex(self, box)
+
+    def side(self, theta, theta_dot, saddles):
+        """Basin k of the exact equation at each point (θ [rad], θ̇ [rad s⁻¹], broadcast):
+        the strip S_{2k−1}(θ) < θ̇ < S_{2k+1}(θ).
+
+        ``saddles`` = (n_below, n_above): odd n of boundaries that lie entirely below and
+        above the points (from :func:`basin_areas`). For a grid pass θ shaped (1, C) and θ̇
+        shaped (R, 1): each boundary is then evaluated once per column."""
+        n_below, n_above = saddles
+        theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
+        k = np.full(np.broadcast_shapes(theta.shape, theta_dot.shape), (n_below + 1) // 2,
+                    np.int64)
+        for n in range(n_below + 2, n_above, 2):
+            k += theta_dot > self.boundary(n, theta)
+        return k
+
+
+class BoundaryIndex:
+    """Nearest basin boundaries of points, among the boundary copies that pass through a box
+    (a k-d tree over their samples, refined on the dense output of :class:`StableManifold`)."""
+
+    def __init__(self, manifold: StableManifold, box):
+        from scipy.spatial import cKDTree
+
+        self.manifold, self.box = manifold, box
+        copies = manifold._copies(box)
+        self.empty = copies is None
+        if not self.empty:
+            self.theta, self.theta_dot, self.n, self.branch, self.sample = copies
+            self.tree = cKDTree(np.column_stack([self.theta, self.theta_dot]))
+
+    def nearest(self, theta, theta_dot):
+        """Distance [rad-ish, Euclidean in the (θ, θ̇) plane] from each point to the nearest
+        boundary in the index, and that boundary's saddle n (odd); (inf, 0) if none. Exact
+        (to ≈ 1e-12) wherever the true nearest boundary passes through the box."""
+        theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
+        if self.empty or theta.size == 0:
+            return np.full(theta.shape, np.inf), np.zeros(theta.shape, np.int64)
+        _, j = self.tree.query(np.column_stack([theta.ravel(), theta_dot.ravel()]), workers=-1)
+        n, right = self.n[j], self.branch[j] == 1
+        # each point in L's own frame: the inverse of the copy's shift or point reflection
+        x = np.where(right, (n + 1) * math.pi - theta.ravel(), theta.ravel() - (n - 1) * math.pi)
+        v = np.where(right, -theta_dot.ravel(), theta_dot.ravel())
+        dist = self.manifold._foot_distance(x, v, self.sample[j])
+        return dist.reshape(theta.shape), n.reshape(theta.shape)
+
+    def saddles_within(self, theta, theta_dot, radius: float):
+        """(lowest, highest) saddle n of the boundaries that pass within ``radius`` of each
+        point (a superset: samples within radius + the sample spacing); (0, 0) where none."""
+        points = np.column_stack([np.ravel(theta), np.ravel(theta_dot)])
+        lo, hi = np.zeros(len(points), np.int64), np.zeros(len(points), np.int64)
+        if self.empty or not len(points):
+            return lo, hi
+        for i, near in enumerate(self.tree.query_ball_point(points, radius + SAMPLE_SPACING)):
+            if near:
+                ns = self.n[near]
+                lo[i], hi[i] = ns.min(), ns.max()
+        return lo, hi
+
+
+@dataclass(frozen=True)
+class BasinAreas:
+    """Exact area fractions of a window in the basins k = k[0], …, k[-1].
+
+    fraction: the area fraction of the window in each basin (sums to 1);
+    error:    estimated error of each fraction (the change from rtol 1e-12 to 1e-13 of the
+              reference, which bounds the error at 1e-13 about tenfold), at least 4 ulp;
+    saddles:  (n_below, n_above), the odd n of the highest boundary entirely below the
+              window and of the lowest entirely above it.
+    """
+
+    k: np.ndarray
+    fraction: np.ndarray
+    error: np.ndarray
+    saddles: tuple[int, int]
+
+
+def _boundary_integrals(manifold: StableManifold, theta_window, theta_dot_window):
+    """{n: ∫ clip(S_n) dθ} for every odd n from the highest boundary entirely below the
+    window to the lowest entirely above it (S_n increases with n)."""
+    (a, b), (lo, hi) = theta_window, theta_dot_window
+    floor, ceiling = lo * (b - a), hi * (b - a)
+    scale = 1e-13 * max(abs(floor), abs(ceiling), (hi - lo) * (b - a))
+    centre = 2 * math.floor(0.5 * (a + b) / (2 * math.pi)) + 1
+    g = {centre: manifold.boundary_integral(centre, theta_window, theta_dot_window)}
+    for step, extreme in ((2, ceiling), (-2, floor)):
+        n = centre
+        while abs(g[n] - extreme) > scale:
+            n += step
+            g[n] = manifold.boundary_integral(n, theta_window, theta_dot_window)
+    return g
+
+
+def basin_areas(pendulum: Pendulum, theta_window, theta_dot_window) -> BasinAreas:
+    """Exact area fractions of the window θ ∈ ``theta_window`` [rad] × θ̇ ∈
+    ``theta_dot_window`` [rad s⁻¹] in each basin: (G_{2k+1} − G_{2k−1}) / area with
+    G_n = ∫ clip(S_n(θ), θ̇min, θ̇max) dθ (module docstring)."""
+    speed = max(abs(x) for x in theta_dot_window)
+    width = theta_window[1] - theta_window[0]
+    area = width * (theta_dot_window[1] - theta_dot_window[0])
+    fine, coarse = (_boundary_integrals(StableManifold(pendulum, speed, rtol), theta_window,
+                                        theta_dot_window) for rtol in (RTOL, RTOL_CHECK))
+    below, above = min(fine), max(fine)
+    n = np.arange(min(below, min(coarse)), max(above, max(coarse)) + 1, 2)
+
+    def fractions(g):
+        edge = {n_: theta_dot_window[0 if n_ < min(g) else 1] * width for n_ in n}
+        values = np.array([g.get(n_, edge[n_]) for n_ in n])
+        return np.diff(values) / area
+
+    fraction = fractions(fine)
+    error = np.maximum(np.abs(fraction - fractions(coarse)), 4 * np.finfo(float).eps)
+    return BasinAreas(k=(n[:-1] + 1) // 2, fraction=fraction, error=error,
+                      saddles=(int(below), int(above)))

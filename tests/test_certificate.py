@@ -1,0 +1,144 @@
+"""Labels certified for the exact equation, and the grid fractions' error (atlas.certificate).
+
+References: scipy's DOP853 at rtol 1e-12 labelling orbits of the exact equation; the exact
+areas of atlas.manifold (themselves checked in tests/test_manifold.py); the cell geometry.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import atlas
+from atlas import separatrices
+from atlas.certificate import SAFETY, Certifier, cert_distance, labelled
+from atlas.kernels import NEAR_BOUNDARY, TRAPPED
+from atlas.model import Pendulum
+
+PI = math.pi
+WINDOW = ((-3 * PI, 3 * PI), (-4.0, 4.0))
+
+
+def exact_label(p: Pendulum, theta0: float, theta_dot0: float) -> int | None:
+    """The well reached by the exact equation: DOP853 (rtol 1e-12, atol 1e-14) until the
+    orbit is deep in a well (E_k < ω0², far below the saddles' 2ω0²), None if not by t = 400."""
+    w2, a2 = p.omega0**2, 2 * p.alpha
+
+    def rhs(_, y):
+        return [y[1], -w2 * math.sin(y[0]) - a2 * y[1]]
+
+    def deep(_, y):
+        k = round(y[0] / (2 * PI))
+        return 0.5 * y[1] ** 2 + w2 * (1 - math.cos(y[0] - 2 * PI * k)) - w2
+
+    deep.terminal = True
+    sol = solve_ivp(rhs, (0, 400), [theta0, theta_dot0], method="DOP853", rtol=1e-12,
+                    atol=1e-14, events=deep)
+    return round(sol.y[0, -1] / (2 * PI)) if sol.status == 1 else None
+
+
+@pytest.fixture(scope="module", params=[(0.1, 1.0), (2.0, 1.0)], ids=["under", "over"])
+def traced(request):
+    """(pendulum, its separatrices over the default window, a Certifier with their shift)."""
+    p = Pendulum(*request.param)
+    sep = separatrices.trace(p, *WINDOW)
+    theta0, theta_dot0 = np.linspace(*WINDOW[0], 64), np.linspace(*WINDOW[1], 48)
+    cert = Certifier(p, theta0, theta_dot0, float(sep.attrs["discrepancy"]),
+                     float(sep.attrs["tol"]))
+    return p, sep, cert
+
+
+def test_d_cert_is_the_stated_formula(traced):
+    _, sep, cert = traced
+    assert cert.d_cert == SAFETY * (sep.attrs["discrepancy"] + sep.attrs["tol"]
+                                    + cert.reference_error)
+    assert 0 < cert.reference_error < 1e-9 and cert.d_cert < 1e-7
+    assert math.isnan(cert_distance(float("nan"), 1e-12, 1e-11))
+
+
+def test_certified_labels_are_the_exact_equations(traced):
+    """Points on either side of the exact boundaries at 10·d_cert: every label atlas certifies
+    is DOP853's; at 0.1·d_cert none is certified, so the flag is not vacuous."""
+    p, _, cert = traced
+    manifold = cert._index(1.0).manifold
+    rng = np.random.default_rng(11)
+    # points on the exact boundaries through saddles in and outside the window
+    picks = rng.choice(manifold.theta.size, 12, replace=False)
+    shifts = rng.choice([-4, -2, 0, 2], 12) * PI  # copies of L: saddles −3π … 3π
+    base_theta = manifold.theta[picks] + shifts
+    base_speed = manifold.theta_dot[picks]
+    f0, f1 = base_speed, -p.omega0**2 * np.sin(base_theta) - 2 * p.alpha * base_speed
+    norm = np.hypot(f0, f1)
+    normal = np.column_stack([-f1 / norm, f0 / norm])  # larger θ̇ side
+    for factor, must_flag in ((10.0, False), (0.1, True)):
+        offset = factor * cert.d_cert * np.concatenate([np.ones(12), -np.ones(12)])
+        theta = np.tile(base_theta, 2) + offset * np.tile(normal[:, 0], 2)
+        speed = np.tile(base_speed, 2) + offset * np.tile(normal[:, 1], 2)
+        res = atlas.label(theta, speed, alpha=p.alpha, omega0=p.omega0, t_max=400.0)
+        status, dist, side, _ = cert.certify(theta, speed, res.attractor, res.status)
+        np.testing.assert_allclose(dist, factor * cert.d_cert, rtol=1e-3)
+        if must_flag:
+            assert np.all(status[labelled(res.status)] == NEAR_BOUNDARY)
+            continue
+        assert np.count_nonzero(status == TRAPPED) >= 20  # the certificate is not empty
+        for i in np.flatnonzero(status == TRAPPED):
+            assert res.attractor[i] == side[i] == exact_label(p, theta[i], speed[i])
+
+
+def test_grid_error_bound_holds_and_shrinks_at_first_order():
+    p = Pendulum(0.1, 1.0)
+    sep = separatrices.trace(p, *WINDOW)
+    errors, bounds = [], []
+    for num in (64, 128, 256):
+        theta0, theta_dot0 = np.linspace(*WINDOW[0], num), np.linspace(*WINDOW[1], num)
+        res = atlas.label(theta0[None, :], theta_dot0[:, None], alpha=0.1, omega0=1.0)
+        cert = Certifier(p, theta0, theta_dot0, float(sep.attrs["discrepancy"]),
+                         float(sep.attrs["tol"]))
+        cert.tile(slice(0, num // 2), res.attractor[:num // 2], res.status[:num // 2])
+        cert.tile(slice(num // 2, num), res.attractor[num // 2:], res.status[num // 2:])
+        f = cert.fractions()
+        counted = [np.count_nonzero(res.attractor == k) / num**2 for k in f["k"]]
+        np.testing.assert_array_equal(f["basin_fraction"], counted)
+        assert np.all(f["basin_fraction_grid_error"] <= f["basin_fraction_grid_error_bound"])
+        errors.append(f["basin_fraction_grid_error"].sum())
+        bounds.append(f["basin_fraction_grid_error_bound"].sum())
+    h = np.array([1 / 63, 1 / 127, 1 / 255])
+    order_error = np.polyfit(np.log(h), np.log(errors), 1)[0]
+    order_bound = np.polyfit(np.log(h), np.log(bounds), 1)[0]
+    assert 0.7 < order_error < 1.4 and 0.9 < order_bound < 1.1
+
+
+def test_without_a_measured_shift_no_label_is_certified():
+    p = Pendulum(0.1, 1.0)
+    theta0, theta_dot0 = np.linspace(-1, 1, 5), np.linspace(-1, 1, 4)
+    res = atlas.label(theta0[None, :], theta_dot0[:, None], alpha=0.1, omega0=1.0)
+    cert = Certifier(p, theta0, theta_dot0, float("nan"), float("nan"))
+    status, dist = cert.tile(slice(0, 4), res.attractor, res.status)
+    assert np.all(status == NEAR_BOUNDARY) and np.all(dist > 0) and cert.certified == 0
+
+
+def test_an_atlas_file_stores_the_certificate(tmp_path):
+    """Through atlas.run: distances, d_cert and statuses are consistent, and the fractions
+    and their errors are those of the file's own labels."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"""\
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 41}}
+  theta_dot0: {{start: -4, stop: 4, num: 31}}
+output: {tmp_path / 'c.h5'}
+""")
+    ds = atlas.run(atlas.load_config(cfg), quiet=True).to_dataset(inherit=False)
+    sep = atlas.open(tmp_path / "c.h5")["separatrices"]
+    d_cert = float(ds["d_cert"])
+    assert d_cert == cert_distance(sep.attrs["discrepancy"], sep.attrs["tol"],
+                                   float(ds["boundary_reference_error"]))
+    assert float(ds["boundary_shift"]) == sep.attrs["discrepancy"]
+    status, dist = ds["status"].values, ds["boundary_distance"].values
+    assert np.all(np.isfinite(dist)) and np.all(dist >= 0)
+    assert np.all(dist[labelled(status)] > 0)  # distance 0: only the saddles at the corners
+    np.testing.assert_array_equal(status == TRAPPED, labelled(status) & (dist > d_cert))
+    assert float(ds["certified_fraction"]) == np.mean(status == TRAPPED)
+    assert int(ds["side_mismatches"]) == 0
