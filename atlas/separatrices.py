@@ -637,7 +637,7 @@ def _needed(g: _Predicted, window: Window) -> _Predicted:
     for _, mask in _copies(g.theta, g.theta_dot, window, reach=2):
         used |= mask
     idx = np.flatnonzero(used)
-    return g.part(int(idx[0]), int(idx[-1])) if idx.size else g.part(0, -1)
+    return g.part(int(idx[0]), int(idx[-1])) if idx.size else g.part(0, -1)  # -1: none
 
 
 def _left_branch_at(p: Pendulum, thetas: np.ndarray, dt_p: float):
