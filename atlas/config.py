@@ -30,6 +30,7 @@ from pydantic import (
 
 from . import defaults
 from .errors import ConfigError
+from .limits import MAX_RATE, MIN_RATE
 
 __all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash"]
 
@@ -136,6 +137,8 @@ class PendulumConfig(_Strict):
         def check(a):
             if a < 0:
                 raise ValueError(f"damping must be >= 0, got {a:g}")
+            if a > MAX_RATE:
+                raise ValueError(f"must be at most {MAX_RATE:g} 1/s, got {a:g}")
             if a == 0:
                 raise ValueError(
                     "alpha = 0 makes no basin atlas: without damping the energy is conserved "
@@ -151,6 +154,9 @@ class PendulumConfig(_Strict):
         def check(w):
             if w <= 0:
                 raise ValueError(f"must be > 0, got {w:g}")
+            if not MIN_RATE <= w <= MAX_RATE:
+                raise ValueError(f"must be between {MIN_RATE:g} and {MAX_RATE:g} rad/s, "
+                                 f"got {w:g}")
 
         cls._each(value, check)
         return value
@@ -292,6 +298,43 @@ def _first_error(exc: ValidationError) -> str:
     return f"{key}: {msg}" if key else msg
 
 
+#: Largest config file read [bytes]: a config is a few hundred bytes, a long parameter list a
+#: few kilobytes.
+MAX_CONFIG_BYTES = 1 << 20
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """YAML's safe loader that refuses a key given twice in one mapping (naming the key and
+    both lines) instead of letting the last one win silently."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
+            try:
+                hash(key)
+            except TypeError:  # SafeLoader itself refuses an unhashable key, with its line
+                continue
+            if key in seen:
+                raise ConfigError(f"line {line}: key {key!r} given twice (first on line "
+                                  f"{seen[key]})")
+            seen[key] = line
+        return super().construct_mapping(node, deep=deep)
+
+
+def _parse_yaml(text: str):
+    """The YAML document in ``text``. Anchors and aliases are refused before anything is
+    built (configs never need them, and nested aliases expand exponentially: the "billion
+    laughs"), so reading takes time linear in the file's size."""
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+            line = event.start_mark.line + 1
+            raise ConfigError(f"line {line}: YAML anchors and aliases (&, *) are not "
+                              "allowed in a config")
+    return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 (a SafeLoader subclass)
+
+
 def load_config(path: str | Path, *, output: str | Path | None = None) -> Config:
     """Read and validate a YAML config; ``output`` overrides its ``output`` key.
 
@@ -299,13 +342,18 @@ def load_config(path: str | Path, *, output: str | Path | None = None) -> Config
     """
     path = Path(path)
     try:
+        if path.stat().st_size > MAX_CONFIG_BYTES:
+            raise ConfigError(f"{path}: {path.stat().st_size:,} bytes is too large for a "
+                              f"config (at most {MAX_CONFIG_BYTES:,})")
         text = path.read_text()
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such config file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"{path}: cannot read config file ({exc.__class__.__name__})") from None
     try:
-        data = yaml.safe_load(text)
+        data = _parse_yaml(text)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}: " if mark is not None else ""

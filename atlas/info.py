@@ -53,11 +53,12 @@ def _basin_lines(ds: xr.Dataset) -> list[str]:
     lines += [f"          {int(k):+d}  {e:.14f} ± {ee:.0e}   {g:.6f}     {b:.1e}, {m:.1e}"
               for k, e, ee, g, b, m in zip(ks, exact, exact_err, grid, bound, measured)]
     d_cert = float(ds["d_cert"])
-    share = float(ds["certified_fraction"])
+    n = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+    certified = int(round(float(ds["certified_fraction"]) * n))
     if d_cert == d_cert:  # not NaN
-        lines.append(f"certified d_cert = {d_cert:.1e} (rad-ish): {share:.4%} of the grid "
-                     "is certified for the exact equation (status trapped); the rest of the "
-                     "labels holds for the RK4 map only (near_boundary)")
+        lines.append(f"certified {certified:,} of {n:,} labels ({certified / n:.2%}) hold for "
+                     f"the exact equation: farther than d_cert = {d_cert:.1e} from every "
+                     "basin boundary (status trapped); the others for the RK4 map only")
     else:
         lines.append("certified d_cert not measured (separatrices disabled): labels are "
                      "certified for the RK4 map only (status near_boundary)")

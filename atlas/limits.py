@@ -10,6 +10,10 @@ import math
 
 import numpy as np
 
+#: Range of the rates α [s⁻¹] and ω0 [rad s⁻¹] a config may give: within it the eigenvalues,
+#: energies (ω0²) and trap margins stay finite in double precision; beyond it no dt that an
+#: orbit's step budget allows is both stable and able to reach t_max.
+MIN_RATE, MAX_RATE = 1e-6, 1e6
 #: Most RK4 steps one orbit may take: step counts are int32 in every kernel.
 MAX_STEPS = int(np.iinfo(np.int32).max)
 #: Largest |k| of an attractor (2πk, 0): ``attractor`` is int16 in the file.

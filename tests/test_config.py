@@ -82,6 +82,14 @@ BAD = [
     ("- 1\n- 2", "a config must be a mapping"),
     ("pendulum: {alpha: 0.1\n", "line"),
     ("grid:\n  theta0: {start: 0, stop: 1, num: 4}\n   bad: indent", "YAML syntax error"),
+    ("pendulum:\n  alpha: 0.1\n  omega0: 1\n  alpha: 0.2\n",
+     "line 4: key 'alpha' given twice (first on line 2)"),
+    ("name: a\nname: b\n", "line 2: key 'name' given twice (first on line 1)"),
+    ("a: &x 1\nname: *x\n", "line 1: YAML anchors and aliases"),
+    ("pendulum: {omega0: 1.0e+300}", "pendulum.omega0: must be between 1e-06 and 1e+06"),
+    ("pendulum: {omega0: 1.0e-300}", "pendulum.omega0: must be between 1e-06 and 1e+06"),
+    ("pendulum: {alpha: 1.0e+300}", "pendulum.alpha: must be at most 1e+06"),
+    ("pendulum: {alpha: [0.1, 1.0e+200]}", "pendulum.alpha: item 1: must be at most"),
 ]
 
 
@@ -105,6 +113,23 @@ def test_missing_and_unreadable_files(tmp_path):
     binary.write_bytes(b"\xff\xfe\x00bad")
     with pytest.raises(ConfigError, match="cannot read"):
         load_config(binary)
+
+
+def test_billion_laughs_is_refused_at_once(tmp_path):
+    """Nine levels of nested aliases would expand to 9⁹ items: refused before expansion."""
+    lines = ['l0: &l0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    lines += [f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 9) + "]" for i in range(1, 9)]
+    path = tmp_path / "laughs.yaml"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ConfigError, match="anchors and aliases"):
+        load_config(path)  # a hang here would time the test suite out
+
+
+def test_oversized_config_is_refused_unread(tmp_path):
+    path = tmp_path / "big.yaml"
+    path.write_text("name: " + "x" * (2 << 20) + "\n")
+    with pytest.raises(ConfigError, match="too large for a config"):
+        load_config(path)
 
 
 def test_yaml_error_reports_the_line(tmp_path):
