@@ -92,6 +92,62 @@ def _cmd_bench(args) -> int:
     return 0
 
 
+def _cmd_view(args) -> int:
+    from .view import write_view
+
+    print(f"wrote {write_view(args.file, args.output)}")
+    return 0
+
+
+def _cmd_orbit(args) -> int:
+    from .orbit import check_file_argument, default_output, parse_number, plot_orbit, report
+
+    if len(args.values) not in (2, 3):
+        raise AtlasError("orbit: give THETA0 THETA_DOT0, or FILE THETA0 THETA_DOT0 "
+                         f"(got {len(args.values)} values)")
+    file = args.values[0] if len(args.values) == 3 else None
+    if file is not None:
+        check_file_argument(file)
+    theta0, theta_dot0 = (parse_number(text, name) for text, name in
+                          zip(args.values[-2:], ("theta0", "theta_dot0")))
+    opts = {name: None if getattr(args, name) is None else parse_number(getattr(args, name),
+                                                                         f"--{name}")
+            for name in ("alpha", "omega0", "dt", "t_max")}
+    orbit, lines, context = report(theta0, theta_dot0, file=file, **opts)
+    output = Path(args.output) if args.output else default_output(file)
+    _output_folder(output.parent)
+    try:
+        plot_orbit(orbit, output, context["tree"], context["index"])
+    finally:
+        if context["tree"] is not None:
+            context["tree"].close()
+    for line in lines:
+        print(line)
+    print(f"wrote        {output}")
+    return 0
+
+
+def _add_view_and_orbit(sub, common) -> None:
+    p = sub.add_parser("view", parents=[common],
+                       help="OUT.html: a self-contained interactive page of an atlas file")
+    p.add_argument("file")
+    p.add_argument("-o", "--output", help="the page (default: the atlas file with .html)")
+    p.set_defaults(func=_cmd_view)
+
+    p = sub.add_parser("orbit", parents=[common],
+                       help="one orbit: label, certificate, phase curve and theta(t) as PNG",
+                       description="atlas orbit [FILE] THETA0 THETA_DOT0: numbers or pi "
+                       "expressions; put -- before a negative pi expression (-- -pi/2 1)")
+    p.add_argument("values", nargs="+", metavar="[FILE] THETA0 THETA_DOT0")
+    p.add_argument("--alpha", help="damping [1/s] (with a file: selects a parameter point)")
+    p.add_argument("--omega0", help="natural frequency [rad/s] (with a file: selects a point)")
+    p.add_argument("--dt", help="RK4 step [s] (default 0.01; with a file: the file's)")
+    p.add_argument("--t-max", dest="t_max", help="t_max [s] (default 200; a file: the file's)")
+    p.add_argument("-o", "--output", help="the PNG (default: FILE_orbit.png next to the "
+                   "file, else outputs/orbit.png)")
+    p.set_defaults(func=_cmd_orbit)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="atlas", description="Phase-space atlas of the damped pendulum "
                      "θ̈ = −ω0² sin θ − 2αθ̇: basins of attraction, separatrices, figures.")
@@ -129,6 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", choices=["cpu", "cuda"], default="cpu")
     p.add_argument("--output", default="outputs/bench.json")
     p.set_defaults(func=_cmd_bench)
+    _add_view_and_orbit(sub, common)
     return parser
 
 
