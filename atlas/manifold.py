@@ -16,12 +16,18 @@ S_{2k−1}(θ) < θ̇ < S_{2k+1}(θ).
 
 :class:`StableManifold` integrates L once — scipy's DOP853 (rtol = atol = 1e-13, dense output)
 in reversed time from 10⁻⁷ along the stable eigenvector (essay eqs. 22, 24; the neglected
-curvature is O(10⁻¹⁴)) until θ̇ exceeds a stated speed — together with the quadrature
-Q(τ) = ∫₀^τ θ̇² dτ' = ∫ θ̇ dθ (Green's theorem along the curve). From it:
+curvature is O(10⁻¹⁴)) until θ̇ exceeds a stated speed (:meth:`StableManifold.extended`
+continues it) — together with the quadrature Q(τ) = ∫₀^τ θ̇² dτ' = ∫ θ̇ dθ (Green's theorem
+along the curve); the vector field is :class:`atlas.model.Pendulum`'s. From it:
 
+* :meth:`StableManifold.at`, :meth:`StableManifold.tau_at`, :meth:`StableManifold.left` — the
+  curve itself: its point at reversed time τ, the τ and the θ̇ = L(u) where it passes θ = u;
 * :meth:`StableManifold.boundary` — S_n(θ) by Newton's method on the dense output;
-* :meth:`StableManifold.nearest_boundary` — the Euclidean distance in the (θ, θ̇) plane from any
-  point to the nearest basin boundary, and which one (foot point by Newton's method);
+* :meth:`StableManifold.foot_points` — the nearest point of L, and its distance, for points
+  near L (Newton's method for the foot point on the dense output); :func:`to_left_branch` maps
+  points of any boundary branch onto L's frame (an isometry);
+* :meth:`StableManifold.index` — :meth:`BoundaryIndex.nearest`: the Euclidean distance in the
+  (θ, θ̇) plane from any point to the nearest basin boundary, and which one;
 * :meth:`StableManifold.side` — the basin k of the exact equation each point lies in;
 * :func:`basin_areas` — the area fraction of a window in each basin, from
   ∫ clip(S_n(θ), θ̇min, θ̇max) dθ, integrated exactly piecewise (Q between the points where a
@@ -35,6 +41,8 @@ ODEs I*, §II.5–6 (DOP853 and its dense output).
 
 from __future__ import annotations
 
+import bisect
+import copy
 import math
 from dataclasses import dataclass
 
@@ -42,7 +50,8 @@ import numpy as np
 
 from .model import Pendulum
 
-__all__ = ["StableManifold", "basin_areas", "BasinAreas", "RTOL", "START_DISTANCE"]
+__all__ = ["StableManifold", "BoundaryIndex", "to_left_branch", "basin_areas", "BasinAreas",
+           "RTOL", "START_DISTANCE"]
 
 #: Relative and absolute tolerance of the DOP853 reference.
 RTOL = 1e-13
@@ -58,15 +67,32 @@ _NEWTON = 6  # iterations for foot points and inverse functions (quadratic conve
 class _DenseOutput:
     """DOP853's dense output (Hairer, Nørsett & Wanner, §II.6) of a whole solution, evaluated
     for many times at once: the same polynomial as scipy's ``Dop853DenseOutput``, its
-    coefficients stacked over the steps, so one call costs a few array operations."""
+    coefficients stacked over the steps, so one call costs a few array operations.
+    ``solutions``: scipy ``OdeSolution`` pieces, each starting where the one before ends."""
 
-    def __init__(self, solution):
-        parts = solution.interpolants
-        self.t = np.asarray(solution.ts, float)
+    def __init__(self, solutions):
+        parts = [q for solution in solutions for q in solution.interpolants]
+        self.t = np.concatenate([solutions[0].ts] + [s.ts[1:] for s in solutions[1:]])
         self.t_old = np.array([q.t_old for q in parts])
         self.h = np.array([q.h for q in parts])
         self.y_old = np.array([q.y_old for q in parts])  # (steps, 3)
         self.F = np.array([q.F for q in parts])[:, ::-1]  # (steps, 7, 3), highest first
+        self._lists = None  # the same as Python lists, for point()
+
+    def point(self, tau: float) -> list[float]:
+        """The solution at one time τ, as floats: the same polynomial evaluated without
+        array overhead, for callers that step along the curve one point at a time."""
+        if self._lists is None:
+            self._lists = (self.t.tolist(), self.t_old.tolist(), self.h.tolist(),
+                           self.y_old.tolist(), self.F.tolist())
+        t, t_old, h, y_old, F = self._lists
+        step = min(max(bisect.bisect_right(t, tau) - 1, 0), len(h) - 1)
+        x = (tau - t_old[step]) / h[step]
+        y = [0.0] * len(y_old[step])
+        for i, row in enumerate(F[step]):
+            w = x if i % 2 == 0 else 1.0 - x
+            y = [(a + c) * w for a, c in zip(y, row)]
+        return [a + b for a, b in zip(y, y_old[step])]
 
     def __call__(self, tau):
         tau = np.asarray(tau, float)
@@ -81,50 +107,88 @@ class _DenseOutput:
         return y.T.reshape(self.y_old.shape[1], *tau.shape)
 
 
+def to_left_branch(n, right, theta, theta_dot):
+    """Points of the boundary branch through the saddle (nπ, 0) (``right`` true: its right
+    branch, else its left one) mapped into the frame of L: the inverse of the shift by
+    (n − 1)π of the left branch, or of the point reflection θ → (n + 1)π − θ, θ̇ → −θ̇ of the
+    right one. Both maps are isometries, so distances to L are distances to the branch."""
+    n, right = np.asarray(n), np.asarray(right, bool)
+    theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
+    return (np.where(right, (n + 1) * math.pi - theta, theta - (n - 1) * math.pi),
+            np.where(right, -theta_dot, theta_dot))
+
+
 class StableManifold:
     """The left branch L of the saddle (π, 0) of ``pendulum``, integrated until θ̇ > ``speed``
     [rad s⁻¹]; beyond that point L(u) > speed for ever (its energy exceeds ½speed² + 2ω0² and
-    only grows). Requires α > 0.
+    only grows). Requires α > 0. :meth:`extended` continues it further.
     """
 
     def __init__(self, pendulum: Pendulum, speed: float, rtol: float = RTOL):
-        from scipy.integrate import solve_ivp
-
         p = self.pendulum = pendulum
         if not p.alpha > 0:
             raise ValueError("the stable manifolds bound basins only for alpha > 0")
-        self.speed = float(speed)
+        self.speed, self.rtol = float(speed), rtol
         self.u2 = -p.saddle_eigenvalues()[1]
         e_theta, e_theta_dot = p.saddle_stable_direction()
-        start = (math.pi - START_DISTANCE * e_theta, -START_DISTANCE * e_theta_dot)
+        self.start = (math.pi - START_DISTANCE * e_theta, -START_DISTANCE * e_theta_dot)
         # ∫ θ̇ dθ along the straight piece from the start point to the saddle
-        q0 = 0.5 * start[1] * START_DISTANCE * e_theta
+        q0 = 0.5 * self.start[1] * START_DISTANCE * e_theta
+        self._pieces = [self._integrate(0.0, [*self.start, q0], math.pi)]
+        self._finish()
+
+    def _integrate(self, tau0: float, y0, theta_min: float):
+        """DOP853 from state ``y0`` = (θ, θ̇, Q) at τ0 until θ̇ > ``speed`` and θ < theta_min."""
+        from scipy.integrate import solve_ivp
+
+        p = self.pendulum
         e_stop = 0.5 * self.speed**2 + p.saddle_energy
 
         def rhs(_, y):  # eq. (1) in reversed time, and ∫ θ̇² dτ
-            return [-y[1], -p.acceleration(y[0], y[1]), y[1] * y[1]]
+            f0, f1 = p.field(y[0], y[1])
+            return [-f0, -f1, f0 * f0]
 
-        def beyond(_, y):
-            return p.energy(y[0], y[1]) - e_stop
+        def beyond(_, y):  # both grow along L: E (dE/dτ = 2αθ̇²) and −θ
+            return min(p.energy(y[0], y[1]) - e_stop, theta_min - y[0])
 
         beyond.terminal, beyond.direction = True, 1
-        t_cap = 1e4 * (1.0 / p.alpha + 1.0 / p.omega0)
-        sol = solve_ivp(rhs, (0.0, t_cap), [*start, q0], method="DOP853", rtol=rtol,
-                        atol=rtol, dense_output=True, events=beyond)
+        t_cap = tau0 + 1e4 * (1.0 / p.alpha + 1.0 / p.omega0)
+        sol = solve_ivp(rhs, (tau0, t_cap), y0, method="DOP853", rtol=self.rtol,
+                        atol=self.rtol, dense_output=True, events=beyond)
         if sol.status != 1:
-            raise RuntimeError(f"the stable manifold did not reach speed {speed:g} "
+            raise RuntimeError(f"the stable manifold did not reach speed {self.speed:g} "
                                f"({sol.message})")
-        self._sol = _DenseOutput(sol.sol)
-        self.tau_end = float(sol.t[-1])
-        self.start = start
-        self.theta_end = float(sol.y[0, -1])  # L(u) > speed for u < theta_end
+        return sol
+
+    def _finish(self) -> None:
+        """Dense output, end point and samples of the integrated pieces."""
+        first, rest = self._pieces[0], self._pieces[1:]
+        self._sol = _DenseOutput([piece.sol for piece in self._pieces])
+        t = np.concatenate([first.t] + [piece.t[1:] for piece in rest])
+        y = np.concatenate([first.y] + [piece.y[:, 1:] for piece in rest], axis=1)
+        self.tau_end = float(t[-1])
+        self.theta_end = float(y[0, -1])  # L(u) > speed for u < theta_end
         # samples at arc length ≤ SAMPLE_SPACING, from the saddle outward
-        steps = np.hypot(np.diff(sol.y[0]), np.diff(sol.y[1]))
+        steps = np.hypot(np.diff(y[0]), np.diff(y[1]))
         pieces = np.maximum(1, np.ceil(steps / SAMPLE_SPACING)).astype(int)
         tau = np.concatenate([np.linspace(a, b, m, endpoint=False)
-                              for a, b, m in zip(sol.t[:-1], sol.t[1:], pieces)] + [sol.t[-1:]])
+                              for a, b, m in zip(t[:-1], t[1:], pieces)] + [t[-1:]])
         self.tau = tau
         self.theta, self.theta_dot, _ = self._sol(tau)
+        self._tree = None  # k-d tree over the samples, built by foot_points when needed
+
+    def extended(self, theta_min: float) -> StableManifold:
+        """L integrated on until θ < ``theta_min`` [rad] as well (``self`` if it already
+        reaches that far); unchanged for τ ≤ ``tau_end``: its steps are kept, the
+        integration continues from its end."""
+        if self.theta_end < theta_min:
+            return self
+        longer = copy.copy(self)
+        last = self._pieces[-1]
+        longer._pieces = self._pieces + [self._integrate(self.tau_end, last.y[:, -1],
+                                                         theta_min)]
+        longer._finish()
+        return longer
 
     # ------------------------------------------------------------------ on the curve
 
@@ -132,8 +196,17 @@ class StableManifold:
         """(θ, θ̇, Q) on L at reversed time τ ∈ [0, tau_end] [s]."""
         return self._sol(np.clip(tau, 0.0, self.tau_end))
 
-    def _tau_at_theta(self, u):
-        """τ where L passes θ = u, for theta_end ≤ u ≤ θ(0) (θ decreases along L)."""
+    def at(self, tau):
+        """(θ [rad], θ̇ [rad s⁻¹]) on L at reversed time τ [s] from its first point
+        ``start``, clipped to [0, ``tau_end``] (DOP853's dense output); floats for a scalar τ."""
+        if np.ndim(tau) == 0:
+            theta, theta_dot, _ = self._sol.point(min(max(float(tau), 0.0), self.tau_end))
+        else:
+            theta, theta_dot, _ = self._state(tau)
+        return theta, theta_dot
+
+    def tau_at(self, u):
+        """τ [s] where L passes θ = u [rad], for theta_end ≤ u ≤ θ(0) (θ decreases along L)."""
         u = np.asarray(u, float)
         tau = np.interp(-u, -self.theta, self.tau)
         for _ in range(_NEWTON):
@@ -155,13 +228,14 @@ class StableManifold:
         return 0.5 * (a + b)
 
     def left(self, u):
-        """L(u) [rad s⁻¹] for u ≤ π [rad]; +inf where L is faster than ``speed``."""
+        """L(u) [rad s⁻¹] for u ≤ π [rad]; +inf beyond ``theta_end``, where L is faster than
+        ``speed``."""
         u = np.atleast_1d(np.asarray(u, float))
         out = np.full(u.shape, np.inf)
         line = u >= self.start[0]  # the straight piece next to the saddle
         out[line] = self.u2 * (math.pi - u[line])
         mid = (u >= self.theta_end) & ~line
-        out[mid] = self._state(self._tau_at_theta(u[mid]))[1]
+        out[mid] = self._state(self.tau_at(u[mid]))[1]
         return out
 
     def boundary(self, n: int, theta):
@@ -193,7 +267,7 @@ class StableManifold:
             elif a >= self.start[0]:  # straight piece: L = u2 (π − u)
                 total += 0.5 * self.u2 * ((math.pi - a) ** 2 - (math.pi - b) ** 2)
             else:
-                q_a, q_b = self._state(self._tau_at_theta(np.array([a, b])))[2]
+                q_a, q_b = self._state(self.tau_at(np.array([a, b])))[2]
                 total += q_a - q_b
         return total
 
@@ -237,19 +311,18 @@ class StableManifold:
             return None
         return tuple(np.concatenate(parts) for parts in zip(*out))
 
-    def _foot_distance(self, x, v, i):
-        """Distance from points (x, v), in L's own frame, to L near sample ``i``: Newton's
-        method for the foot point on the dense output, kept within the neighbouring samples,
-        and the straight piece to the saddle for the first samples."""
+    def _foot(self, x, v, i):
+        """(τ, distance) of the foot points on L of points (x, v), in L's own frame, near
+        sample ``i``: Newton's method on the dense output, kept within the neighbouring
+        samples (the sample itself if nearer), and the straight piece to the saddle for the
+        first samples (τ = 0 when the foot lies on it)."""
         lo = self.tau[np.maximum(i - 1, 0)]
         hi = self.tau[np.minimum(i + 1, self.tau.size - 1)]
         tau = self.tau[i].copy()
-        p = self.pendulum
-        w2, a2 = p.omega0**2, 2.0 * p.alpha
         for _ in range(_NEWTON):  # Newton on g(τ) = (c(τ) − q)·c'(τ) = 0
             theta, theta_dot, _ = self._state(tau)
-            d0, d1 = -theta_dot, -p.acceleration(theta, theta_dot)  # c' (reversed flow)
-            dd0, dd1 = -d1, w2 * np.cos(theta) * d0 + a2 * d1  # c'' = J c'
+            (f0, f1), (dd0, dd1) = self.pendulum.field_jet(theta, theta_dot)
+            d0, d1 = -f0, -f1  # c' = −f (reversed flow), c'' = J·f
             g = (theta - x) * d0 + (theta_dot - v) * d1
             slope = d0 * d0 + d1 * d1 + (theta - x) * dd0 + (theta_dot - v) * dd1
             # near a centre of curvature g' ≤ 0: fall back to the Gauss–Newton step
@@ -257,14 +330,32 @@ class StableManifold:
             tau = np.clip(tau - g / slope, lo, hi)
         theta, theta_dot, _ = self._state(tau)
         dist = np.hypot(theta - x, theta_dot - v)
-        dist = np.minimum(dist, np.hypot(self.theta[i] - x, self.theta_dot[i] - v))
+        sample = np.hypot(self.theta[i] - x, self.theta_dot[i] - v)
+        tau = np.where(sample < dist, self.tau[i], tau)
+        dist = np.minimum(dist, sample)
         near = i <= 1  # the segment from the saddle (π, 0) to the first integrated point
         if near.any():
             ax, av = self.start[0] - math.pi, self.start[1]
             s = np.clip(((x[near] - math.pi) * ax + v[near] * av) / (ax * ax + av * av), 0, 1)
             seg = np.hypot(math.pi + s * ax - x[near], s * av - v[near])
+            tau[near] = np.where(seg < dist[near], 0.0, tau[near])
             dist[near] = np.minimum(dist[near], seg)
-        return dist
+        return tau, dist
+
+    def foot_points(self, x, v):
+        """(τ [s], distance [rad-ish]) of the foot points on L — the nearest points of L — of
+        points (x [rad], v [rad s⁻¹]) given in L's own frame (:func:`to_left_branch`), exact to
+        ≈ 1e-13 for points within about ``SAMPLE_SPACING`` of L: the nearest sample, then
+        Newton's method on the dense output."""
+        from scipy.spatial import cKDTree
+
+        x, v = np.atleast_1d(np.asarray(x, float)), np.atleast_1d(np.asarray(v, float))
+        if x.size == 0:
+            return np.zeros(0), np.zeros(0)
+        if self._tree is None:
+            self._tree = cKDTree(np.column_stack([self.theta, self.theta_dot]))
+        _, i = self._tree.query(np.column_stack([x, v]))
+        return self._foot(x, v, i)
 
     def index(self, box) -> BoundaryIndex:
         """A search index over every boundary passing through ``box`` = ((θ0, θ1), (v0, v1))
@@ -309,11 +400,9 @@ class BoundaryIndex:
         if self.empty or theta.size == 0:
             return np.full(theta.shape, np.inf), np.zeros(theta.shape, np.int64)
         _, j = self.tree.query(np.column_stack([theta.ravel(), theta_dot.ravel()]), workers=-1)
-        n, right = self.n[j], self.branch[j] == 1
-        # each point in L's own frame: the inverse of the copy's shift or point reflection
-        x = np.where(right, (n + 1) * math.pi - theta.ravel(), theta.ravel() - (n - 1) * math.pi)
-        v = np.where(right, -theta_dot.ravel(), theta_dot.ravel())
-        dist = self.manifold._foot_distance(x, v, self.sample[j])
+        n = self.n[j]
+        x, v = to_left_branch(n, self.branch[j] == 1, theta.ravel(), theta_dot.ravel())
+        _, dist = self.manifold._foot(x, v, self.sample[j])
         return dist.reshape(theta.shape), n.reshape(theta.shape)
 
     def saddles_within(self, theta, theta_dot, radius: float):

@@ -50,6 +50,17 @@ class Pendulum:
         """θ̈ [rad s⁻²] from eq. (1)."""
         return -self.omega0**2 * np.sin(theta) - 2.0 * self.alpha * theta_dot
 
+    def field(self, theta, theta_dot):
+        """The vector field f = (θ̇, θ̈) of eq. (1) [rad s⁻¹, rad s⁻²] (scalars or arrays)."""
+        return theta_dot, self.acceleration(theta, theta_dot)
+
+    def field_jet(self, theta, theta_dot):
+        """f and its derivative along the flow, df/dt = J·f (J the Jacobian of f):
+        ((θ̇, θ̈), (θ̈, d³θ/dt³)). The velocity and acceleration of an orbit, for its curvature
+        κ = |f × J·f| / |f|³; in reversed time the velocity is −f and the acceleration J·f."""
+        f0, f1 = self.field(theta, theta_dot)
+        return (f0, f1), (f1, -self.omega0**2 * np.cos(theta) * f0 - 2.0 * self.alpha * f1)
+
     def energy(self, theta, theta_dot, k=0):
         """E_k = ½θ̇² + ω0²(1 − cos(θ − 2πk)) [rad² s⁻²] per unit ml²: the energy above the
         bottom of well k. dE/dt = −2αθ̇² ≤ 0, so E is a Lyapunov function (SPEC.md)."""

@@ -1,4 +1,4 @@
-"""Separatrices, certified: the stable manifolds of the saddles ((2j+1)π, 0) located by bisection.
+"""Separatrices, certified: the basin boundaries of the RK4 map, located by bisection.
 
 The basin of the rest state (2πk, 0) is bounded by the stable manifolds of the saddles on either
 side (essay §3, Figure 9). Each saddle nπ (n odd) has two branches:
@@ -16,30 +16,36 @@ every right branch is a copy of R, the right branch of −π: that of nπ is R s
 (n + 1)π; and R = −L. Only L and R are located; every boundary in the window, from saddles
 inside it or outside, is one of their copies.
 
+This module locates the boundaries of the *RK4 map* at step dt — those that colour the basin
+map — by bisection on its labels. The exact boundaries, the stable manifolds of eq. (1)
+itself, are :mod:`atlas.manifold`'s: they serve here as the predictor and as the check.
+
 Method (:func:`trace`)
 ----------------------
-1. *Predictor* (manifold growth): for L (if the window holds θ̇ > 0) and R (if it holds
-   θ̇ < 0), start at distance 10⁻⁷ from the saddle along its stable eigenvector (1, −u2) of the
-   linearisation (essay eqs. 22, 24; the neglected curvature of the manifold is O(10⁻¹⁴)
-   there) and integrate eq. (1) in reversed time with RK4 at step dt/2.
-   Vertices are taken along this orbit with chords ≤ ``max_spacing`` and ≤ max_spacing/√κ
-   (κ the curvature in rad⁻¹, computed from the vector field), so the chord error of the
-   polyline stays below max_spacing²/8 everywhere; near the saddle the spacing grows
-   geometrically from max_spacing/10. A source branch is grown through the window's θ̇ band
-   at every θ (its copies cover any θ range) until its energy exceeds every energy in the
-   window, with a vertex placed on the band's edge at every crossing; only the stretch that
-   its copies in the window use is kept.
+1. *Predictor* (vertices on the exact manifold): L is integrated once by DOP853
+   (:class:`atlas.manifold.StableManifold`: from 10⁻⁷ along the stable eigenvector, essay
+   eqs. 22, 24, rtol = atol = 10⁻¹³, dense output) until its energy exceeds every energy in
+   the window. Vertices are taken along it, walking its dense output in reversed time from
+   the saddle, with chords ≤ ``max_spacing`` and ≤ max_spacing/√κ (κ the curvature in
+   rad⁻¹, from the vector field and its derivative along the flow,
+   :meth:`atlas.model.Pendulum.field_jet`), so the chord error of the polyline stays below
+   max_spacing²/8 everywhere; near the saddle the spacing grows geometrically from
+   max_spacing/10. An extra vertex is placed wherever the curve crosses a θ̇ edge of the
+   window (or of its reflection), found by Brent's method on the dense output. The
+   predicted vertices of R are the point reflections of those of L. Only the stretch of each
+   that its copies in the window use is kept.
 2. *Corrector* (bisection on initial conditions): each predicted vertex is only a guess.
    Across the curve, along the normal of the vector field, certified labels of
    :func:`atlas.labels.label` at step ``dt`` bracket the boundary between basins k − 1 and k;
    the bracket is widened ×8 until its ends carry those labels, then shrunk by bisection (or
    multisection — several labels across each bracket in one kernel call — when few brackets
    are left), all vertices of both branches in one batch per call, until narrower than
-   ``tol``. The stored point is the bracket's midpoint, so the labels at ±tol across the curve
-   differ. Two passes share the work (:func:`_locate`): every 8th vertex is bisected from
-   ±32·tol to tol/8; a spline of those offsets predicts the others so well that their first
-   bracket, ±0.45·tol, is usually final — two orbits per vertex (≈ 4.5 orbits per point in
-   all at the default settings instead of ≈ 17).
+   ``tol`` (:func:`bisect_across`, usable on its own with any labeller). The stored point is
+   the bracket's midpoint, so the labels at ±tol across the curve differ. Two passes share
+   the work (:func:`_locate`): every 8th vertex is bisected from ±32·tol to tol/8; a spline of
+   those offsets predicts the others so well that their first bracket, ±0.45·tol, is usually
+   final — two orbits per vertex (≈ 4.5 orbits per point in all at the default settings
+   instead of ≈ 17).
    Orbits near the manifold linger ≈ ln(1/δ)/u1 at the saddle: t_max is the predictor's
    travel time plus 2(ln(1/tol) + 5)/u1, enough down to δ ≈ tol². An ``unresolved`` orbit is
    never taken as either side: bisection treats it as no information (such orbits are stuck
@@ -49,24 +55,27 @@ Method (:func:`trace`)
    ``warnings`` attribute.
    The located curve is the basin boundary of the RK4 scheme at step ``dt``, the same one that
    colours the basin map; it differs from the exact manifold by O(dt⁴).
-3. *Symmetry check*: R is located on its own labels, not reflected from L. The predictor is
-   odd in floating point, so the vertices of R are the reflections of those of L; the largest
-   distance between a located point of R and the reflected located point of L is the attribute
-   ``symmetry_error``, below tol when the labels respect the symmetry (at rounding level in
-   practice: the bisection is symmetric too); above ``SYMMETRY_BOUND``·tol the summary carries
-   a warning.
+3. *Symmetry check*: R is located on its own labels, not reflected from L. Its predicted
+   vertices are the exact reflections of those of L, and the normal of the vector field is
+   the same vector at both; the largest distance between a located point of R and the
+   reflected located point of L is the attribute ``symmetry_error``, below tol when the
+   labels respect the symmetry (at rounding level in practice: the bisection is symmetric
+   too); above ``SYMMETRY_BOUND``·tol the summary carries a warning.
 4. *Copies*: copy j of L is the left branch of the saddle (1 + 2j)π, copy j of R the right
    branch of (−1 + 2j)π, both shifted by 2πj. Each copy that enters the window is stored with
    its points inside it and the one neighbour outside at either end of each inside run, so the
    polylines reach the window's edges; ``vertex`` keeps the index along the source branch.
-5. *Independent check* (:func:`check_against_stable_manifold`): the reversed-time ODE is
-   integrated from the 10⁻⁷ start with scipy's DOP853 (rtol = atol = 10⁻¹³, dense output);
-   the distance from every bisected point of L and R to that curve is found by Newton's method
-   on the dense output. Its maximum is the attribute ``discrepancy``: ≈ 6e-10 at α = 0.1,
-   ω0 = 1, dt = 0.01 (≈ 7e-10 at α = 1 and α = 2), falling as dt⁴ — RK4's offset, not
-   bisection error (tests/test_separatrices.py checks it against Richardson's estimate). Above
-   ``DISCREPANCY_BOUND`` = 10⁻⁸ the summary carries a warning. The same curve measures
-   ``polyline_error``, the largest distance from the manifold to the polyline.
+5. *Check against the exact manifold* (:func:`check_against_stable_manifold`): the distance
+   from every stored point to the exact boundary it belongs to — the same DOP853 reference,
+   its foot points by Newton's method on the dense output
+   (:meth:`atlas.manifold.StableManifold.foot_points`). Its maximum is the attribute
+   ``discrepancy``: ≈ 6e-10 at α = 0.1, ω0 = 1, dt = 0.01 (≈ 7e-10 at α = 1 and α = 2),
+   falling as dt⁴ — RK4's offset, not bisection error (tests/test_separatrices.py checks it
+   against Richardson's estimate). The predictor lies on that reference, but the located
+   points do not: they come from the RK4 labels alone, so the check measures the RK4 map's
+   boundary against the exact one. Above ``DISCREPANCY_BOUND`` = 10⁻⁸ the summary carries a
+   warning. The same curve measures ``polyline_error``, the largest distance from the
+   manifold to the polyline.
 
 :func:`atlas.limits.check_separatrix_settings` rejects, before any work, a ``tol`` below what
 double precision resolves in the window and a ``max_spacing`` finer than the curve is
@@ -75,13 +84,13 @@ user.
 
 The crossing of every boundary in the window with the axis θ0 = 0 (the initial speed at which
 the label changes there, inside the window or not) is located by the same bisection along the
-θ̇0 axis, from the predictor's value of L at θ = −(|n| − 1)π (:func:`_axis_crossings`).
+θ̇0 axis, from the exact value of L at θ = −(|n| − 1)π (:func:`_axis_crossings`).
 
 References: Nusse & Yorke, "A procedure for finding numerical trajectories on chaotic saddles",
 Physica D 36 (1989) 137 (straddle orbits: bisection between initial conditions of different
 fate); Krauskopf et al., "A survey of methods for computing (un)stable manifolds of vector
 fields", Int. J. Bifurcation Chaos 15 (2005) 763 (growing a manifold from its linearisation);
-Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5 (DOP853).
+Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5–6 (DOP853 and its dense output).
 """
 
 from __future__ import annotations
@@ -96,9 +105,9 @@ import xarray as xr
 from . import defaults
 from .errors import SeparatrixError
 from .kernels import TRAPPED, UNRESOLVED
-from .kernels.rk4 import rk4_step
 from .labels import label
-from .limits import MAX_STEPS, MAX_WELL, check_separatrix_settings
+from .limits import MAX_STEPS, check_separatrix_settings
+from .manifold import START_DISTANCE, StableManifold, to_left_branch
 from .model import Pendulum
 
 __all__ = [
@@ -123,10 +132,6 @@ __all__ = [
 BRANCHES = ("left", "right")
 #: Largest accepted distance [rad-ish] between bisected points and the DOP853 manifold.
 DISCREPANCY_BOUND = 1e-8
-#: Distance of the first point of the predictor and of the check from the saddle.
-START_DISTANCE = 1e-7
-#: Tolerances of the DOP853 reference.
-CHECK_RTOL = CHECK_ATOL = 1e-13
 #: ``attractor`` of an orbit without a certified label, as seen by the bisection.
 NO_LABEL = np.iinfo(np.int64).min
 #: Largest accepted distance between the bisected right branch of −π and the point reflection of
@@ -143,8 +148,7 @@ _FINE_BRACKET = 0.45  # half-width of the other vertices' first bracket, in unit
 _MAX_STALLS = 20  # rounds in a row without a certified label inside a bracket
 _SPEED_GROWTH = 0.3  # predictor: max log-growth of the speed between vertices (near the saddle)
 _CHORD_AIM = 0.9  # predictor: aim at this × the allowed chord (curvature varies along it)
-_MAX_VERTICES = 1_000_000  # per branch: a branch 100 rad-ish long at MIN_MAX_SPACING
-_FAR = 2 * math.pi * MAX_WELL  # [rad] the θ reach of an atlas: a source branch's θ range
+_MAX_VERTICES = 1_000_000  # a branch 100 rad-ish long at MIN_MAX_SPACING
 
 
 @dataclass(frozen=True)
@@ -166,19 +170,10 @@ class Window:
             np.minimum(theta_dot - self.theta_dot[0], self.theta_dot[1] - theta_dot),
         )
 
-    def max_energy(self, omega0: float) -> float:
-        """Largest E = ½θ̇² + ω0²(1 − cos θ) in the window (a bound: ½max θ̇² + 2ω0²)."""
-        return 0.5 * max(self.theta_dot[0] ** 2, self.theta_dot[1] ** 2) + 2.0 * omega0**2
-
-
-# --------------------------------------------------------------------------- vector field
-
-
-def _field(p: Pendulum, theta, theta_dot):
-    """f = (θ̇, θ̈) of eq. (1) and its derivative along the flow, J·f."""
-    w2, a2 = p.omega0**2, 2.0 * p.alpha
-    f0, f1 = theta_dot, -w2 * np.sin(theta) - a2 * theta_dot
-    return (f0, f1), (f1, -w2 * np.cos(theta) * f0 - a2 * f1)
+    @property
+    def speed(self) -> float:
+        """Largest |θ̇| [rad s⁻¹] in the window."""
+        return max(abs(self.theta_dot[0]), abs(self.theta_dot[1]))
 
 
 def _normal(p: Pendulum, theta, theta_dot):
@@ -186,28 +181,9 @@ def _normal(p: Pendulum, theta, theta_dot):
 
     Along a branch θ̇ ≠ 0, so nθ̇ = |θ̇|/|f| > 0 is well defined; on the positive side lie the
     initial conditions of well k = (n+1)/2."""
-    (f0, f1), _ = _field(p, theta, theta_dot)
+    f0, f1 = p.field(theta, theta_dot)
     s = np.sign(f0) / np.hypot(f0, f1)
     return -f1 * s, f0 * s
-
-
-def _energy(p: Pendulum, theta, theta_dot):
-    return 0.5 * theta_dot**2 + p.omega0**2 * (1.0 - np.cos(theta))
-
-
-def _saddle_start(p: Pendulum, n: int, branch: str, distance: float) -> tuple[float, float]:
-    """The point at ``distance`` from the saddle nπ along its stable eigenvector (eqs. 22, 24)."""
-    e_theta, e_theta_dot = p.saddle_stable_direction()
-    sign = -1.0 if branch == "left" else 1.0
-    return n * math.pi + sign * distance * e_theta, sign * distance * e_theta_dot
-
-
-def _gone(p: Pendulum, window: Window, branch: str, theta: float, theta_dot: float) -> bool:
-    """True once a branch, followed away from its saddle, can never re-enter the window: θ moves
-    monotonically (left: decreasing) and E grows beyond every energy the window holds."""
-    past = theta < window.theta[0] if branch == "left" else theta > window.theta[1]
-    return past or _energy(p, theta, theta_dot) > window.max_energy(p.omega0)
-
 
 # --------------------------------------------------------------------------- labels
 
@@ -252,10 +228,13 @@ def bisect_across(
     target: float | None = None,
     strict: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Locate the boundary between basins k − 1 and k on the lines base + s·direction.
+    """Locate the boundary between basins k − 1 and k on the lines base + s·direction: a
+    vectorised bracket multisection, usable on its own with any labeller.
 
-    ``labels(theta, theta_dot) -> k`` gives certified labels, ``NO_LABEL`` where an orbit is
-    not certified (:class:`_Labeller`); ``base``, ``direction``: (N, 2) arrays [rad, rad s⁻¹]
+    ``labels(theta, theta_dot) -> k`` maps arrays of points to integer labels, ``NO_LABEL``
+    where a point has none (for :func:`trace`, certified RK4 labels, :class:`_Labeller`; any
+    function that is k − 1 on one side of a curve and k on the other will do);
+    ``base``, ``direction``: (N, 2) arrays [rad, rad s⁻¹]
     (s is in units of |direction|); ``k``: (N,) the basin on the +s side; ``half_width``: the
     first bracket is [−half_width, +half_width] (scalar or (N,)); ``target`` ≤ tol (default
     tol): the width aimed at, a bracket that stalls between target and tol is accepted.
@@ -360,51 +339,17 @@ def bisect_across(
 # --------------------------------------------------------------------------- predictor
 
 
-def _flow_back(p: Pendulum, theta: float, theta_dot: float, tau: float, dt_p: float):
-    """The state reached after reversed time ``tau`` ≥ 0: RK4 with ⌈tau/dt_p⌉ equal steps."""
-    m = max(1, math.ceil(tau / dt_p - 1e-9))
-    h = -tau / m
-    for _ in range(m):
-        theta, theta_dot = rk4_step(theta, theta_dot, p.alpha, p.omega0, h)
-    return theta, theta_dot
-
-
-_EDGE_GRADIENT = ((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0))
-
-
-def _edge_point(p: Pendulum, window: Window, y, span: float, dt_p: float):
-    """The point where the reversed-time orbit from ``y`` crosses the window's edge within
-    reversed time ``span``: safeguarded Newton on the edge margin. Returns (state, time)."""
-    def margin(z):
-        sides = (z[0] - window.theta[0], window.theta[1] - z[0],
-                 z[1] - window.theta_dot[0], window.theta_dot[1] - z[1])
-        j = int(np.argmin(sides))
-        return sides[j], _EDGE_GRADIENT[j]
-
-    g_a = margin(y)[0]
-    a, b = 0.0, span
-    tau = span / 2
-    for _ in range(40):
-        z = _flow_back(p, *y, tau, dt_p)
-        g, grad = margin(z)
-        if abs(g) < 1e-14 * (1.0 + abs(z[0]) + abs(z[1])):
-            break
-        if (g > 0) == (g_a > 0):
-            a = tau
-        else:
-            b = tau
-        (f0, f1), _ = _field(p, z[0], z[1])
-        slope = -(grad[0] * f0 + grad[1] * f1)  # d margin / d tau along the reversed flow
-        tau = tau - g / slope if slope != 0 else 0.5 * (a + b)
-        if not a < tau < b:
-            tau = 0.5 * (a + b)
-    return z, tau
+def _reference(p: Pendulum, window: Window) -> StableManifold:
+    """The exact left branch L of the saddle π, until its energy exceeds every energy in the
+    window: the predictor of :func:`trace` and the reference of its check."""
+    return StableManifold(p, window.speed)
 
 
 @dataclass(frozen=True)
 class _Predicted:
-    """Predicted vertices of one branch: state, reversed time from the start point and index
-    along the branch (0 its first vertex, next to the saddle)."""
+    """Predicted vertices of one source branch: state, reversed time τ from the first point
+    of the reference (:class:`atlas.manifold.StableManifold`) and index along the branch (0
+    its first vertex, next to the saddle)."""
 
     n: int
     branch: str
@@ -419,52 +364,55 @@ class _Predicted:
         return _Predicted(self.n, self.branch, self.theta[cut], self.theta_dot[cut],
                           self.tau[cut], self.vertex[cut])
 
+    def reflected(self) -> _Predicted:
+        """The point reflection (θ, θ̇) → (−θ, −θ̇): the right branch of −π from the left
+        branch of π, vertex by vertex."""
+        return _Predicted(-self.n, BRANCHES[1 - BRANCHES.index(self.branch)], -self.theta,
+                          -self.theta_dot, self.tau, self.vertex)
 
-def _grow(p: Pendulum, window: Window, n: int, branch: str, max_spacing: float,
-          dt_p: float) -> _Predicted:
-    """Grow one branch from its linearisation by reversed-time RK4 (step ``dt_p``), placing
-    vertices with curvature-adapted spacing, and an extra vertex at every crossing of the
-    window's edge; keep the part from its first to its last vertex in the window."""
+
+def _edge_speeds(window: Window) -> list[float]:
+    """The speeds θ̇ > 0 at which L or its reflection R = −L crosses a θ̇ edge of the window."""
+    return sorted({v for v in (*window.theta_dot, *(-x for x in window.theta_dot)) if v > 0})
+
+
+def _predict(m: StableManifold, edges: list[float], max_spacing: float) -> _Predicted:
+    """Vertices along L, the left branch of π, walking the dense output of ``m`` in reversed
+    time from the saddle to its end: chords ≤ ``max_spacing`` and ≤ max_spacing/√κ, the step
+    in τ also limited by the growth of the speed |f| near the saddle, and an extra vertex at
+    every crossing of a speed in ``edges`` (Brent's method on the smooth dense output)."""
+    from scipy.optimize import brentq
+
+    p = m.pendulum
+
     u2 = -p.saddle_eigenvalues()[1]
-    y = _saddle_start(p, n, branch, START_DISTANCE)
-    verts, inside = [], []
-    if not _gone(p, window, branch, *y):
-        tau = max(0.0, math.log(0.1 * max_spacing / START_DISTANCE) / u2)
-        y = _flow_back(p, *y, tau, dt_p)
-        was_inside = window.margin(*y) >= 0
-        verts.append((*y, tau))
-        inside.append(was_inside)
-    while verts and not _gone(p, window, branch, *y):
+    tau = min(max(0.0, math.log(0.1 * max_spacing / START_DISTANCE) / u2), m.tau_end)
+    y = m.at(tau)
+    verts = [(*y, tau)]
+    while tau < m.tau_end:
         if len(verts) > _MAX_VERTICES:
-            raise SeparatrixError(f"branch {branch} of saddle {n}π: more than {_MAX_VERTICES} "
-                                  "vertices; raise separatrices.max_spacing or shrink the "
-                                  "window")
-        (f0, f1), (g0, g1) = _field(p, *y)
+            raise SeparatrixError(f"the stable manifold needs more than {_MAX_VERTICES} "
+                                  "vertices; raise separatrices.max_spacing or shrink the window")
+        (f0, f1), (g0, g1) = p.field_jet(*y)
         speed = math.hypot(f0, f1)
         kappa = abs(f0 * g1 - f1 * g0) / speed**3  # curvature of the orbit [rad⁻¹]
         growth = abs(f0 * g0 + f1 * g1) / speed**2  # |d ln speed / d tau|
         h = max_spacing * min(1.0, 1.0 / math.sqrt(kappa)) if kappa > 0 else max_spacing
         span = min(_CHORD_AIM * h / speed, _SPEED_GROWTH / max(growth, 1e-300))
         while True:
-            z = _flow_back(p, *y, span, dt_p)
+            t = min(tau + span, m.tau_end)
+            z = m.at(t)
             chord = math.hypot(z[0] - y[0], z[1] - y[1])
             if chord <= h:
                 break
-            span *= _CHORD_AIM * h / chord
-        now_inside = window.margin(*z) >= 0
-        if now_inside != was_inside:
-            e, t_e = _edge_point(p, window, y, span, dt_p)
-            verts.append((*e, tau + t_e))
-            inside.append(True)
-        tau += span
-        y, was_inside = z, now_inside
-        verts.append((*y, tau))
-        inside.append(now_inside)
-    keep = np.flatnonzero(inside)
-    arr = np.array(verts[keep[0]:keep[-1] + 1] if keep.size else [], float).reshape(-1, 3)
-    first = int(keep[0]) if keep.size else 0
-    return _Predicted(n, branch, arr[:, 0], arr[:, 1], arr[:, 2],
-                      np.arange(first, first + arr.shape[0]))
+            span = (t - tau) * _CHORD_AIM * h / chord
+        crossings = sorted(brentq(lambda s, v=v: m.at(s)[1] - v, tau, t, xtol=1e-15)
+                           for v in edges if (y[1] - v) * (z[1] - v) < 0)
+        verts += [(*m.at(s), s) for s in crossings]
+        verts.append((*z, t))
+        tau, y = t, z
+    arr = np.array(verts, float)
+    return _Predicted(1, "left", arr[:, 0], arr[:, 1], arr[:, 2], np.arange(arr.shape[0]))
 
 
 # --------------------------------------------------------------------------- check
@@ -487,84 +435,33 @@ class ManifoldCheck:
         return float(self.distance.max(initial=0.0))
 
 
-def _to_reference(saddle_n, branch, theta, theta_dot):
-    """Map points of branch (n, left|right) onto the left branch of the saddle π.
-
-    Eq. (1) is invariant under θ → θ + 2π and under (θ, θ̇) → (−θ, −θ̇); the left branch of nπ
-    is the left branch of π shifted by (n − 1)π, and the right branch of nπ is the point
-    reflection of the left branch of −nπ. Both maps are isometries, so distances survive."""
-    left = np.asarray(branch) == 0
-    n = np.asarray(saddle_n, float)
-    return (np.where(left, theta - (n - 1) * np.pi, (n + 1) * np.pi - theta),
-            np.where(left, theta_dot, -theta_dot))
-
-
 def check_against_stable_manifold(ds: xr.Dataset) -> ManifoldCheck:
-    """Recompute the independent check of a traced ``/separatrices`` group (see
-    :func:`_check`): per-point distances to the DOP853 stable manifold, polyline error."""
-    return _check(Pendulum(float(ds.attrs["alpha"]), float(ds.attrs["omega0"])),
-                  Window(tuple(ds.attrs["theta_window"]), tuple(ds.attrs["theta_dot_window"])),
-                  ds["saddle_n"].values, ds["branch"].values, ds["vertex"].values,
-                  ds["theta"].values, ds["theta_dot"].values)
+    """Recompute the check of a traced ``/separatrices`` group (see :func:`_check`) against
+    the same reference: per-point distances to the DOP853 stable manifold, polyline error."""
+    p = Pendulum(float(ds.attrs["alpha"]), float(ds.attrs["omega0"]))
+    window = Window(tuple(ds.attrs["theta_window"]), tuple(ds.attrs["theta_dot_window"]))
+    return _check(_reference(p, window), ds["saddle_n"].values, ds["branch"].values,
+                  ds["vertex"].values, ds["theta"].values, ds["theta_dot"].values)
 
 
-def _check(p: Pendulum, window: Window, saddle_n, branch, vertex, theta,
-           theta_dot) -> ManifoldCheck:
-    """Independent check of traced separatrix points against the stable manifold.
+def _check(m: StableManifold, saddle_n, branch, vertex, theta, theta_dot) -> ManifoldCheck:
+    """Traced separatrix points against the exact stable manifolds of :mod:`atlas.manifold`.
 
-    The left branch of the saddle (π, 0) is integrated in reversed time, θ' = −θ̇,
-    θ̇' = ω0² sin θ + 2αθ̇, with scipy's DOP853 (rtol = atol = 1e-13, dense output) from
-    10⁻⁷ along the stable eigenvector (linearisation error 10⁻¹⁴), until it is one radian past
-    the farthest point or beyond the window's energies; all other branches are its images
-    under the symmetries of eq. (1) (:func:`_to_reference`). The distance of each point to
-    that curve is found by Newton's method for the foot point on the dense output (accurate
-    to ≈ 1e-13).
-
-    ``branch`` holds flag values (0 left, 1 right); ``vertex`` orders the points of a branch,
-    and the polyline joins consecutive vertices only (a branch may leave the window and come
-    back: the points in between are not stored). The window bounds the energy of the points.
+    Each point of the branch (n, left|right) is mapped into the frame of L, the left branch of
+    π (:func:`atlas.manifold.to_left_branch`, an isometry), and its distance to L is that of
+    its foot point on ``m``'s dense output (:meth:`~atlas.manifold.StableManifold.foot_points`,
+    accurate to ≈ 1e-13). ``branch`` holds flag values (0 left, 1 right); ``vertex`` orders the
+    points of a branch, and the polyline joins consecutive vertices only (a branch may leave the
+    window and come back: the points in between are not stored); the manifold is sampled at 15
+    points between the foot points of each pair, and their largest distance to the chord is
+    ``polyline_error``.
     """
-    from scipy.integrate import solve_ivp
-    from scipy.spatial import cKDTree
-
     saddle_n, branch, vertex = (np.asarray(a, np.int64) for a in (saddle_n, branch, vertex))
     theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
     if theta.size == 0:
         return ManifoldCheck(np.zeros(0), 0.0)
-    x, v = _to_reference(saddle_n, branch, theta, theta_dot)
-    w2, a2 = p.omega0**2, 2.0 * p.alpha
-    # the reference runs one radian past the farthest mapped point (θ falls along it), so
-    # every foot point lies inside it, or until no point of the window's energy is left
-    theta_end = float(x.min()) - 1.0
-    energy_end = window.max_energy(p.omega0)
-
-    def rhs(t, y):
-        return np.array([-y[1], w2 * math.sin(y[0]) + a2 * y[1]])
-
-    def gone(t, y):
-        return min(y[0] - theta_end, energy_end - _energy(p, y[0], y[1]))
-
-    gone.terminal, gone.direction = True, -1
-    y0 = _saddle_start(p, 1, "left", START_DISTANCE)
-    t_cap = 1e3 * (1.0 / p.alpha + 1.0 / p.omega0) + 10 * abs(theta_end)
-    sol = solve_ivp(rhs, (0.0, t_cap), y0, method="DOP853", rtol=CHECK_RTOL, atol=CHECK_ATOL,
-                    dense_output=True, events=gone)
-    if sol.status < 0:
-        raise SeparatrixError(f"DOP853 reference of the separatrix check failed: {sol.message}")
-    curve = sol.sol
-
-    # foot points: nearest dense sample, then Newton on (c(t) − q)·c'(t) = 0
-    t_samples = np.union1d(sol.t, (sol.t[:-1, None] + np.diff(sol.t)[:, None]
-                                   * np.linspace(0, 1, 16, endpoint=False)).ravel())
-    _, nearest = cKDTree(curve(t_samples).T).query(np.column_stack([x, v]))
-    t = t_samples[nearest]
-    for _ in range(4):
-        c = curve(t)
-        d0, d1 = -c[1], w2 * np.sin(c[0]) + a2 * c[1]
-        t = np.clip(t - ((c[0] - x) * d0 + (c[1] - v) * d1) / (d0 * d0 + d1 * d1),
-                    0.0, sol.t[-1])
-    c = curve(t)
-    distance = np.hypot(c[0] - x, c[1] - v)
+    x, v = to_left_branch(saddle_n, branch == 1, theta, theta_dot)
+    t, distance = m.foot_points(x, v)
 
     # polyline: sample the manifold between consecutive vertices, distance to the chord
     order = np.lexsort((vertex, branch, saddle_n))
@@ -573,8 +470,7 @@ def _check(p: Pendulum, window: Window, saddle_n, branch, vertex, theta,
     i0, i1 = order[:-1][same], order[1:][same]
     frac = np.linspace(0.0, 1.0, 17)[1:-1]
     ts = t[i0, None] + (t[i1] - t[i0])[:, None] * frac
-    c = curve(ts.ravel())
-    cx, cv = c[0].reshape(ts.shape), c[1].reshape(ts.shape)
+    cx, cv = m.at(ts)
     ax, av, bx, bv = x[i0, None], v[i0, None], x[i1, None], v[i1, None]
     ex, ev = bx - ax, bv - av
     s = np.clip(((cx - ax) * ex + (cv - av) * ev) / (ex * ex + ev * ev), 0.0, 1.0)
@@ -598,17 +494,11 @@ def _linger(p: Pendulum, tol: float) -> float:
     return 2.0 * (math.log(1.0 / tol) + 5.0) / p.saddle_eigenvalues()[0]
 
 
-def _band(window: Window) -> Window:
-    """The window's θ̇ band over the θ reach of an atlas: where a source branch is needed, since
-    its copies shifted by multiples of 2π cover every θ range. Growth in it ends by energy."""
-    return Window((-_FAR, _FAR), window.theta_dot)
-
-
-def _sources(window: Window) -> list[tuple[int, str]]:
+def _sources(window: Window) -> list[str]:
     """The source branches whose copies can enter the window: the left branch of π (θ̇ > 0
     along it) if the window holds θ̇ > 0, the right branch of −π (θ̇ < 0) if it holds θ̇ < 0."""
-    return [(n, b) for n, b, present in ((1, "left", window.theta_dot[1] > 0.0),
-                                         (-1, "right", window.theta_dot[0] < 0.0)) if present]
+    return [b for b, present in (("left", window.theta_dot[1] > 0.0),
+                                 ("right", window.theta_dot[0] < 0.0)) if present]
 
 
 def _copies(theta: np.ndarray, theta_dot: np.ndarray, window: Window,
@@ -640,36 +530,25 @@ def _needed(g: _Predicted, window: Window) -> _Predicted:
     return g.part(int(idx[0]), int(idx[-1])) if idx.size else g.part(0, -1)  # -1: none
 
 
-def _left_branch_at(p: Pendulum, thetas: np.ndarray, dt_p: float):
-    """θ̇ [rad s⁻¹] and reversed time τ [s] where the predictor of the left branch of π — RK4
-    in reversed time at step ``dt_p`` from ``START_DISTANCE`` along the stable eigenvector —
-    passes each θ < π of ``thetas`` [rad]: marching step by step, then Newton on the step that
-    crosses (:func:`_edge_point`, with θ = target the only edge in reach). Along the branch θ
-    falls monotonically, so each θ is passed once."""
-    y, tau = _saddle_start(p, 1, "left", START_DISTANCE), 0.0
-    speed, when = np.empty(thetas.size), np.empty(thetas.size)
-    for i in np.argsort(thetas)[::-1]:
-        while (z := _flow_back(p, *y, dt_p, dt_p))[0] > thetas[i]:
-            y, tau = z, tau + dt_p
-        line = Window((float(thetas[i]), _FAR), (-_FAR, _FAR))
-        crossing, t = _edge_point(p, line, y, dt_p, dt_p)
-        speed[i], when[i] = crossing[1], tau + t
-    return speed, when
-
-
-def _axis_crossings(p: Pendulum, saddles: np.ndarray, tol: float, dt: float, backend: str):
+def _axis_crossings(m: StableManifold, saddles: np.ndarray, tol: float, dt: float,
+                    backend: str):
     """θ̇0 [rad s⁻¹] where the stable manifold of each saddle nπ meets the axis θ0 = 0, the
     boundary between basins (n − 1)/2 below and (n + 1)/2 above.
 
     The branch arriving from the side of θ = 0 meets it: for n ≥ 1 the left branch of nπ, the
     left branch of π shifted by (n − 1)π, at θ̇ = L(−(n − 1)π); for n ≤ −1 the right branch,
-    the reflection of L shifted by (n + 1)π, at θ̇ = −L((n + 1)π). The predictor gives L there
-    (:func:`_left_branch_at`); the crossing is bisected along the θ̇0 axis on certified labels,
-    with t_max covering the travel time to the saddle. Returns (θ̇0, bracket width, k above,
-    the labeller)."""
-    speed, travel = _left_branch_at(p, -(np.abs(saddles) - 1) * np.pi, 0.5 * dt)
-    labels = _Labeller(p, dt, travel.max(initial=0.0) + _linger(p, tol), backend)
-    predicted = np.sign(saddles) * speed
+    the reflection of L shifted by (n + 1)π, at θ̇ = −L((n + 1)π). The reference ``m`` gives L
+    there (:meth:`~atlas.manifold.StableManifold.extended` if it ends short of −(|n| − 1)π: a
+    crossing may lie beyond the window's speeds); the crossing is bisected along the θ̇0 axis
+    on certified labels, with t_max covering the travel time to the saddle. Returns (θ̇0,
+    bracket width, k above, the labeller)."""
+    u = -(np.abs(saddles) - 1) * np.pi
+    if u.size:
+        m = m.extended(float(u.min()))
+    travel = m.tau_at(u) if u.size else np.zeros(0)
+    labels = _Labeller(m.pendulum, dt, travel.max(initial=0.0) + _linger(m.pendulum, tol),
+                       backend)
+    predicted = np.sign(saddles) * m.at(travel)[1]
     base = np.column_stack([np.zeros(saddles.size), predicted])
     k_above = (saddles + 1) // 2
     lo, hi = bisect_across(labels, base, np.broadcast_to([0.0, 1.0], base.shape), k_above,
@@ -714,22 +593,23 @@ def _locate(labels, base, normal, k, run, tau, tol):
     return lo, hi
 
 
-def _symmetry_error(run: np.ndarray, tau: np.ndarray, point: np.ndarray) -> float:
-    """Largest distance [rad-ish] between a located point of the right branch of −π (run 1)
-    and the point reflection of the located point of the left branch of π (run 0) with the
-    same predictor time τ; NaN if they share none (one source only).
+def _symmetry_error(branch: np.ndarray, vertex: np.ndarray, point: np.ndarray) -> float:
+    """Largest distance [rad-ish] between a located point of the right branch of −π (branch 1)
+    and the point reflection of the located point of the left branch of π (branch 0) with the
+    same vertex index; NaN if they share none (one source only).
 
-    The predictor is odd in floating point (rounding is symmetric, sin is odd, the vertex
-    spacing depends on |f| only), so the predicted vertices of the two pair up exactly. The
-    normal of a pair is one vector, so both brackets lie on one line; if the label boundary is
-    symmetric, as eq. (1) is, both brackets — each narrower than tol — hold its crossing with
-    that line and the midpoints differ by less than tol. The bisection's sample points are
-    symmetric about the vertex too, so labels that are odd in floating point give an error at
-    rounding level; labels that break the symmetry show as an error of order tol or more."""
-    _, i, j = np.intersect1d(tau[run == 0], tau[run == 1], return_indices=True)
+    The predicted vertices of the right branch are the reflections of those of the left one,
+    and the normal of a pair is one vector (the vector field is odd), so both brackets lie on
+    one line; if the label boundary is symmetric, as eq. (1) is, both brackets — each
+    narrower than tol — hold its crossing with that line and the midpoints differ by less than
+    tol. The bisection's sample points are symmetric about the vertex too, so labels that are
+    odd in floating point give an error at rounding level; labels that break the symmetry
+    show as an error of order tol or more."""
+    left, right = branch == 0, branch == 1
+    _, i, j = np.intersect1d(vertex[left], vertex[right], return_indices=True)
     if i.size == 0:
         return math.nan
-    gap = point[run == 0][i] + point[run == 1][j]
+    gap = point[left][i] + point[right][j]
     return float(np.hypot(gap[:, 0], gap[:, 1]).max())
 
 
@@ -788,10 +668,13 @@ def trace(
     check_separatrix_settings(theta_window, theta_dot_window, tol, max_spacing)
     window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
 
-    # the two source branches, over the stretch their copies in the window use
-    band = _band(window)
-    grown = [g for n, b in _sources(window)
-             if (g := _needed(_grow(p, band, n, b, max_spacing, 0.5 * dt), window)).theta.size]
+    # the two source branches, over the stretch their copies in the window use: vertices on
+    # the exact left branch of π, and their reflections for the right branch of −π
+    reference = _reference(p, window)
+    left = _predict(reference, _edge_speeds(window), max_spacing)
+    grown = [g for b in _sources(window)
+             if (g := _needed(left if b == "left" else left.reflected(), window)).theta.size]
+
     def cat(f):
         return np.concatenate([f(r, g) for r, g in enumerate(grown)]) if grown else np.zeros(0)
 
@@ -808,15 +691,17 @@ def trace(
     normal = np.column_stack(_normal(p, base[:, 0], base[:, 1]))
     lo, hi = _locate(labels, base, normal, (saddle_n + 1) // 2, run, tau, tol)
     point = base + 0.5 * (lo + hi)[:, None] * normal
-    check = _check(p, band, saddle_n, branch, vertex, point[:, 0], point[:, 1])
-    symmetry_error = _symmetry_error(run, tau, point)
+    symmetry_error = _symmetry_error(branch, vertex, point)
     source, copy = _place(run, point, window)
     stored_n = (saddle_n[source] + 2 * copy).astype(np.int32)
     order = np.lexsort((vertex[source], branch[source], stored_n))
     source, copy, stored_n = source[order], copy[order], stored_n[order]
+    stored_theta = point[source, 0] + 2.0 * math.pi * copy
+    check = _check(reference, stored_n, branch[source], vertex[source], stored_theta,
+                   point[source, 1])
     saddles = np.unique(stored_n).astype(np.int64)
-    crossing, crossing_width, k_above, axis_labels = _axis_crossings(p, saddles, tol, dt,
-                                                                     backend)
+    crossing, crossing_width, k_above, axis_labels = _axis_crossings(reference, saddles, tol,
+                                                                     dt, backend)
     crossing_in_window = (window.margin(0.0, crossing) >= 0).astype(np.int8)
 
     problems = []
@@ -843,7 +728,7 @@ def trace(
 
     return xr.Dataset(
         data_vars={
-            "theta": ("point", point[source, 0] + 2.0 * math.pi * copy,
+            "theta": ("point", stored_theta,
                       {"units": "rad", "long_name": "angle theta"}),
             "theta_dot": ("point", point[source, 1],
                           {"units": "rad s-1", "long_name": "angular velocity theta_dot"}),
@@ -895,16 +780,17 @@ def trace(
             "n_unresolved": labels.unresolved + axis_labels.unresolved,
             "warnings": "\n".join(problems),
             "method": (
-                "stable manifolds of the saddles: the left branch of pi and the right branch "
-                "of -pi, vertices predicted by reversed-time RK4 (step dt/2) from 1e-7 along "
-                "the stable eigenvector (essay eqs. 22, 24), spacing <= max_spacing and <= "
-                "max_spacing/sqrt(curvature); each vertex located by bisection/multisection "
-                "across the curve on certified RK4 labels (step dt) until the bracket is "
-                "narrower than tol; every other branch is a copy shifted by a multiple of 2 pi "
-                "(symmetry_error: the right branch of -pi vs the point reflection of the left "
-                "branch of pi); checked against DOP853 (rtol = atol = 1e-13) in reversed time: "
-                "discrepancy = max distance of the points to it, polyline_error = max distance "
-                "of it to the polyline"),
+                "basin boundaries of the RK4 map (step dt): the left branch of pi and the "
+                "right branch of -pi, vertices predicted on the exact stable manifold (DOP853 "
+                "in reversed time, rtol = atol = 1e-13, from 1e-7 along the stable "
+                "eigenvector, essay eqs. 22, 24; the right branch its point reflection), "
+                "spacing <= max_spacing and <= max_spacing/sqrt(curvature); each vertex "
+                "located by bisection/multisection across the curve on certified RK4 labels "
+                "until the bracket is narrower than tol; every other branch is a copy shifted "
+                "by a multiple of 2 pi (symmetry_error: the right branch of -pi vs the point "
+                "reflection of the left branch of pi); checked against the same DOP853 "
+                "manifold: discrepancy = max distance of the points to it, polyline_error = "
+                "max distance of it to the polyline"),
         },
     )
 

@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import atlas
-from atlas.manifold import StableManifold, basin_areas
+from atlas.manifold import StableManifold, basin_areas, to_left_branch
 from atlas.model import Pendulum
 
 PI = math.pi
@@ -156,3 +156,49 @@ def test_window_without_a_boundary_is_one_basin():
     a = basin_areas(Pendulum(0.1, 1.0), (-0.5, 0.5), (-0.5, 0.5))
     np.testing.assert_array_equal(a.k, [0])
     assert a.fraction[0] == pytest.approx(1.0, abs=1e-15)
+
+
+def test_extended_continues_the_same_curve():
+    """extended keeps the integrated steps (the same curve up to tau_end) and goes on to the
+    requested θ, where the independent integration agrees with it as before."""
+    p = Pendulum(0.1, 1.0)
+    m = StableManifold(p, 4.0)
+    longer = m.extended(m.theta_end - 6.0)
+    assert longer.theta_end < m.theta_end - 6.0 < m.theta_end and longer.tau_end > m.tau_end
+    assert m.extended(m.theta_end + 1.0) is m
+    tau = np.linspace(0.0, m.tau_end, 400)
+    np.testing.assert_allclose(np.array(longer.at(tau)), np.array(m.at(tau)), rtol=0, atol=1e-14)
+    curve, *_ = branch_by_dop853(p, 1, "left", 8.0)
+    beyond = (curve[0] > longer.theta_end) & (curve[0] < m.theta_end)
+    assert beyond.sum() > 100
+    np.testing.assert_allclose(longer.left(curve[0][beyond][::50]), curve[1][beyond][::50],
+                               rtol=0, atol=1e-9)
+    assert np.all(np.isinf(m.left(curve[0][beyond])))
+
+
+def test_foot_points_on_the_left_branch():
+    """Points offset by d along the normal of an independently integrated L: their distance
+    to L is |d| (|d| below the radius of curvature), their foot point the point offset from."""
+    p = Pendulum(0.3, 2.0)
+    m = StableManifold(p, 6.0)
+    curve, t, sol = branch_by_dop853(p, 1, "left", 5.0)
+    away = np.hypot(curve[0] - PI, curve[1]) > 1e-2  # off the straight piece at the saddle
+    pick = np.flatnonzero(away & (np.abs(curve[1]) < 5.0))[::2000]
+    c = curve[:, pick]
+    f0, f1 = p.field(c[0], c[1])
+    normal = np.array([-f1, f0]) / np.hypot(f0, f1)
+    d = np.random.default_rng(1).uniform(-1e-3, 1e-3, pick.size)
+    tau, dist = m.foot_points(*(c + d * normal))
+    np.testing.assert_allclose(dist, np.abs(d), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(np.array(m.at(tau)), c, rtol=0, atol=1e-9)
+
+
+def test_copies_map_onto_the_left_branch():
+    """to_left_branch takes every boundary S_n, left and right of its saddle, onto L."""
+    m = StableManifold(Pendulum(0.1, 1.0), 4.0)
+    for n in (-5, -1, 3):
+        theta = np.linspace((n - 1) * PI, (n + 1) * PI, 41)[1:-1]
+        speed = m.boundary(n, theta)
+        fin = np.isfinite(speed)
+        x, v = to_left_branch(n, theta[fin] > n * PI, theta[fin], speed[fin])
+        np.testing.assert_allclose(v, m.left(x), rtol=0, atol=1e-12)

@@ -59,3 +59,25 @@ def test_rk4_stability_limit():
 def test_bad_parameters(alpha, omega0):
     with pytest.raises(ValueError):
         Pendulum(alpha, omega0)
+
+
+def test_field_and_its_derivative_along_the_flow():
+    """field is (θ̇, θ̈) of eq. (1); field_jet's second part is df/dt = J·f, checked by central
+    differences of f along f itself (ε = 1e-5: error O(ε²) ≈ 1e-10), for arrays and floats."""
+    p = Pendulum(0.3, 1.5)
+    rng = np.random.default_rng(5)
+    theta, theta_dot = rng.uniform(-7, 7, 50), rng.uniform(-4, 4, 50)
+    f0, f1 = p.field(theta, theta_dot)
+    np.testing.assert_array_equal(f0, theta_dot)
+    np.testing.assert_array_equal(f1, p.acceleration(theta, theta_dot))
+    (j0, j1), (g0, g1) = p.field_jet(theta, theta_dot)
+    np.testing.assert_array_equal(j0, f0)
+    np.testing.assert_array_equal(j1, f1)
+    eps = 1e-5
+    ahead = p.field(theta + eps * f0, theta_dot + eps * f1)
+    behind = p.field(theta - eps * f0, theta_dot - eps * f1)
+    np.testing.assert_allclose(g0, (ahead[0] - behind[0]) / (2 * eps), rtol=0, atol=1e-8)
+    np.testing.assert_allclose(g1, (ahead[1] - behind[1]) / (2 * eps), rtol=0, atol=1e-8)
+    (s0, s1), (s2, s3) = p.field_jet(1.0, 0.5)  # scalars stay scalars
+    assert all(np.ndim(x) == 0 for x in (s0, s1, s2, s3))
+    assert s3 == pytest.approx(-1.5**2 * math.cos(1.0) * 0.5 - 0.6 * s1, rel=1e-15)

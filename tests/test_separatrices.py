@@ -488,3 +488,29 @@ def test_a_window_that_no_boundary_enters_gives_empty_tables():
     assert ds.sizes["point"] == ds.sizes["crossing"] == 0
     assert ds.attrs["n_boundaries"] == 0 and ds.attrs["n_orbits"] == 0
     assert sep.warnings(ds) == [] and "none" in sep.summary(ds)[3]
+
+
+@pytest.mark.parametrize("lines", [5, 300])  # few lines: multisection; many: bisection
+def test_bisect_across_works_with_any_labeller(lines):
+    """bisect_across on its own, without the pendulum: basins k − 1 below and k above the
+    curve θ̇ = 0.5 + 0.3 sin 2θ, located across it along slanted lines; each final bracket
+    holds the crossing (Brent's method on the same line) and is narrower than tol."""
+    k, tol = 3, 1e-12
+
+    def curve(theta):
+        return 0.5 + 0.3 * np.sin(2 * theta)
+
+    def labels(theta, theta_dot):
+        return (theta_dot > curve(theta)).astype(np.int64) + k - 1
+
+    rng = np.random.default_rng(7)
+    theta = rng.uniform(-3.0, 3.0, lines)
+    base = np.column_stack([theta, curve(theta) + rng.uniform(-2e-9, 2e-9, lines)])
+    direction = np.broadcast_to([0.6, 0.8], base.shape)  # a unit vector, across the curve
+    lo, hi = sep.bisect_across(labels, base, direction, k, tol=tol, half_width=1e-11)
+    root = np.array([brentq(lambda s, b=b: b[1] + 0.8 * s - curve(b[0] + 0.6 * s), -1e-6, 1e-6,
+                            xtol=1e-20) for b in base])
+    assert np.all((lo < hi) & (hi - lo < tol))
+    assert np.all((lo - 1e-15 <= root) & (root <= hi + 1e-15))
+    for s, side in ((lo, k - 1), (hi, k)):
+        np.testing.assert_array_equal(labels(*(base + s[:, None] * direction).T), side)
