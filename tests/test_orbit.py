@@ -1,0 +1,101 @@
+"""``atlas orbit``: one orbit's label equals the kernel's, its certificate agrees with the
+file's, its pictures are written, and bad input is one line with exit status 2."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import atlas
+from atlas.cli import main
+from atlas.orbit import integrate
+
+
+@pytest.fixture(scope="module")
+def atlas_file(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("orbit")
+    cfg = atlas.Config.model_validate({
+        "name": "orbit test", "pendulum": {"alpha": 0.1, "omega0": 1.0},
+        "grid": {"theta0": {"start": "-3pi", "stop": "3pi", "num": 48},
+                 "theta_dot0": {"start": -4, "stop": 4, "num": 32}},
+        "output": str(tmp / "a.h5")})
+    atlas.run(cfg, quiet=True)
+    sweep = atlas.Config.model_validate({
+        "name": "sweep", "pendulum": {"alpha": [0.1, 0.5], "omega0": 1.0},
+        "grid": {"theta0": {"start": -3, "stop": 3, "num": 8},
+                 "theta_dot0": {"start": -2, "stop": 2, "num": 8}},
+        "separatrices": {"enabled": False}, "output": str(tmp / "s.h5")})
+    atlas.run(sweep, quiet=True)
+    return cfg.output, sweep.output
+
+
+def test_integrate_gives_the_kernels_labels():
+    rng = np.random.default_rng(0)
+    th, v = rng.uniform(-9, 9, 150), rng.uniform(-4, 4, 150)
+    for alpha, omega0, dt in ((0.1, 1.0, 0.01), (0.7, 2.0, 0.005)):
+        ref = atlas.label(th, v, alpha=alpha, omega0=omega0, dt=dt, kernel="straightforward")
+        orbits = [integrate(a, b, alpha=alpha, omega0=omega0, dt=dt) for a, b in zip(th, v)]
+        np.testing.assert_array_equal([o.status for o in orbits], ref.status)
+        np.testing.assert_array_equal([o.k for o in orbits], ref.attractor)
+        t = np.array([o.t_trap for o in orbits])
+        assert np.mean(np.isclose(t, ref.t_trap)) > 0.98
+        for o in orbits:  # the trap really holds where it is reported, and the curve is whole
+            i = o.trap_index
+            phi = o.theta[i] - 2 * np.pi * o.k
+            energy = 0.5 * o.theta_dot[i] ** 2 + omega0**2 * (1 - np.cos(phi))
+            assert abs(phi) <= np.pi and energy < o.cap == 2 * omega0**2 * (1 - o.margin)
+            assert o.t[i] == pytest.approx(o.t_trap) and o.t.size == o.theta.size
+
+
+def test_orbit_on_a_file_agrees_with_the_stored_label(atlas_file, tmp_path, capsys):
+    path, _ = atlas_file
+    ds = atlas.open(path).to_dataset(inherit=False)
+    j, i = np.argwhere(ds["status"].values == 0)[len(ds["status"].values.ravel()) // 3]
+    th, v = float(ds["theta0"][i]), float(ds["theta_dot0"][j])
+    k = int(ds["attractor"].values[j, i])
+    out = tmp_path / "o.png"
+    assert main(["orbit", str(path), repr(th), repr(v), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"label        k = {k:+d}" in text and "the same as atlas.label" in text
+    assert "certified for the exact equation" in text and "Certifier" in text
+    assert f"stored k = {k:+d}, status trapped" in text
+    assert f"boundary distance {float(ds['boundary_distance'].values[j, i]):.4g}" in text
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_orbit_without_a_file(tmp_path, capsys):
+    out = tmp_path / "free.png"
+    assert main(["orbit", "--alpha", "0.2", "--omega0", "1", "-o", str(out), "--",
+                 "-pi/2", "3.3"]) == 0
+    text = capsys.readouterr().out
+    ref = atlas.label(-np.pi / 2, 3.3, alpha=0.2, omega0=1.0)
+    assert f"k = {int(ref.attractor):+d}" in text
+    assert f"t_trap       {float(ref.t_trap):.2f}" in text
+    assert "energy trap" in text and "d_cert needs" in text and out.exists()
+
+
+def test_orbit_picks_a_parameter_point(atlas_file, tmp_path, capsys):
+    _, sweep = atlas_file
+    assert main(["orbit", str(sweep), "0", "1.5", "--alpha", "0.5",
+                 "-o", str(tmp_path / "s.png")]) == 0
+    assert "alpha = 0.5 1/s" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["orbit", "1"], "give THETA0 THETA_DOT0"),
+    (["orbit", "1", "abc", "--alpha", "0.1", "--omega0", "1"], "theta_dot0: cannot read 'abc'"),
+    (["orbit", "1", "2"], "give --alpha and --omega0"),
+    (["orbit", "missing.h5", "1", "2"], "missing.h5: no such file"),
+    (["orbit", "1", "2", "--alpha", "0", "--omega0", "1"], "alpha = 0"),
+    (["orbit", "1", "2", "--alpha", "0.1", "--omega0", "1", "--dt", "3"], "stability limit"),
+    (["orbit", "{sweep}", "1", "2"], "a parameter atlas of 2 points"),
+    (["orbit", "{sweep}", "1", "2", "--alpha", "0.3"], "no single parameter point"),
+    (["orbit", "{file}", "1", "2", "--dt", "0.02"], "was computed with dt = 0.01"),
+])
+def test_bad_input_is_one_line_and_exit_2(atlas_file, capsys, tmp_path, args, fragment):
+    path, sweep = atlas_file
+    args = [a.format(file=path, sweep=sweep) for a in args] + ["-o", str(tmp_path / "x.png")]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("atlas: error: ") and fragment in err and "\n" not in err, err
+    assert not (tmp_path / "x.png").exists()
