@@ -384,7 +384,6 @@ def _predict(m: StableManifold, edges: list[float], max_spacing: float) -> _Pred
     from scipy.optimize import brentq
 
     p = m.pendulum
-
     u2 = -p.saddle_eigenvalues()[1]
     tau = min(max(0.0, math.log(0.1 * max_spacing / START_DISTANCE) / u2), m.tau_end)
     y = m.at(tau)
