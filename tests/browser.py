@@ -46,38 +46,44 @@ class Browser:
         self.log = open(os.path.join(self.profile, "stderr.log"), "wb")  # noqa: SIM115
         to_child_r, self._to_child = os.pipe()
         self._from_child, from_child_w = os.pipe()
-        # Move the child's ends above 9 so that placing them at 3 and 4 cannot clobber them.
+        # Move the child's ends above 9, then let bash place them at 3 and 4 for the
+        # browser (no preexec_fn: that is unsafe in a process with threads).
         hi_r = fcntl.fcntl(to_child_r, fcntl.F_DUPFD, 10)
         hi_w = fcntl.fcntl(from_child_w, fcntl.F_DUPFD, 10)
         os.close(to_child_r)
         os.close(from_child_w)
-
-        def place():
-            os.dup2(hi_r, 3)
-            os.dup2(hi_w, 4)
-
-        args = [executable, "--headless", "--remote-debugging-pipe", "--no-sandbox",
-                "--disable-gpu", "--no-first-run", "--no-default-browser-check",
-                "--disable-extensions", "--disable-background-networking",
-                "--disable-dev-shm-usage", "--mute-audio", f"--user-data-dir={self.profile}",
-                "about:blank"]
-        self.proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                     stderr=self.log, preexec_fn=place, close_fds=False)
+        flags = ["--headless", "--remote-debugging-pipe", "--no-sandbox",
+                 "--disable-gpu", "--no-first-run", "--no-default-browser-check",
+                 "--disable-extensions", "--disable-background-networking",
+                 "--disable-dev-shm-usage", "--mute-audio", f"--user-data-dir={self.profile}",
+                 "about:blank"]
+        script = f'exec "$0" "$@" 3<&{hi_r} 4>&{hi_w}'
+        self.proc = subprocess.Popen([shutil.which("bash") or "/bin/bash", "-c", script,
+                                      executable, *flags],
+                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=self.log, pass_fds=(hi_r, hi_w))
         os.close(hi_r)
         os.close(hi_w)
         self._next = 0
+        self._closed = False
         self._replies: dict[int, queue.Queue] = {}
         self._lock = threading.Lock()
         self.events: list[tuple[str, dict]] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
-        target = self.send("Target.createTarget", {"url": "about:blank"})["targetId"]
-        self.session = self.send("Target.attachToTarget",
-                                 {"targetId": target, "flatten": True})["sessionId"]
-        for domain in ("Page.enable", "Runtime.enable"):
-            self.call(domain)
-        self.call("Emulation.setDeviceMetricsOverride",
-                  {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False})
+        self.session = None
+        try:
+            target = self.send("Target.createTarget", {"url": "about:blank"})["targetId"]
+            self.session = self.send("Target.attachToTarget",
+                                     {"targetId": target, "flatten": True})["sessionId"]
+            for domain in ("Page.enable", "Runtime.enable"):
+                self.call(domain)
+            self.call("Emulation.setDeviceMetricsOverride",
+                      {"width": width, "height": height, "deviceScaleFactor": 1,
+                       "mobile": False})
+        except BaseException:
+            self.close()
+            raise
 
     def _read(self):
         buffer = b""
@@ -104,18 +110,25 @@ class Browser:
                         self._post("Page.handleJavaScriptDialog", {"accept": True},
                                    message.get("sessionId"))
         with self._lock:
+            self._closed = True
             for box in self._replies.values():
-                box.put({"error": {"message": "browser closed the pipe"}})
+                box.put({"error": {"message": "the browser closed the pipe"}})
 
     def _post(self, method, params=None, session=None) -> int:
         with self._lock:
+            if self._closed:
+                raise BrowserError(f"{method}: the browser is gone ({self._log_tail()})")
             self._next += 1
             ident = self._next
             self._replies[ident] = queue.Queue()
         message = {"id": ident, "method": method, "params": params or {}}
         if session:
             message["sessionId"] = session
-        os.write(self._to_child, json.dumps(message).encode() + b"\0")
+        try:
+            os.write(self._to_child, json.dumps(message).encode() + b"\0")
+        except OSError as exc:
+            raise BrowserError(f"{method}: the browser is gone ({exc}; "
+                               f"{self._log_tail()})") from None
         return ident
 
     def send(self, method, params=None, session=None, timeout=30.0) -> dict:
@@ -130,6 +143,14 @@ class Browser:
         if "error" in reply:
             raise BrowserError(f"{method}: {reply['error'].get('message')}")
         return reply.get("result", {})
+
+    def _log_tail(self) -> str:
+        try:
+            with open(self.log.name, "rb") as f:
+                lines = f.read().decode(errors="replace").strip().splitlines()
+        except OSError:
+            return "no log"
+        return lines[-1] if lines else "its log is empty"
 
     def call(self, method, params=None, timeout=30.0) -> dict:
         """A command to the page's session."""
