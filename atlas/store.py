@@ -1,14 +1,17 @@
 """The atlas file: one HDF5 file in netCDF-4 layout (xarray's ``h5netcdf`` engine).
 
-This is the only module that touches HDF5. A run writes into ``<output>.partial``:
+This is the only module that touches HDF5. A run keeps its finished tiles in
+``<output>.partial/`` (:mod:`atlas.tiles`, one atomically written file per tile); when every
+tile is done, :func:`finalize` assembles the file:
 
-1. :func:`create` pre-creates the chunked, compressed basin-map variables (one chunk per
-   tile row band) and a ``tile_done`` record;
-2. :func:`write_tile` writes each finished tile by region and marks it done, then flushes,
-   so a crash loses at most the tile in flight and ``--resume`` redoes only missing tiles;
-3. :func:`finalize` adds the basin fractions and the small groups (``/critical_points``,
-   ``/separatrices``) and renames the file onto the output path, so the output path only ever
-   holds a complete file.
+1. the basin-map variables are created chunked and compressed, one chunk per tile, and each
+   tile's chunks are copied in as stored (no decoding, memory bounded by one tile);
+2. the summary is added in one place (:func:`_write_summary`): basin fractions summed from
+   the tiles' counts, any further root variables passed in, then the groups
+   (``/critical_points``, ``/separatrices``, …), then the attributes and ``complete = 1``;
+3. the file (built inside the partial folder) is fsynced and renamed onto the output, the
+   folder fsynced, and only then is the partial folder removed. The output path therefore only
+   ever holds a complete file, and an interruption anywhere leaves the tiles to finish from.
 
 Layout (SPEC.md): root dims ``theta_dot0``, ``theta0`` (leading ``alpha``, ``omega0`` for a
 parameter atlas); ``attractor`` int16 (``_FillValue`` where not trapped), ``status`` int8
@@ -20,7 +23,6 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
 from pathlib import Path
 
 import h5netcdf
@@ -30,179 +32,81 @@ import xarray as xr
 
 from .errors import InputFileError
 from .labels import ATTRACTOR_FILL
+from .tiles import DEFLATE_LEVEL, MANIFEST, Layout, PartialStoreError, TileStore, partial_path
 
-__all__ = ["Layout", "create", "open_partial", "write_tile", "finalize", "open_atlas",
-           "partial_path", "describe", "read_layout"]
+__all__ = ["Layout", "finalize", "open_atlas", "partial_path", "describe", "FILLS",
+           "DamagedTile"]
 
 STATUS_FLAGS = {"flag_values": np.array([0, 1, 2], np.int8),
                 "flag_meanings": "trapped unresolved nonfinite"}
-_COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+_COMPRESSION = {"compression": "gzip", "compression_opts": DEFLATE_LEVEL, "shuffle": True}
 SCHEMA = "atlas-basin-map/1"
+#: Fill values of the label variables (also the padding of a tile's edge chunk).
+FILLS = {"attractor": ATTRACTOR_FILL, "status": np.int8(0), "t_trap": np.float32(np.nan)}
+_SPECS = {
+    "attractor": (np.int16, ATTRACTOR_FILL, {
+        "long_name": "index k of the attractor (2*pi*k, 0) reached",
+        "units": "1", "comment": "fill value where status != trapped"}),
+    "status": (np.int8, None, {"long_name": "labelling status", "units": "1",
+                               **STATUS_FLAGS}),
+    "t_trap": (np.float32, np.float32(np.nan), {
+        "long_name": "time at which the orbit was certified trapped", "units": "s"}),
+}
 
 
-def partial_path(output: Path) -> Path:
-    """Where an unfinished run keeps its data: next to the output, never at it."""
-    return output.with_name(output.name + ".partial")
+class DamagedTile(Exception):
+    """A tile file that cannot be read back (its index in ``index``)."""
+
+    def __init__(self, index: int, reason: str):
+        super().__init__(f"tile {index}: {reason}")
+        self.index = index
 
 
-@dataclass(frozen=True)
-class Layout:
-    """Shape of a basin atlas: parameter values, grid axes and the row-band tiling.
-
-    ``alpha``/``omega0`` are None for a single-parameter atlas (no leading dims).
-    A tile is one row band ``rows`` of one parameter point ``(ia, iw)``.
-    """
-
-    theta0: np.ndarray
-    theta_dot0: np.ndarray
-    alpha: np.ndarray | None
-    omega0: np.ndarray | None
-    rows_per_tile: int
-
-    @property
-    def n_params(self) -> int:
-        return 1 if self.alpha is None else self.alpha.size * self.omega0.size
-
-    @property
-    def bands(self) -> int:
-        return -(-self.theta_dot0.size // self.rows_per_tile)
-
-    @property
-    def n_tiles(self) -> int:
-        return self.n_params * self.bands
-
-    @property
-    def dims(self) -> tuple[str, ...]:
-        lead = () if self.alpha is None else ("alpha", "omega0")
-        return (*lead, "theta_dot0", "theta0")
-
-    def tile(self, index: int) -> tuple[tuple[int, ...], slice]:
-        """(parameter index tuple, row slice) of tile ``index``; () for no sweep."""
-        p, band = divmod(index, self.bands)
-        rows = slice(band * self.rows_per_tile,
-                     min((band + 1) * self.rows_per_tile, self.theta_dot0.size))
-        if self.alpha is None:
-            return (), rows
-        return divmod(p, self.omega0.size), rows
-
-
-def _chunks(layout: Layout) -> tuple[int, ...]:
+def _create_map(f: h5netcdf.File, layout: Layout) -> None:
+    """Coordinates and the empty, chunked basin-map variables (one chunk per tile)."""
+    coords = {"theta_dot0": (layout.theta_dot0, "rad s-1", "initial angular velocity"),
+              "theta0": (layout.theta0, "rad", "initial angle")}
+    if layout.alpha is not None:
+        coords = {"alpha": (layout.alpha, "s-1", "damping constant"),
+                  "omega0": (layout.omega0, "rad s-1", "natural angular frequency"),
+                  **coords}
+    f.dimensions = {name: values[0].size for name, values in coords.items()}
+    for name, (values, units, long_name) in coords.items():
+        var = f.create_variable(name, (name,), np.float64, data=values)
+        var.attrs.update(units=units, long_name=long_name)
     lead = (1, 1) if layout.alpha is not None else ()
-    return (*lead, min(layout.rows_per_tile, layout.theta_dot0.size), layout.theta0.size)
+    chunks = (*lead, layout.chunk_rows, layout.theta0.size)
+    for name, (dtype, fill, var_attrs) in _SPECS.items():
+        var = f.create_variable(name, layout.dims, dtype, fillvalue=fill, chunks=chunks,
+                                **_COMPRESSION)
+        var.attrs.update(var_attrs)
 
 
-def create(path: Path, layout: Layout, attrs: dict) -> h5netcdf.File:
-    """Create a new partial atlas at ``path`` with empty basin-map variables."""
-    f = h5netcdf.File(path, "w")
-    try:
-        coords = {"theta_dot0": (layout.theta_dot0, "rad s-1", "initial angular velocity"),
-                  "theta0": (layout.theta0, "rad", "initial angle")}
-        if layout.alpha is not None:
-            coords = {"alpha": (layout.alpha, "s-1", "damping constant"),
-                      "omega0": (layout.omega0, "rad s-1", "natural angular frequency"),
-                      **coords}
-        f.dimensions = {name: values[0].size for name, values in coords.items()}
-        f.dimensions["tile"] = layout.n_tiles
-        for name, (values, units, long_name) in coords.items():
-            var = f.create_variable(name, (name,), np.float64, data=values)
-            var.attrs.update(units=units, long_name=long_name)
-        chunks = _chunks(layout)
-        specs = {
-            "attractor": (np.int16, ATTRACTOR_FILL, {
-                "long_name": "index k of the attractor (2*pi*k, 0) reached",
-                "units": "1", "comment": "fill value where status != trapped"}),
-            "status": (np.int8, None, {"long_name": "labelling status", "units": "1",
-                                       **STATUS_FLAGS}),
-            "t_trap": (np.float32, np.float32(np.nan), {
-                "long_name": "time at which the orbit was certified trapped", "units": "s"}),
-        }
-        for name, (dtype, fill, var_attrs) in specs.items():
-            var = f.create_variable(name, layout.dims, dtype, fillvalue=fill, chunks=chunks,
-                                    **_COMPRESSION)
-            var.attrs.update(var_attrs)
-        done = f.create_variable("tile_done", ("tile",), np.int8,
-                                 data=np.zeros(layout.n_tiles, np.int8))
-        done.attrs.update(long_name="tile finished and written", units="1",
-                          rows_per_tile=np.int64(layout.rows_per_tile))
-        f.attrs.update({key: value for key, value in attrs.items() if value is not None})
-        f.attrs["atlas_schema"] = SCHEMA
-        f.attrs["complete"] = np.int8(0)
-        _sync(f)
-    except BaseException:
-        f.close()
-        raise
-    return f
-
-
-def read_layout(f: h5netcdf.File) -> Layout:
-    """The layout a file was created with (its tiling included)."""
-    sweep = "alpha" in f.variables
-    return Layout(
-        theta0=f.variables["theta0"][...], theta_dot0=f.variables["theta_dot0"][...],
-        alpha=f.variables["alpha"][...] if sweep else None,
-        omega0=f.variables["omega0"][...] if sweep else None,
-        rows_per_tile=int(f.variables["tile_done"].attrs["rows_per_tile"]),
-    )
-
-
-def open_partial(path: Path, config_hash: str) -> tuple[h5netcdf.File, Layout, np.ndarray]:
-    """Reopen an interrupted run for ``--resume``: (file, its layout, tiles still to do).
-
-    The file's own tiling is kept, so a resume may use another ``tile_orbits``. Refuses a
-    file that is unreadable or was made from a different config.
-    """
-    try:
-        _discard_summary(path)
-        f = h5netcdf.File(path, "a")
-    except (OSError, ValueError, KeyError) as exc:
-        raise InputFileError(f"{path}: cannot resume, the partial file is unreadable "
-                             f"({exc.__class__.__name__}); delete it to start over") from None
-    if f.attrs.get("config_hash") != config_hash:
-        f.close()
-        raise InputFileError(f"{path}: cannot resume, the partial file was made from a "
-                             "different config; delete it or run without --resume")
-    done = f.variables["tile_done"][...]
-    return f, read_layout(f), np.flatnonzero(done == 0)
-
-
-def _sync(f: h5netcdf.File) -> None:
-    """Push everything written so far to disk. h5netcdf's own ``flush`` only writes its
-    netCDF bookkeeping, so the HDF5 file underneath is flushed explicitly."""
-    f.flush()
-    f._h5file.flush()
-
-
-def write_tile(f: h5netcdf.File, layout: Layout, index: int, attractor, status, t_trap) -> None:
-    """Write tile ``index`` (arrays shaped (rows, n_theta0)) and record it done, durably."""
-    params, rows = layout.tile(index)
-    region = (*params, rows, slice(None))
-    f.variables["attractor"][region] = attractor
-    f.variables["status"][region] = status
-    f.variables["t_trap"][region] = t_trap
-    _sync(f)  # data before the record: a crash can lose a tile, never mislabel one
-    f.variables["tile_done"][index] = 1
-    _sync(f)
-
-
-def _basin_counts(f: h5netcdf.File, layout: Layout) -> tuple[dict, np.ndarray]:
-    """Per parameter point: {k: count} of trapped orbits and the number of orbits not trapped,
-    read back tile by tile so memory stays bounded by one tile."""
+def _copy_tiles(f: h5netcdf.File, tiles: TileStore) -> tuple[list[dict], np.ndarray]:
+    """Copy every tile's stored chunks into the file; return the basin counts per parameter
+    point ({k: trapped orbits}) and the orbits not trapped."""
+    layout = tiles.layout
+    datasets = {name: f._h5group[name] for name in _SPECS}
     counts = [dict() for _ in range(layout.n_params)]
     untrapped = np.zeros(layout.n_params, np.int64)
     for index in range(layout.n_tiles):
+        try:
+            tile = tiles.read_tile(index)
+        except (OSError, ValueError, KeyError, EOFError) as exc:
+            raise DamagedTile(index, exc.__class__.__name__) from None
         params, rows = layout.tile(index)
-        region = (*params, rows, slice(None))
-        status = f.variables["status"][region]
-        k = f.variables["attractor"][region][status == 0]
+        offset = (*params, rows.start, 0)
+        for name, dset in datasets.items():
+            dset.id.write_direct_chunk(offset, tile.chunks[name], 0)
         p = index // layout.bands
-        for value, count in zip(*np.unique(k, return_counts=True)):
-            counts[p][int(value)] = counts[p].get(int(value), 0) + int(count)
-        untrapped[p] += int(np.count_nonzero(status != 0))
+        for k, n in zip(tile.ks.tolist(), tile.counts.tolist()):
+            counts[p][k] = counts[p].get(k, 0) + n
+        untrapped[p] += tile.untrapped
     return counts, untrapped
 
 
-def _write_fractions(f: h5netcdf.File, layout: Layout) -> None:
-    counts, untrapped = _basin_counts(f, layout)
+def _write_fractions(f: h5netcdf.File, layout: Layout, counts: list[dict],
+                     untrapped: np.ndarray) -> None:
     ks = sorted(set().union(*counts)) or [0]
     n_orbits = layout.theta0.size * layout.theta_dot0.size
     table = np.array([[c.get(k, 0) for k in ks] for c in counts], np.float64)
@@ -226,38 +130,70 @@ def _write_fractions(f: h5netcdf.File, layout: Layout) -> None:
                      "(unresolved or nonfinite)")
 
 
-#: What :func:`finalize` adds to a file whose tiles are all done.
-_SUMMARY = ("basin_fraction", "basin_fraction_stderr", "unresolved_fraction", "k",
-            "critical_points", "separatrices")
+def _write_root_vars(f: h5netcdf.File, ds: xr.Dataset) -> None:
+    """Further root variables (on the file's dims, or new ones), with their attributes."""
+    for name, size in ds.sizes.items():
+        if name not in f.dimensions:
+            f.dimensions[name] = size
+    for name, var in {**ds.coords, **ds.data_vars}.items():
+        if name in f.variables:
+            continue
+        attrs = dict(var.attrs)
+        fill = attrs.pop("_FillValue", var.encoding.get("_FillValue"))
+        new = f.create_variable(name, var.dims, var.dtype, data=var.values, fillvalue=fill)
+        new.attrs.update(attrs)
 
 
-def finalize(f: h5netcdf.File, path: Path, output: Path, groups: dict[str, xr.Dataset],
-             attrs: dict) -> None:
-    """Complete the partial file at ``path`` and rename it onto ``output``.
-
-    ``complete`` is set last, just before the rename: a failure on the way (disk full)
-    leaves a partial file that ``--resume`` finishes (see :func:`_discard_summary`).
-    """
-    layout = read_layout(f)
-    _write_fractions(f, layout)
-    f.attrs.update(attrs)
-    f.close()
+def _write_summary(path: Path, layout: Layout, counts: list[dict], untrapped: np.ndarray,
+                   groups: dict[str, xr.Dataset], root_vars: xr.Dataset | None,
+                   attrs: dict) -> None:
+    """Everything a finished file has beyond the basin map, in one place: basin fractions,
+    further root variables, the groups, the attributes; ``complete`` last."""
+    with h5netcdf.File(path, "a") as f:
+        _write_fractions(f, layout, counts, untrapped)
+        if root_vars is not None:
+            _write_root_vars(f, root_vars)
+        f.attrs.update({key: value for key, value in attrs.items() if value is not None})
     for name, ds in groups.items():
         ds.to_netcdf(path, mode="a", group=name, engine="h5netcdf")
     with h5py.File(path, "a") as h:
         h.attrs["complete"] = np.int8(1)
+
+
+def _fsync(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def finalize(tiles: TileStore, output: Path, groups: dict[str, xr.Dataset],
+             root_vars: xr.Dataset | None, attrs: dict) -> None:
+    """Assemble the finished tiles of ``tiles`` into the atlas file ``output``; then remove
+    the partial folder.
+
+    ``groups`` become HDF5 groups (``/critical_points``, …), ``root_vars`` further root
+    variables next to the basin map, ``attrs`` the root attributes (with the partial run's
+    own: provenance, config). The file is built inside the partial folder, fsynced and renamed
+    onto ``output``: an interruption or a full disk at any point leaves the output as it was
+    and the tiles in place (run again to finish). Raises :class:`DamagedTile` for a tile file
+    that cannot be read back.
+    """
+    layout = tiles.layout
+    path = tiles.path / "assembly.h5"
+    path.unlink(missing_ok=True)
+    with h5netcdf.File(path, "w") as f:
+        _create_map(f, layout)
+        f.attrs.update(tiles.manifest["attrs"])
+        f.attrs["atlas_schema"] = SCHEMA
+        f.attrs["complete"] = np.int8(0)
+        counts, untrapped = _copy_tiles(f, tiles)
+    _write_summary(path, layout, counts, untrapped, groups, root_vars, attrs)
+    _fsync(path)
     os.replace(path, output)
-
-
-def _discard_summary(path: Path) -> None:
-    """Remove what an interrupted :func:`finalize` may have added, so it can run again."""
-    with h5py.File(path, "a") as h:
-        if "basin_fraction" not in h and "critical_points" not in h and "k" not in h:
-            return
-        for name in _SUMMARY:  # the variables on dim k before k itself
-            if name in h:
-                del h[name]
-        h.attrs["complete"] = np.int8(0)
+    _fsync(output.parent)
+    tiles.remove()
 
 
 def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:
@@ -268,8 +204,8 @@ def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:
     """
     path = Path(path)
     if not _check_atlas_file(path).get("complete", 0):
-        raise InputFileError(f"{path}: a partial atlas (an interrupted run); finish it with "
-                             "`atlas run CONFIG --resume` first")
+        raise InputFileError(f"{path}: a partial atlas (an interrupted run); finish it by "
+                             "running `atlas run CONFIG` again first")
     return xr.open_datatree(path, engine="h5netcdf", mask_and_scale=False, chunks=chunks)
 
 
@@ -278,6 +214,9 @@ def _check_atlas_file(path: Path) -> dict:
     if not path.exists():
         raise InputFileError(f"{path}: no such file")
     if path.is_dir():
+        if (path / MANIFEST).exists():
+            raise InputFileError(f"{path}: a partial atlas (an interrupted run); finish it by "
+                                 "running `atlas run CONFIG` again first")
         raise InputFileError(f"{path}: is a directory, not an atlas file")
     try:
         with h5netcdf.File(path, "r") as f:
@@ -293,11 +232,21 @@ def _check_atlas_file(path: Path) -> dict:
 
 
 def describe(path: str | Path) -> dict:
-    """What ``atlas info`` needs without loading the arrays: attrs, completeness, tile counts."""
+    """What ``atlas info`` needs without loading the arrays: attrs, completeness, and for a
+    partial run (its ``.partial`` folder) how many tiles are done."""
     path = Path(path)
+    if path.is_dir() and (path / MANIFEST).exists():
+        try:
+            tiles = TileStore.read(path)
+        except PartialStoreError as exc:
+            raise InputFileError(f"{path}: a partial run that cannot be read ({exc})") from None
+        attrs = tiles.manifest["attrs"]
+        return {"attrs": attrs, "complete": False, "tiles_done": int(tiles.done().size),
+                "tiles": tiles.layout.n_tiles, "config": _config(attrs)}
     attrs = _check_atlas_file(path)
-    with h5netcdf.File(path, "r") as f:
-        done = f.variables["tile_done"][...]
-    return {"attrs": attrs, "complete": bool(attrs.get("complete", 0)),
-            "tiles_done": int(done.sum()), "tiles": int(done.size),
-            "config": json.loads(attrs["config"]) if "config" in attrs else None}
+    return {"attrs": attrs, "complete": bool(attrs.get("complete", 0)), "tiles_done": None,
+            "tiles": None, "config": _config(attrs)}
+
+
+def _config(attrs: dict):
+    return json.loads(attrs["config"]) if "config" in attrs else None

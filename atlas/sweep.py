@@ -3,12 +3,20 @@
 The grid (θ̇0 rows × θ0 columns, for every α, ω0 of a parameter atlas) is cut into tiles of
 whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled independently
 (:func:`compute_tile`, which any backend can run) and each finished tile is written at once
-(:mod:`atlas.store`), so memory is bounded by a tile and a crash loses only tiles in flight.
-Orbits never interact, so results do not depend on tile size, backend or thread count.
+(:mod:`atlas.tiles`, one atomically written file per tile in ``<output>.partial/``), so memory
+is bounded by a tile and a crash loses only tiles in flight; when all are done
+:func:`atlas.store.finalize` assembles the HDF5 file. Orbits never interact, so results do not
+depend on tile size, backend or thread count.
+
+A run continues the partial run at its output if that has the same identity
+(:func:`run_identity`: grid, physics, integrator, kernel check interval, atlas version, kernel
+class) and refuses one of another identity unless ``restart=True`` discards it.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 import os
 import shutil
@@ -23,12 +31,14 @@ import xarray as xr
 
 from . import store
 from .config import Config, config_hash
-from .errors import AtlasError, StorageError
+from .errors import AtlasError, InputFileError, StorageError
 from .labels import CHECK_EVERY, label, trap_margin
 from .lock import output_lock
 from .model import Pendulum, critical_points
+from .tiles import IdentityMismatch, PartialStoreError, TileStore, partial_path
 
-__all__ = ["run", "compute_tile", "layout_of", "critical_points_dataset"]
+__all__ = ["run", "compute_tile", "layout_of", "critical_points_dataset", "run_identity",
+           "identity_hash"]
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +58,25 @@ def layout_of(cfg: Config) -> store.Layout:
         omega0=np.array(cfg.pendulum.omega0s) if sweep else None,
         rows_per_tile=max(1, min(g.theta_dot0.num, cfg.execution.tile_orbits // g.theta0.num)),
     )
+
+
+def run_identity(cfg: Config, backend: str) -> dict:
+    """What determines a run's tiles, so a partial run may be continued only by an equal one:
+    the grid, the physics (every ``pendulum`` key), the integrator, the kernels' trap-check
+    interval, the atlas version, and the kernel class that computes the labels ('cuda' for the
+    GPU kernels; 'cpu' for the CPU kernels, which the Dask backend runs too). Not the
+    separatrix settings, the tiling, the output path or the name."""
+    from . import __version__
+
+    return {"grid": cfg.grid.model_dump(mode="json"),
+            "pendulum": cfg.pendulum.model_dump(mode="json"),
+            "integrator": cfg.integrator.model_dump(mode="json"),
+            "check_every": int(CHECK_EVERY), "atlas_version": __version__,
+            "kernels": "cuda" if backend == "cuda" else "cpu"}
+
+
+def identity_hash(identity: dict) -> str:
+    return hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def _pendulum(cfg: Config, params: tuple[int, ...]) -> Pendulum:
@@ -85,10 +114,11 @@ def _local_results(cfg, layout, todo, backend) -> Iterator[tuple[int, tuple]]:
         yield index, compute_tile(*_tile_args(cfg, layout, index), backend=backend)
 
 
-def _dask_results(cfg, layout, todo) -> Iterator[tuple[int, tuple]]:
+def _dask_results(cfg, layout, todo, key_prefix) -> Iterator[tuple[int, tuple]]:
     from .distributed import dask_results
 
-    yield from dask_results(cfg, todo, lambda i: _tile_args(cfg, layout, i), compute_tile)
+    yield from dask_results(cfg, todo, lambda i: _tile_args(cfg, layout, i), compute_tile,
+                            key_prefix)
 
 
 def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
@@ -159,7 +189,7 @@ def _versions() -> dict:
             "python_version": sys.version.split()[0]}
 
 
-def _attrs(cfg: Config) -> dict:
+def _attrs(cfg: Config, identity: dict) -> dict:
     attrs = {
         "title": f"atlas basin map: {cfg.name}",
         "Conventions": "CF-1.10",
@@ -169,6 +199,7 @@ def _attrs(cfg: Config) -> dict:
         "check_every": np.int64(CHECK_EVERY),
         "config": cfg.to_json(),
         "config_hash": config_hash(cfg),
+        "run_identity": identity_hash(identity),
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         **_versions(),
     }
@@ -217,17 +248,31 @@ def _progress(total: int, initial: int, quiet: bool):
                 disable=quiet or not sys.stderr.isatty(), desc="atlas", leave=False)
 
 
-def _open_partial(cfg: Config, layout: store.Layout, resume: bool):
-    """The partial file to write into, its layout, and the tiles still to do."""
-    partial = store.partial_path(cfg.output)
-    if resume and partial.exists():
-        f, layout, todo = store.open_partial(partial, config_hash(cfg))
-        log.info("resuming %s: %d of %d tiles to do", partial, todo.size, layout.n_tiles)
-        return f, layout, todo
-    if resume:
-        log.info("nothing to resume at %s: starting afresh", partial)
-    partial.unlink(missing_ok=True)
-    return store.create(partial, layout, _attrs(cfg)), layout, np.arange(layout.n_tiles)
+def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool) -> TileStore:
+    """The partial run to write into: the one at the output if it has this identity (said in
+    one line), a new one otherwise. One of another identity is refused, unless ``restart``."""
+    partial = partial_path(cfg.output)
+    TileStore.clear_leftovers(partial)
+    if restart and partial.exists():
+        log.warning("discarding the partial run %s (--restart)", partial)
+        if partial.is_dir():
+            shutil.rmtree(partial)
+        else:
+            partial.unlink()
+    if not partial.exists():
+        return TileStore.create(partial, layout, identity, _attrs(cfg, identity))
+    try:
+        tiles = TileStore.open(partial, identity)
+    except IdentityMismatch as exc:
+        raise InputFileError(f"{partial}: a partial run of a different config is in the way "
+                             f"({', '.join(exc.differs)} differ); run with --restart to discard "
+                             "it, or write elsewhere with -o") from None
+    except PartialStoreError as exc:
+        raise InputFileError(f"{partial}: cannot continue this partial run ({exc}); run with "
+                             "--restart to discard it") from None
+    log.warning("resuming %s: %d of %d tiles already done", partial, tiles.done().size,
+                tiles.layout.n_tiles)
+    return tiles
 
 
 def _orbits(layout: store.Layout, tiles) -> int:
@@ -235,26 +280,52 @@ def _orbits(layout: store.Layout, tiles) -> int:
         * layout.theta0.size
 
 
-def _compute_into(f, cfg: Config, layout: store.Layout, todo, backend: str, quiet: bool):
-    """Label the tiles ``todo`` and write each into ``f`` as it finishes."""
-    results = (_dask_results(cfg, layout, todo) if backend == "dask"
-               else _local_results(cfg, layout, todo, backend))
+def _compute_into(tiles: TileStore, cfg: Config, backend: str, quiet: bool) -> None:
+    """Label the tiles still to do and store each as it finishes."""
+    layout, todo = tiles.layout, tiles.todo()
+    results = (_dask_results(cfg, layout, todo, tiles.manifest["attrs"]["run_identity"])
+               if backend == "dask" else _local_results(cfg, layout, todo, backend))
     total = _orbits(layout, range(layout.n_tiles))
     with _progress(total, total - _orbits(layout, todo), quiet) as bar:
         for index, (attractor, status, t_trap) in results:
-            store.write_tile(f, layout, index, attractor, status, t_trap)
+            tiles.write(index, attractor, status, t_trap, store.FILLS)
             bar.update(status.size)
             log.debug("tile %d of %d written", index + 1, layout.n_tiles)
 
 
-def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
+def _groups(cfg: Config, layout: store.Layout) -> dict[str, xr.Dataset]:
+    groups = {"critical_points": critical_points_dataset(cfg, layout)}
+    separatrices = _separatrices_dataset(cfg, layout)
+    if separatrices is not None:
+        groups["separatrices"] = separatrices
+    return groups
+
+
+def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float) -> None:
+    """Compute what is missing, then assemble the file. A tile file found damaged is set
+    aside (renamed, not deleted) and computed again."""
+    for _ in range(3):
+        _compute_into(tiles, cfg, backend, quiet)
+        try:
+            store.finalize(tiles, cfg.output, _groups(cfg, tiles.layout), None,
+                           {"run_time_s": time.perf_counter() - start, "backend": backend})
+            return
+        except store.DamagedTile as exc:
+            log.warning("%s: %s is damaged; computing it again", tiles.path, exc)
+            tiles.set_aside(exc.index)
+    raise StorageError(f"{tiles.path}: tile files keep coming back damaged; check the disk")
+
+
+def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool = False,
         backend: str | None = None) -> xr.DataTree:
     """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
 
-    ``resume=True`` continues an interrupted run from ``<output>.partial`` (made from the
-    same config), computing only the tiles it is missing. ``backend`` overrides
-    ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O error)
-    raises :class:`StorageError`; the tiles finished before it stay resumable.
+    An interrupted run of the same identity at the output (``<output>.partial/``) is
+    continued: only its missing tiles are computed, with its own tiling. A partial run of
+    another identity raises :class:`InputFileError`, unless ``restart=True`` discards it
+    first. ``resume`` is accepted for compatibility (continuing is always on). ``backend``
+    overrides ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O
+    error) raises :class:`StorageError`; the tiles finished before it are kept.
     """
     backend = backend or cfg.execution.backend
     layout = layout_of(cfg)
@@ -264,39 +335,18 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
         require_cuda()
     _check_output_path(cfg, layout)
     _make_output_folder(cfg.output)
-    partial = store.partial_path(cfg.output)
+    partial = partial_path(cfg.output)
+    identity = run_identity(cfg, backend)
     start = time.perf_counter()
     with output_lock(cfg.output):
         try:
-            f, layout, todo = _open_partial(cfg, layout, resume)
-        except OSError as exc:
-            raise StorageError(f"{partial}: cannot create the partial file "
-                               f"({exc.strerror or exc})") from None
-        try:
-            _compute_into(f, cfg, layout, todo, backend, quiet)
-            groups = {"critical_points": critical_points_dataset(cfg, layout)}
-            separatrices = _separatrices_dataset(cfg, layout)
-            if separatrices is not None:
-                groups["separatrices"] = separatrices
-            store.finalize(f, partial, cfg.output, groups,
-                           {"run_time_s": time.perf_counter() - start, "backend": backend})
+            tiles = _open_tiles(cfg, layout, identity, restart)
+            _finish(tiles, cfg, backend, quiet, start)
         except OverflowError as exc:
-            _close_quietly(f)
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:
-            _close_quietly(f)
             raise StorageError(f"{partial}: writing failed ({exc.strerror or exc}); the "
                                "tiles finished before it are kept: free space or fix the "
-                               "disk, then run again with --resume") from None
-        except BaseException:
-            _close_quietly(f)
-            raise
+                               "disk, then run the same command again") from None
     log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
     return store.open_atlas(cfg.output)
-
-
-def _close_quietly(f) -> None:
-    try:
-        f.close()
-    except Exception:  # the file may be unwritable (disk full): its flushed tiles are safe
-        log.debug("closing the partial file failed", exc_info=True)
