@@ -21,6 +21,7 @@ parameter atlas); ``attractor`` int16 (``_FillValue`` where not trapped), ``stat
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from pathlib import Path
@@ -52,6 +53,23 @@ _SPECS = {
     "t_trap": (np.float32, np.float32(np.nan), {
         "long_name": "time at which the orbit was certified trapped", "units": "s"}),
 }
+
+
+@contextlib.contextmanager
+def _netcdf(path: Path, mode: str):
+    """``h5netcdf.File`` that, if anything fails inside (a full disk), is closed without the
+    final flush: h5netcdf would otherwise flush the broken file again when it is garbage
+    collected, and HDF5 can crash the process doing so."""
+    f = h5netcdf.File(path, mode)
+    try:
+        yield f
+    except BaseException:
+        h5 = f._h5file
+        f._closed = True
+        with contextlib.suppress(Exception):
+            h5.close()
+        raise
+    f.close()
 
 
 class DamagedTile(Exception):
@@ -149,7 +167,7 @@ def _write_summary(path: Path, layout: Layout, counts: list[dict], untrapped: np
                    attrs: dict) -> None:
     """Everything a finished file has beyond the basin map, in one place: basin fractions,
     further root variables, the groups, the attributes; ``complete`` last."""
-    with h5netcdf.File(path, "a") as f:
+    with _netcdf(path, "a") as f:
         _write_fractions(f, layout, counts, untrapped)
         if root_vars is not None:
             _write_root_vars(f, root_vars)
@@ -183,7 +201,7 @@ def finalize(tiles: TileStore, output: Path, groups: dict[str, xr.Dataset],
     layout = tiles.layout
     path = tiles.path / "assembly.h5"
     path.unlink(missing_ok=True)
-    with h5netcdf.File(path, "w") as f:
+    with _netcdf(path, "w") as f:
         _create_map(f, layout)
         f.attrs.update(tiles.manifest["attrs"])
         f.attrs["atlas_schema"] = SCHEMA

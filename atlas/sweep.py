@@ -19,6 +19,7 @@ import hashlib
 import json
 import logging
 import os
+import re
 import shutil
 import sys
 import time
@@ -345,8 +346,19 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
         except OverflowError as exc:
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:
-            raise StorageError(f"{partial}: writing failed ({exc.strerror or exc}); the "
+            raise StorageError(f"{partial}: writing failed ({_reason(exc)}); the "
                                "tiles finished before it are kept: free space or fix the "
                                "disk, then run the same command again") from None
     log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
     return store.open_atlas(cfg.output)
+
+
+def _reason(exc: OSError) -> str:
+    """The system's words for a failed write, on one line (HDF5's own messages are long)."""
+    if exc.errno:
+        return os.strerror(exc.errno)
+    text = str(exc)
+    found = re.search(r"errno = (\d+)", text)  # HDF5 quotes the system's errno
+    if found:
+        return os.strerror(int(found.group(1)))
+    return text.splitlines()[0] if text else exc.__class__.__name__

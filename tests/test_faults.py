@@ -84,6 +84,50 @@ def test_disk_full_mid_run_keeps_finished_tiles_resumable(tmp_path):
         np.testing.assert_array_equal(a, b)
 
 
+def _limit_file_size(n_bytes):
+    def limit():
+        import resource
+
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails: EFBIG
+        resource.setrlimit(resource.RLIMIT_FSIZE, (n_bytes, n_bytes))
+
+    return limit
+
+
+def test_a_real_write_failure_while_assembling_keeps_every_tile(tmp_path):
+    """A file-size limit that the small tile files fit under but the assembled file does
+    not: the kernel refuses the write (EFBIG), the run stops with one line and exit 1, every
+    tile is kept, and the next run without the limit gives the clean result."""
+    out = tmp_path / "big.h5"
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
+    proc = subprocess.run([sys.executable, "-m", "atlas.cli", "run", str(cfg), "--quiet"],
+                          capture_output=True, text=True, cwd=REPO,
+                          preexec_fn=_limit_file_size(20_000))
+    _one_line(proc, 1, "big.h5.partial", "File too large", "tiles finished before it are kept")
+    assert not out.exists() and describe(out.with_name("big.h5.partial"))["tiles_done"] == 160
+    assert run_cli("run", cfg, "--quiet").returncode == 0
+    assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
+    for a, b in zip(_labels(out), _labels(tmp_path / "ref.h5")):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_real_full_disk_mid_run(tmp_path):
+    """The output on a 64 KiB tmpfs (a private mount namespace): the disk fills up after some
+    tiles; exit 1 with one line; the tmpfs is enlarged and the next run finishes it, equal to
+    a clean run."""
+    from atlas.faults import _tmpfs_trial, _unshare_works
+
+    if not _unshare_works(tmp_path):
+        pytest.skip("unprivileged mount namespaces are not available here")
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=tmp_path / "x.h5"))
+    code, line, recovered = _tmpfs_trial(cfg, tmp_path, 64)
+    assert code == 1 and "No space left on device" in line and "kept" in line, line
+    assert len(line.splitlines()) == 1 and recovered
+    assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
+    for a, b in zip(_labels(tmp_path / "full-copy.h5"), _labels(tmp_path / "ref.h5")):
+        np.testing.assert_array_equal(a, b)
+
+
 @pytest.mark.parametrize("sig, code, word", [(signal.SIGINT, 130, "interrupted"),
                                              (signal.SIGTERM, 143, "terminated (SIGTERM)")])
 def test_ctrl_c_or_sigterm_stops_cleanly_and_keeps_finished_tiles(tmp_path, sig, code, word):
