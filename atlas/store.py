@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import zipfile
 from pathlib import Path
 
 import h5netcdf
@@ -110,7 +111,7 @@ def _copy_tiles(f: h5netcdf.File, tiles: TileStore) -> tuple[list[dict], np.ndar
     for index in range(layout.n_tiles):
         try:
             tile = tiles.read_tile(index)
-        except (OSError, ValueError, KeyError, EOFError) as exc:
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
             raise DamagedTile(index, exc.__class__.__name__) from None
         params, rows = layout.tile(index)
         offset = (*params, rows.start, 0)
