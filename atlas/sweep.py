@@ -249,6 +249,33 @@ def _progress(total: int, initial: int, quiet: bool):
                 disable=quiet or not sys.stderr.isatty(), desc="atlas", leave=False)
 
 
+def _refuse_another(partial: Path, identity: dict, opener=TileStore.open) -> TileStore:
+    """The partial run at ``partial`` if it has ``identity``, else one clear InputFileError
+    naming ``--restart``."""
+    try:
+        return opener(partial, identity)
+    except IdentityMismatch as exc:
+        raise InputFileError(f"{partial}: a partial run of a different config is in the way "
+                             f"({', '.join(exc.differs)} differ); run with --restart to discard "
+                             "it, or write elsewhere with -o") from None
+    except PartialStoreError as exc:
+        raise InputFileError(f"{partial}: cannot continue this partial run ({exc}); run with "
+                             "--restart to discard it") from None
+
+
+def _check_partial(partial: Path, identity: dict) -> None:
+    """Before anything is written (the lock included): refuse a partial run of another
+    identity. Reading is safe without the lock, the manifest being written atomically."""
+    def read_only(path, identity):
+        theirs = TileStore.read(path).manifest["identity"]
+        differs = sorted(k for k in {*identity, *theirs} if identity.get(k) != theirs.get(k))
+        if differs:
+            raise IdentityMismatch(differs)
+
+    if partial.exists():
+        _refuse_another(partial, identity, read_only)
+
+
 def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool) -> TileStore:
     """The partial run to write into: the one at the output if it has this identity (said in
     one line), a new one otherwise. One of another identity is refused, unless ``restart``."""
@@ -262,15 +289,7 @@ def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool
             partial.unlink()
     if not partial.exists():
         return TileStore.create(partial, layout, identity, _attrs(cfg, identity))
-    try:
-        tiles = TileStore.open(partial, identity)
-    except IdentityMismatch as exc:
-        raise InputFileError(f"{partial}: a partial run of a different config is in the way "
-                             f"({', '.join(exc.differs)} differ); run with --restart to discard "
-                             "it, or write elsewhere with -o") from None
-    except PartialStoreError as exc:
-        raise InputFileError(f"{partial}: cannot continue this partial run ({exc}); run with "
-                             "--restart to discard it") from None
+    tiles = _refuse_another(partial, identity)
     log.warning("resuming %s: %d of %d tiles already done", partial, tiles.done().size,
                 tiles.layout.n_tiles)
     return tiles
@@ -335,9 +354,11 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
 
         require_cuda()
     _check_output_path(cfg, layout)
-    _make_output_folder(cfg.output)
     partial = partial_path(cfg.output)
     identity = run_identity(cfg, backend)
+    if not restart:
+        _check_partial(partial, identity)
+    _make_output_folder(cfg.output)
     start = time.perf_counter()
     with output_lock(cfg.output):
         try:

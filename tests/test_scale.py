@@ -98,6 +98,7 @@ def test_a_partial_run_of_another_config_is_refused_until_restart(tmp_path, monk
         atlas.run(atlas.load_config(cfg), quiet=True)
     before = _snapshot(partial)
     assert len(before) == 3  # the manifest and two tiles
+    out.with_name("x.h5.lock").unlink()
     other = write_config(tmp_path / "other.yaml", MANY_TILES.format(t_max=60, output=out))
     for flags in ([], ["--resume"]):
         proc = run_cli("run", other, *flags)
@@ -106,6 +107,7 @@ def test_a_partial_run_of_another_config_is_refused_until_restart(tmp_path, monk
         assert "different config" in line and "integrator differ" in line
         assert "--restart" in line
         assert _snapshot(partial) == before and not out.exists()
+        assert not out.with_name("x.h5.lock").exists()  # refused before taking the lock
     # separatrix settings, tiling and the name do not make another identity
     same = write_config(tmp_path / "same.yaml", "name: renamed\n" + MANY_TILES.format(
         t_max=50, output=out).replace("enabled: false", "enabled: false, tol: 1e-10")
