@@ -81,20 +81,53 @@ class DamagedTile(Exception):
         self.index = index
 
 
-def _create_map(f: h5netcdf.File, layout: Layout) -> None:
-    """Coordinates and the empty, chunked basin-map variables (one chunk per tile)."""
+def coords_of(layout: Layout) -> dict[str, tuple]:
+    """The basin map's coordinates: name → (values, units, long_name)."""
     coords = {"theta_dot0": (layout.theta_dot0, "rad s-1", "initial angular velocity"),
               "theta0": (layout.theta0, "rad", "initial angle")}
     if layout.alpha is not None:
         coords = {"alpha": (layout.alpha, "s-1", "damping constant"),
                   "omega0": (layout.omega0, "rad s-1", "natural angular frequency"),
                   **coords}
+    return coords
+
+
+def chunks_of(layout: Layout) -> tuple[int, ...]:
+    """One chunk per tile."""
+    lead = (1, 1) if layout.alpha is not None else ()
+    return (*lead, layout.chunk_rows, layout.theta0.size)
+
+
+def fraction_vars(layout: Layout, counts: list[dict], untrapped: np.ndarray) -> xr.Dataset:
+    """``k``, ``basin_fraction``, ``basin_fraction_stderr`` and ``unresolved_fraction`` from
+    the tiles' counts (per parameter point: {k: trapped orbits}, orbits not trapped)."""
+    ks = sorted(set().union(*counts)) or [0]
+    n_orbits = layout.theta0.size * layout.theta_dot0.size
+    p = np.array([[c.get(k, 0) for k in ks] for c in counts], np.float64) / n_orbits
+    lead = () if layout.alpha is None else (layout.alpha.size, layout.omega0.size)
+    lead_dims = layout.dims[:-2]
+    return xr.Dataset({
+        "basin_fraction": ((*lead_dims, "k"), p.reshape(*lead, len(ks)),
+                           {"units": "1", "long_name": "fraction of the grid in the basin of k"}),
+        "basin_fraction_stderr": ((*lead_dims, "k"),
+                                  np.sqrt(p * (1 - p) / n_orbits).reshape(*lead, len(ks)),
+                                  {"units": "1", "long_name":
+                                   "standard error of basin_fraction, sqrt(p(1-p)/N)"}),
+        "unresolved_fraction": (lead_dims, (untrapped / n_orbits).reshape(lead),
+                                {"units": "1", "long_name": "fraction of the grid not "
+                                 "certified (unresolved or nonfinite)"}),
+    }, coords={"k": ("k", np.array(ks, np.int16),
+                     {"long_name": "attractor index: the rest state (2*pi*k, 0)", "units": "1"})})
+
+
+def _create_map(f: h5netcdf.File, layout: Layout) -> None:
+    """Coordinates and the empty, chunked basin-map variables (one chunk per tile)."""
+    coords = coords_of(layout)
     f.dimensions = {name: values[0].size for name, values in coords.items()}
     for name, (values, units, long_name) in coords.items():
         var = f.create_variable(name, (name,), np.float64, data=values)
         var.attrs.update(units=units, long_name=long_name)
-    lead = (1, 1) if layout.alpha is not None else ()
-    chunks = (*lead, layout.chunk_rows, layout.theta0.size)
+    chunks = chunks_of(layout)
     for name, (dtype, fill, var_attrs) in _SPECS.items():
         var = f.create_variable(name, layout.dims, dtype, fillvalue=fill, chunks=chunks,
                                 **_COMPRESSION)
@@ -124,31 +157,6 @@ def _copy_tiles(f: h5netcdf.File, tiles: TileStore) -> tuple[list[dict], np.ndar
     return counts, untrapped
 
 
-def _write_fractions(f: h5netcdf.File, layout: Layout, counts: list[dict],
-                     untrapped: np.ndarray) -> None:
-    ks = sorted(set().union(*counts)) or [0]
-    n_orbits = layout.theta0.size * layout.theta_dot0.size
-    table = np.array([[c.get(k, 0) for k in ks] for c in counts], np.float64)
-    p = table / n_orbits
-    lead = () if layout.alpha is None else (layout.alpha.size, layout.omega0.size)
-    lead_dims = layout.dims[:-2]
-    f.dimensions["k"] = len(ks)
-    f.create_variable("k", ("k",), np.int16, data=np.array(ks, np.int16)).attrs.update(
-        long_name="attractor index: the rest state (2*pi*k, 0)", units="1")
-    for name, values, attrs in [
-        ("basin_fraction", p, {"long_name": "fraction of the grid in the basin of k"}),
-        ("basin_fraction_stderr", np.sqrt(p * (1 - p) / n_orbits),
-         {"long_name": "standard error of basin_fraction, sqrt(p(1-p)/N)"}),
-    ]:
-        var = f.create_variable(name, (*lead_dims, "k"), np.float64,
-                                data=values.reshape(*lead, len(ks)))
-        var.attrs.update(units="1", **attrs)
-    var = f.create_variable("unresolved_fraction", lead_dims, np.float64,
-                            data=(untrapped / n_orbits).reshape(lead))
-    var.attrs.update(units="1", long_name="fraction of the grid not certified "
-                     "(unresolved or nonfinite)")
-
-
 def _write_root_vars(f: h5netcdf.File, ds: xr.Dataset) -> None:
     """Further root variables (on the file's dims, or new ones), with their attributes."""
     for name, size in ds.sizes.items():
@@ -169,7 +177,7 @@ def _write_summary(path: Path, layout: Layout, counts: list[dict], untrapped: np
     """Everything a finished file has beyond the basin map, in one place: basin fractions,
     further root variables, the groups, the attributes; ``complete`` last."""
     with _netcdf(path, "a") as f:
-        _write_fractions(f, layout, counts, untrapped)
+        _write_root_vars(f, fraction_vars(layout, counts, untrapped))
         if root_vars is not None:
             _write_root_vars(f, root_vars)
         f.attrs.update({key: value for key, value in attrs.items() if value is not None})
@@ -225,6 +233,10 @@ def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:
     if not _check_atlas_file(path).get("complete", 0):
         raise InputFileError(f"{path}: a partial atlas (an interrupted run); finish it by "
                              "running `atlas run CONFIG` again first")
+    if path.is_dir():
+        from . import zarrstore
+
+        return zarrstore.open_tree(path, chunks)
     return xr.open_datatree(path, engine="h5netcdf", mask_and_scale=False, chunks=chunks)
 
 
@@ -236,7 +248,14 @@ def _check_atlas_file(path: Path) -> dict:
         if (path / MANIFEST).exists():
             raise InputFileError(f"{path}: a partial atlas (an interrupted run); finish it by "
                                  "running `atlas run CONFIG` again first")
-        raise InputFileError(f"{path}: is a directory, not an atlas file")
+        if not (path / "zarr.json").exists():
+            raise InputFileError(f"{path}: is a directory, not an atlas file")
+        from . import zarrstore
+
+        attrs = zarrstore.attrs_of(path)
+        if attrs.get("atlas_schema") != SCHEMA:
+            raise InputFileError(f"{path}: a Zarr store, but not an atlas")
+        return attrs
     try:
         with h5netcdf.File(path, "r") as f:
             attrs = dict(f.attrs)

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import store
+from . import store, zarrstore
 from .config import Config, config_hash
 from .errors import AtlasError, InputFileError, StorageError
 from .labels import CHECK_EVERY, label, trap_margin
@@ -115,11 +115,36 @@ def _local_results(cfg, layout, todo, backend) -> Iterator[tuple[int, tuple]]:
         yield index, compute_tile(*_tile_args(cfg, layout, index), backend=backend)
 
 
-def _dask_results(cfg, layout, todo, key_prefix) -> Iterator[tuple[int, tuple]]:
+def compute_tile_into_zarr(path, layout, index, *args, numba_threads=None) -> tuple:
+    """Label tile ``index`` and write it by region into the Zarr store at ``path`` (on the
+    Dask worker itself); return its basin counts for the client's record."""
+    from . import zarrstore
+    from .tiles import tile_counts
+
+    attractor, status, t_trap = compute_tile(*args, numba_threads=numba_threads)
+    zarrstore.write_tile(path, layout, index, attractor, status, t_trap)
+    return tile_counts(attractor, status)
+
+
+def _dask_results(cfg, tiles: TileStore, todo) -> Iterator[tuple[int, tuple]]:
+    """(index, label arrays), or for a Zarr output (index, counts) of a tile the worker has
+    written itself."""
     from .distributed import dask_results
 
-    yield from dask_results(cfg, todo, lambda i: _tile_args(cfg, layout, i), compute_tile,
-                            key_prefix)
+    layout = tiles.layout
+    if tiles.format == "zarr":
+        from .zarrstore import DATA
+
+        def args_of(i):
+            return (tiles.path / DATA, layout, i, *_tile_args(cfg, layout, i))
+
+        task = compute_tile_into_zarr
+    else:
+        def args_of(i):
+            return _tile_args(cfg, layout, i)
+
+        task = compute_tile
+    yield from dask_results(cfg, todo, args_of, task, tiles.manifest["attrs"]["run_identity"])
 
 
 def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
@@ -213,7 +238,7 @@ def _attrs(cfg: Config, identity: dict) -> dict:
 def _check_output_path(cfg: Config, layout: store.Layout) -> None:
     """Refuse an output that cannot be written or would not fit, before anything is made."""
     out = cfg.output
-    if out.is_dir():
+    if out.is_dir() and not (zarrstore.is_zarr(out) and (out / "zarr.json").exists()):
         raise AtlasError(f"{out}: the output path is a directory")
     existing = next(p for p in (out.parent, *out.parent.parents) if p.exists())
     if not existing.is_dir():
@@ -288,7 +313,8 @@ def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool
         else:
             partial.unlink()
     if not partial.exists():
-        return TileStore.create(partial, layout, identity, _attrs(cfg, identity))
+        return TileStore.create(partial, layout, identity, _attrs(cfg, identity),
+                                "zarr" if zarrstore.is_zarr(cfg.output) else "hdf5")
     tiles = _refuse_another(partial, identity)
     log.warning("resuming %s: %d of %d tiles already done", partial, tiles.done().size,
                 tiles.layout.n_tiles)
@@ -303,13 +329,17 @@ def _orbits(layout: store.Layout, tiles) -> int:
 def _compute_into(tiles: TileStore, cfg: Config, backend: str, quiet: bool) -> None:
     """Label the tiles still to do and store each as it finishes."""
     layout, todo = tiles.layout, tiles.todo()
-    results = (_dask_results(cfg, layout, todo, tiles.manifest["attrs"]["run_identity"])
-               if backend == "dask" else _local_results(cfg, layout, todo, backend))
+    written_by_workers = backend == "dask" and tiles.format == "zarr"
+    results = (_dask_results(cfg, tiles, todo) if backend == "dask"
+               else _local_results(cfg, layout, todo, backend))
     total = _orbits(layout, range(layout.n_tiles))
     with _progress(total, total - _orbits(layout, todo), quiet) as bar:
-        for index, (attractor, status, t_trap) in results:
-            tiles.write(index, attractor, status, t_trap, store.FILLS)
-            bar.update(status.size)
+        for index, result in results:
+            if written_by_workers:
+                tiles.record(index, result)
+            else:
+                tiles.write(index, *result, store.FILLS)
+            bar.update(_orbits(layout, [index]))
             log.debug("tile %d of %d written", index + 1, layout.n_tiles)
 
 
@@ -326,9 +356,10 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     aside (renamed, not deleted) and computed again."""
     for _ in range(3):
         _compute_into(tiles, cfg, backend, quiet)
+        finalize = zarrstore.finalize if tiles.format == "zarr" else store.finalize
         try:
-            store.finalize(tiles, cfg.output, _groups(cfg, tiles.layout), None,
-                           {"run_time_s": time.perf_counter() - start, "backend": backend})
+            finalize(tiles, cfg.output, _groups(cfg, tiles.layout), None,
+                     {"run_time_s": time.perf_counter() - start, "backend": backend})
             return
         except store.DamagedTile as exc:
             log.warning("%s: %s is damaged; computing it again", tiles.path, exc)

@@ -12,12 +12,15 @@ place:
 * leftovers of a write that was cut short (``*.tmp``) are not tiles and are cleared when the
   run is reopened.
 
-A tile file holds the tile's three label arrays as the final HDF5 file stores them (a chunk
-of ``rows_per_tile`` rows, byte-shuffled then deflated, the edge chunk padded; see
-:func:`encode_chunk`), so :func:`atlas.store.finalize` assembles the output by copying
-compressed chunks without re-encoding, and the tile's basin counts (trapped orbits per well
-k, and the orbits not trapped), so basin fractions are summed from O(tiles) numbers. This
-module never touches HDF5; :mod:`atlas.store` does.
+For an HDF5 output a tile file holds the tile's three label arrays as the final file stores
+them (a chunk of ``rows_per_tile`` rows, byte-shuffled then deflated, the edge chunk padded;
+see :func:`encode_chunk`), so :func:`atlas.store.finalize` assembles the output by copying
+compressed chunks without re-encoding. For a Zarr output (``NAME.zarr``) the arrays go by
+region into the Zarr store ``atlas.zarr`` inside the partial folder (:mod:`atlas.zarrstore`),
+before the tile file is written, and the tile file holds only the record. Either way the tile
+file holds the tile's basin counts (trapped orbits per well k, and the orbits not trapped), so
+basin fractions are summed from O(tiles) numbers. This module never touches HDF5;
+:mod:`atlas.store` does.
 """
 
 from __future__ import annotations
@@ -31,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Layout", "TileStore", "Tile", "partial_path", "encode_chunk", "DEFLATE_LEVEL",
-           "MANIFEST", "PartialStoreError", "IdentityMismatch"]
+__all__ = ["Layout", "TileStore", "Tile", "partial_path", "encode_chunk", "tile_counts",
+           "DEFLATE_LEVEL", "MANIFEST", "PartialStoreError", "IdentityMismatch"]
 
 MANIFEST = "manifest.json"
 SCHEMA = "atlas-partial/2"
@@ -141,6 +144,12 @@ class Tile:
     untrapped: int          # orbits unresolved or nonfinite
 
 
+def tile_counts(attractor: np.ndarray, status: np.ndarray) -> tuple:
+    """(wells k, trapped orbits per k, orbits not trapped) of one tile."""
+    ks, counts = np.unique(attractor[status == 0], return_counts=True)
+    return ks, counts, int(np.count_nonzero(status != 0))
+
+
 def _fsync_dir(path: Path) -> None:
     fd = os.open(path, os.O_RDONLY)
     try:
@@ -179,14 +188,20 @@ class TileStore:
     # ---------------------------------------------------------------- creating, opening
 
     @classmethod
-    def create(cls, path: Path, layout: Layout, identity: dict, attrs: dict) -> TileStore:
-        """A new, empty partial run at ``path`` (which must not exist)."""
+    def create(cls, path: Path, layout: Layout, identity: dict, attrs: dict,
+               output_format: str = "hdf5") -> TileStore:
+        """A new, empty partial run at ``path`` (which must not exist), for an output of
+        ``output_format`` 'hdf5' or 'zarr'."""
         manifest = {"schema": SCHEMA, "identity": identity, "layout": layout.to_json(),
-                    "attrs": _jsonable(attrs)}
+                    "format": output_format, "attrs": _jsonable(attrs)}
         new = path.with_name(f"{path.name}.{os.getpid()}.new")
         shutil.rmtree(new, ignore_errors=True)
         try:
             (new / "tiles").mkdir(parents=True)
+            if output_format == "zarr":
+                from . import zarrstore
+
+                zarrstore.create(new / zarrstore.DATA, layout)
             _write_durably(new / MANIFEST,
                            lambda fh: fh.write(json.dumps(manifest, indent=1).encode()))
             _fsync_dir(new / "tiles")
@@ -246,21 +261,37 @@ class TileStore:
     def todo(self) -> np.ndarray:
         return np.setdiff1d(np.arange(self.layout.n_tiles), self.done())
 
+    @property
+    def format(self) -> str:
+        return self.manifest["format"]
+
     def write(self, index: int, attractor, status, t_trap, fills: dict) -> None:
         """Store tile ``index`` (arrays shaped (rows, n_theta0)) durably and atomically."""
-        rows = self.layout.chunk_rows
-        chunks = {name: encode_chunk(values, rows, fills[name])
-                  for name, values in zip(VARIABLES, (attractor, status, t_trap))}
-        ks, counts = np.unique(attractor[status == 0], return_counts=True)
-        arrays = {name: np.frombuffer(data, np.uint8) for name, data in chunks.items()}
-        arrays.update(ks=ks.astype(np.int64), counts=counts.astype(np.int64),
-                      untrapped=np.int64(np.count_nonzero(status != 0)))
+        if self.format == "zarr":
+            from . import zarrstore
+
+            zarrstore.write_tile(self.path / zarrstore.DATA, self.layout, index,
+                                 attractor, status, t_trap)
+            chunks = {}
+        else:
+            rows = self.layout.chunk_rows
+            chunks = {name: encode_chunk(values, rows, fills[name])
+                      for name, values in zip(VARIABLES, (attractor, status, t_trap))}
+        self.record(index, tile_counts(attractor, status), chunks)
+
+    def record(self, index: int, counts: tuple, chunks: dict | None = None) -> None:
+        """Record tile ``index`` done, with its basin ``counts`` (:func:`tile_counts`) and,
+        for an HDF5 output, its encoded chunks: the tile file appears whole, or not at all."""
+        ks, n, untrapped = counts
+        arrays = {name: np.frombuffer(data, np.uint8) for name, data in (chunks or {}).items()}
+        arrays.update(ks=np.asarray(ks, np.int64), counts=np.asarray(n, np.int64),
+                      untrapped=np.int64(untrapped))
         _write_durably(self._tile_path(index), lambda fh: np.savez(fh, **arrays))
 
     def read_tile(self, index: int) -> Tile:
-        """A finished tile; OSError/ValueError if its file is damaged."""
+        """A finished tile; OSError/ValueError/BadZipFile if its file is damaged."""
         with np.load(self._tile_path(index)) as z:
-            return Tile(chunks={name: z[name].tobytes() for name in VARIABLES},
+            return Tile(chunks={name: z[name].tobytes() for name in VARIABLES if name in z},
                         ks=z["ks"], counts=z["counts"], untrapped=int(z["untrapped"]))
 
     def set_aside(self, index: int) -> None:
