@@ -357,9 +357,13 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     for _ in range(3):
         _compute_into(tiles, cfg, backend, quiet)
         finalize = zarrstore.finalize if tiles.format == "zarr" else store.finalize
+        groups = _groups(cfg, tiles.layout)
+        assembly = time.perf_counter()
         try:
-            finalize(tiles, cfg.output, _groups(cfg, tiles.layout), None,
+            finalize(tiles, cfg.output, groups, None,
                      {"run_time_s": time.perf_counter() - start, "backend": backend})
+            log.info("assembled %s from %d tiles in %.2f s", cfg.output, tiles.layout.n_tiles,
+                     time.perf_counter() - assembly)
             return
         except store.DamagedTile as exc:
             log.warning("%s: %s is damaged; computing it again", tiles.path, exc)

@@ -101,6 +101,8 @@ def finalize(tiles, output: Path, groups: dict[str, xr.Dataset],
 
     layout = tiles.layout
     path = tiles.path / DATA
+    for leftover in path.rglob("*.partial"):  # a chunk write cut short (zarr's temp name)
+        leftover.unlink()
     counts = [dict() for _ in range(layout.n_params)]
     untrapped = np.zeros(layout.n_params, np.int64)
     for index in range(layout.n_tiles):
