@@ -163,8 +163,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"atlas: error: {exc}", file=sys.stderr)
         return getattr(exc, "exit_code", EXIT_BAD_INPUT)
     except KeyboardInterrupt as exc:
-        print("atlas: terminated" if isinstance(exc, Terminated) else "atlas: interrupted",
-              file=sys.stderr)
+        print("atlas: terminated (SIGTERM)" if isinstance(exc, Terminated)
+              else "atlas: interrupted", file=sys.stderr)
         return _interrupted(exc)
     except BrokenPipeError:  # `atlas info x.h5 | head`: the reader left, nothing is wrong
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
