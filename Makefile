@@ -9,7 +9,7 @@ CONFIG ?= configs/default.yaml
 output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
 
 .DEFAULT_GOAL := help
-.PHONY: help run test atlas figures bench lint clean venv
+.PHONY: help run test atlas figures bench faults lint clean venv
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -e 's/:.*## /\t/' | expand -t 10
@@ -42,6 +42,9 @@ figures: $(STAMP) ## the essay's Figures 1-12 → outputs/figures/
 
 bench: $(STAMP) ## benchmark table → outputs/bench.json
 	$(BIN)/atlas bench
+
+faults: $(STAMP) ## soak: kill -9, SIGTERM, disk full, lock races, Dask faults; prints one table
+	$(BIN)/python -m atlas.faults
 
 lint: $(STAMP) ## ruff
 	$(BIN)/ruff check atlas tests

@@ -38,7 +38,6 @@ the cell size; ``basin_fraction_grid_error`` is the measured |f_k − F_k|.
 from __future__ import annotations
 
 import math
-from collections import defaultdict
 
 import numpy as np
 
@@ -46,7 +45,7 @@ from .kernels import NEAR_BOUNDARY, TRAPPED
 from .manifold import RTOL_CHECK, StableManifold, basin_areas
 from .model import Pendulum
 
-__all__ = ["SAFETY", "cert_distance", "Certifier", "labelled"]
+__all__ = ["SAFETY", "cert_distance", "Certifier", "labelled", "add_tallies"]
 
 #: Safety factor of d_cert over the measured RK4-vs-exact boundary shift (module docstring).
 SAFETY = 10.0
@@ -72,14 +71,19 @@ class Certifier:
     basin map, tile by tile: grid axes ``theta0`` [rad] (columns) and ``theta_dot0``
     [rad s⁻¹] (rows), the window being their ranges; ``shift`` [rad-ish], the measured
     distance of the RK4 map's boundaries from the exact ones, located to ``tol`` (NaN when
-    not measured: then no label is certified for the exact equation)."""
+    not measured: then no label is certified for the exact equation).
+
+    A certifier is sent to where tiles are computed (a Dask worker): it pickles without its
+    boundary indices, which are rebuilt on first use."""
 
     def __init__(self, pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float):
         self.pendulum = pendulum
         self.theta0, self.theta_dot0 = np.asarray(theta0, float), np.asarray(theta_dot0, float)
         self.window = ((self.theta0[0], self.theta0[-1]), (self.theta_dot0[0],
                                                            self.theta_dot0[-1]))
+        self._indices: dict[float, object] = {}
         self.areas = basin_areas(pendulum, *self.window)
+        self.shift = float(shift)
         self.reference_error = self._reference_error()
         self.d_cert = cert_distance(shift, tol, self.reference_error)
         d_theta = np.diff(self.window[0])[0] / (self.theta0.size - 1)
@@ -90,16 +94,15 @@ class Certifier:
         # cell areas a/A: interior cells dθ·dθ̇, half of that on an edge, a quarter at corners
         self._col_weight = _edge_weights(self.theta0.size) * d_theta
         self._row_weight = _edge_weights(self.theta_dot0.size) * d_speed / area
-        self._indices: dict[float, object] = {}
-        self.counts = defaultdict(int)
-        self.bound = defaultdict(float)
-        self.certified = self.mismatched = 0
+
+    def __getstate__(self):
+        return {**self.__dict__, "_indices": {}}
 
     def _reference_error(self) -> float:
         """Largest distance between the reference manifolds at rtol 1e-12 and 1e-13 over the
         window's θ̇ band: the DOP853 reference's own error, overestimated about tenfold."""
         speed = max(abs(v) for v in self.window[1])
-        fine = StableManifold(self.pendulum, speed)
+        fine = self._index(_FIRST_MARGIN).manifold
         coarse = StableManifold(self.pendulum, speed, RTOL_CHECK)
         box = ((coarse.theta.min() - 1.0, math.pi + 1.0), (-speed, speed))
         inside = coarse.theta_dot <= speed  # both integrations end just beyond it
@@ -148,33 +151,44 @@ class Certifier:
 
     def tile(self, rows: slice, attractor, status):
         """Certify the grid rows ``rows`` (arrays shaped (rows, columns)) with
-        :meth:`certify` and add them to the tallies; returns (status, boundary distance
-        as float32)."""
+        :meth:`certify`; returns (status, boundary distance as float32, the tile's tally:
+        basin counts and grid-error bounds over the wells k0, k0 + 1, …, and the certified,
+        mismatched and unlabelled counts; tallies of tiles add up, :func:`add_tallies`)."""
         theta, theta_dot = self.theta0[None, :], self.theta_dot0[rows][:, None]
         new_status, dist, side, n_near = self.certify(theta, theta_dot, attractor, status)
         has_label = labelled(status)
         k = attractor.astype(np.int64)
         agree = has_label & (k == side)
-        self.certified += int(np.count_nonzero(new_status == TRAPPED))
-        self.mismatched += int(np.count_nonzero(has_label & ~agree & (dist > self.d_cert)))
-        theta, theta_dot = np.broadcast_arrays(theta, theta_dot)
-        self._tally(rows, k, has_label, side, agree & (dist > self.half_diagonal),
-                    theta, theta_dot, n_near)
-        return new_status, dist.astype(np.float32)
-
-    def _tally(self, rows, k, has_label, side, clean, theta, speed, n_near):
+        clean = agree & (dist > self.half_diagonal)
+        # the wells this tile can touch: its labels, its sides and their neighbours
+        k_lo, k_hi, worst = self._doubt(rows, k, has_label, side, clean,
+                                        *np.broadcast_arrays(theta, theta_dot), n_near)
+        ks = np.concatenate([k[has_label], side.ravel(), k_lo, k_hi])
+        k0 = int(ks.min())
+        size = int(ks.max()) - k0 + 1
+        count = np.bincount(k[has_label] - k0, minlength=size)
         weight = self._row_weight[rows][:, None] * self._col_weight[None, :]  # a/A
-        per_point = 1.0 / self.n_points
-        for value, count in zip(*np.unique(k[has_label], return_counts=True)):
-            self.counts[int(value)] += int(count)
-        # clean cells: wholly in their basin, off only by their weight
-        gap = np.abs(per_point - weight)
-        for value in np.unique(k[clean]):
-            self.bound[int(value)] += float(gap[clean & (k == value)].sum())
-        # the other cells: at most max(1/N, a/A) in every basin they may meet
+        gap = np.abs(1.0 / self.n_points - weight)
+        # clean cells are wholly in their basin, off only by their weight; every other cell
+        # counts at most max(1/N, a/A) in each basin it may meet
+        bound = np.bincount(k[clean] - k0, weights=gap[clean], minlength=size).astype(float)
+        change = np.bincount(k_lo - k0, weights=worst, minlength=size + 1) \
+            - np.bincount(k_hi + 1 - k0, weights=worst, minlength=size + 1)
+        bound += np.cumsum(change)[:size]
+        tally = {"k0": np.int64(k0), "count": count, "bound": bound,
+                 "certified": np.int64(np.count_nonzero(new_status == TRAPPED)),
+                 "mismatched": np.int64(np.count_nonzero(has_label & ~agree
+                                                         & (dist > self.d_cert))),
+                 "unlabelled": np.int64(np.count_nonzero(~has_label))}
+        return new_status, dist.astype(np.float32), tally
+
+    def _doubt(self, rows, k, has_label, side, clean, theta, theta_dot, n_near):
+        """For the cells that are not clean: the range of wells [k_lo, k_hi] each may meet
+        (its label, its exact side, and both sides of every boundary within its
+        half-diagonal) and its weight max(1/N, a/A)."""
         doubt = ~clean
         lo_n, hi_n = self._index(_FIRST_MARGIN).saddles_within(
-            theta[doubt], speed[doubt], self.half_diagonal)
+            theta[doubt], theta_dot[doubt], self.half_diagonal)
         near = n_near[doubt]
         lo_n = np.where(lo_n == 0, near, np.minimum(lo_n, near))
         hi_n = np.where(hi_n == 0, near, np.maximum(hi_n, near))
@@ -183,26 +197,49 @@ class Certifier:
         own = has_label[doubt]
         k_lo = np.where(own, np.minimum(k_lo, k[doubt]), k_lo)
         k_hi = np.where(own, np.maximum(k_hi, k[doubt]), k_hi)
-        worst = np.maximum(per_point, weight[doubt])
-        for value in range(int(k_lo.min(initial=0)), int(k_hi.max(initial=-1)) + 1):
-            self.bound[value] += float(worst[(k_lo <= value) & (value <= k_hi)].sum())
+        weight = self._row_weight[rows][:, None] * self._col_weight[None, :]
+        return k_lo, k_hi, np.maximum(1.0 / self.n_points, weight[doubt])
 
-    def fractions(self) -> dict[str, np.ndarray]:
-        """Per basin k (every k the window meets or a label names): exact fraction and its
-        error, grid fraction, its error bound and its measured error."""
-        ks = sorted(set(self.areas.k.tolist()) | set(self.counts))
-        exact = dict(zip(self.areas.k.tolist(), self.areas.fraction))
-        error = dict(zip(self.areas.k.tolist(), self.areas.error))
-        grid = np.array([self.counts.get(k, 0) for k in ks]) / self.n_points
-        exact_values = np.array([exact.get(k, 0.0) for k in ks])
-        return {
-            "k": np.array(ks),
-            "basin_fraction_exact": exact_values,
-            "basin_fraction_exact_error": np.array([error.get(k, 0.0) for k in ks]),
-            "basin_fraction": grid,
-            "basin_fraction_grid_error_bound": np.array([self.bound.get(k, 0.0) for k in ks]),
-            "basin_fraction_grid_error": np.abs(grid - exact_values),
-        }
+    def summary(self, tally: dict) -> dict[str, np.ndarray]:
+        """The parameter point's summary from the sum of its tiles' tallies: per basin k
+        (every k the window meets or a label names) the exact fraction and its error, the grid
+        fraction, its error bound and its measured error; and the point's certificate
+        figures (the variables of :data:`atlas.store.BASIN_VARIABLES` and
+        :data:`atlas.store.POINT_VARIABLES` but ``trap_margin``)."""
+        k0 = int(tally["k0"])
+        grid_k = np.arange(k0, k0 + tally["count"].size)
+        ks = np.union1d(self.areas.k, grid_k)
+        exact = np.zeros(ks.size)
+        error = np.zeros(ks.size)
+        exact[np.searchsorted(ks, self.areas.k)] = self.areas.fraction
+        error[np.searchsorted(ks, self.areas.k)] = self.areas.error
+        grid = np.zeros(ks.size)
+        bound = np.zeros(ks.size)
+        grid[np.searchsorted(ks, grid_k)] = tally["count"] / self.n_points
+        bound[np.searchsorted(ks, grid_k)] = tally["bound"]
+        n = self.n_points
+        return {"k": ks, "basin_fraction_exact": exact, "basin_fraction_exact_error": error,
+                "basin_fraction": grid, "basin_fraction_grid_error_bound": bound,
+                "basin_fraction_grid_error": np.abs(grid - exact),
+                "unresolved_fraction": int(tally["unlabelled"]) / n,
+                "certified_fraction": int(tally["certified"]) / n, "d_cert": self.d_cert,
+                "boundary_shift": self.shift, "boundary_reference_error": self.reference_error,
+                "side_mismatches": int(tally["mismatched"])}
+
+
+def add_tallies(tallies) -> dict:
+    """The sum of tile tallies (:meth:`Certifier.tile`), aligned on their wells k."""
+    tallies = list(tallies)
+    k0 = min(int(t["k0"]) for t in tallies)
+    size = max(int(t["k0"]) + t["count"].size for t in tallies) - k0
+    total = {"k0": np.int64(k0), "count": np.zeros(size, np.int64), "bound": np.zeros(size)}
+    for t in tallies:
+        at = slice(int(t["k0"]) - k0, int(t["k0"]) - k0 + t["count"].size)
+        total["count"][at] += t["count"]
+        total["bound"][at] += t["bound"]
+    for name in ("certified", "mismatched", "unlabelled"):
+        total[name] = np.int64(sum(int(t[name]) for t in tallies))
+    return total
 
 
 def _edge_weights(num: int) -> np.ndarray:

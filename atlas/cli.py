@@ -1,6 +1,9 @@
 """The ``atlas`` command line: a thin layer over the Python API.
 
 Bad input of any kind ends with one line ``atlas: error: …`` on stderr and exit status 2.
+Exit statuses: 0 done; 1 a fault during a run (disk full, write error), finished tiles kept;
+2 bad input; 3 the output is locked by another run; 130 interrupted by Ctrl-C (SIGINT) and
+143 by SIGTERM, finished tiles kept.
 """
 
 from __future__ import annotations
@@ -8,13 +11,23 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import signal
 import sys
 from pathlib import Path
 
-from .errors import AtlasError
+from .errors import AtlasError, Terminated
 
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+def _interrupted(exc: KeyboardInterrupt) -> int:
+    return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
 
 
 class _Parser(argparse.ArgumentParser):
@@ -31,13 +44,14 @@ def _cmd_run(args) -> int:
 
     cfg = load_config(args.config, output=args.output)
     try:
-        tree = sweep.run(cfg, resume=args.resume, quiet=args.quiet, backend=args.backend)
-    except KeyboardInterrupt:
-        from .store import partial_path
+        tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend)
+    except KeyboardInterrupt as exc:
+        from .tiles import partial_path
 
-        print(f"atlas: interrupted; finished tiles are kept in {partial_path(cfg.output)}; "
-              "continue with --resume", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        print(f"atlas: {what}; finished tiles are kept in {partial_path(cfg.output)}; "
+              "run the same command again to continue", file=sys.stderr)
+        return _interrupted(exc)
     if not args.quiet:
         from .info import summary_lines
 
@@ -161,7 +175,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", help="YAML config, e.g. configs/default.yaml")
     p.add_argument("-o", "--output", help="output file (overrides the config's output key)")
     p.add_argument("--resume", action="store_true",
-                   help="continue an interrupted run of the same config")
+                   help="continue an interrupted run of the same config (the default; "
+                   "kept for old scripts)")
+    p.add_argument("--restart", action="store_true",
+                   help="discard an interrupted run at the output (its finished tiles) and "
+                   "start over")
     p.add_argument("--backend", choices=["cpu", "cuda", "dask"],
                    help="override execution.backend")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
@@ -190,17 +208,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:  # SIGTERM stops a run like Ctrl-C
+        signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         args = build_parser().parse_args(argv)
         level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
         logging.basicConfig(level=level, format="atlas: %(message)s")
+        logging.getLogger("filelock").setLevel(logging.WARNING)
         return args.func(args)
     except AtlasError as exc:
         print(f"atlas: error: {exc}", file=sys.stderr)
         return getattr(exc, "exit_code", EXIT_BAD_INPUT)
-    except KeyboardInterrupt:
-        print("atlas: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:
+        print("atlas: terminated (SIGTERM)" if isinstance(exc, Terminated)
+              else "atlas: interrupted", file=sys.stderr)
+        return _interrupted(exc)
     except BrokenPipeError:  # `atlas info x.h5 | head`: the reader left, nothing is wrong
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0

@@ -275,7 +275,9 @@ class Config(_Strict):
 
 
 def config_hash(cfg: Config) -> str:
-    """Digest of everything that determines the arrays (not the output path or backend)."""
+    """Digest of the config apart from its name, output and execution settings, recorded in the
+    file as provenance. (Whether a partial run may be continued is decided by the stricter
+    :func:`atlas.sweep.run_identity`.)"""
     data = cfg.model_dump(mode="json", exclude={"output", "execution", "name"})
     return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 

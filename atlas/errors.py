@@ -1,7 +1,8 @@
 """atlas's exceptions: each carries one line that names the culprit (a key, a file, a backend).
 
 The CLI prints ``atlas: error: <message>`` for any :class:`AtlasError` and exits with status 2
-(bad input) or the error's ``exit_code`` (1 for a fault during a run).
+(bad input) or the error's ``exit_code`` (1 for a fault during a run, 3 for an output locked
+by another run).
 """
 
 
@@ -33,3 +34,7 @@ class SeparatrixError(AtlasError, RuntimeError):
     one line naming the point or branch and what to change."""
 
     exit_code = 1
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, turned into an exception so that it stops a run like Ctrl-C does."""

@@ -87,7 +87,8 @@ def info_lines(path: str | Path) -> list[str]:
     d = store.describe(path)
     attrs = d["attrs"]
     state = ("complete" if d["complete"] else
-             f"partial: {d['tiles_done']} of {d['tiles']} tiles done (continue with --resume)")
+             f"partial: {d['tiles_done']} of {d['tiles']} tiles done (run the same config "
+             "again to continue)")
     lines = [f"{path}: atlas file, {state}"]
     if d["complete"]:
         lines += ["  " + line for line in summary_lines(store.open_atlas(path))]

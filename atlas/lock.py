@@ -1,72 +1,73 @@
-"""One writer per output: an exclusive lock file ``<output>.lock`` holding the writer's PID.
+"""One writer per output: an exclusive ``flock`` on ``<output>.lock`` (the ``filelock`` package).
 
-A lock whose process is gone (killed, crashed, machine rebooted) is stale and is taken over,
-so a dead run never blocks the next one.
+The kernel releases the lock when its process ends, however it ends (exit, crash, ``kill -9``,
+a rebooted machine), so a lock is never stale and there is nothing to take over: no PID
+checks, no race between two runs clearing a dead run's lock. The lock file stays in place
+(removing it would let two runs lock two different files); the holder's host and PID are
+written next to it (``<output>.lock.owner``) for the message a second run gets.
+
+On a shared cluster file system the lock is as good as the file system's ``flock`` (NFSv4,
+Lustre and GPFS forward it to the server; on a file system without ``flock`` filelock falls
+back to its own soft lock).
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
+import socket
 from pathlib import Path
+
+from filelock import FileLock, Timeout
 
 from .errors import AtlasError
 
-__all__ = ["output_lock", "OutputLocked"]
+__all__ = ["output_lock", "OutputLocked", "EXIT_LOCKED"]
+
+#: Exit status of a run refused because another run holds the output's lock.
+EXIT_LOCKED = 3
 
 
 class OutputLocked(AtlasError):
-    """Another live atlas process is writing the same output."""
+    """Another atlas run is writing the same output (an environment failure: exit 3)."""
+
+    exit_code = EXIT_LOCKED
 
 
-def _alive(pid: int) -> bool:
+def _owner(sidecar: Path) -> str:
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # exists, owned by someone else
-        return True
-    return True
+        who = json.loads(sidecar.read_text())
+        return f"host {who['host']}, pid {who['pid']}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return "host ?, pid ?"
 
 
-def _holder(lock: Path) -> int | None:
+def _write_owner(sidecar: Path) -> None:
+    """Record who holds the lock; only informative, so a failure (disk full) is ignored."""
+    tmp = sidecar.with_name(f".{sidecar.name}.{os.getpid()}.tmp")
     try:
-        return int(lock.read_text().strip() or "0") or None
-    except (OSError, ValueError):
-        return None
-
-
-def _try_lock(lock: Path) -> bool:
-    """Atomically create ``lock`` already holding our PID: write a private file, then
-    hard-link it into place (link fails if the lock exists), so no other process ever sees
-    a lock without its PID."""
-    tmp = lock.with_name(f"{lock.name}.{os.getpid()}.tmp")
-    tmp.write_text(str(os.getpid()))
-    try:
-        os.link(tmp, lock)
-        return True
-    except FileExistsError:
-        return False
-    finally:
+        tmp.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid()}))
+        os.replace(tmp, sidecar)
+    except OSError:
         tmp.unlink(missing_ok=True)
 
 
 @contextlib.contextmanager
 def output_lock(output: Path):
-    """Hold ``<output>.lock`` for the duration of the block; refuse if a live run holds it."""
-    lock = output.with_name(output.name + ".lock")
-    for _ in range(2):
-        if _try_lock(lock):
-            break
-        pid = _holder(lock)
-        if pid is not None and _alive(pid):
-            raise OutputLocked(f"{output}: another atlas run (pid {pid}) is writing this "
-                               f"output; wait for it or remove {lock} if it is stale")
-        lock.unlink(missing_ok=True)  # stale: its writer is gone (or the file is unreadable)
-    else:
-        raise OutputLocked(f"{output}: could not take the lock {lock}")
+    """Hold ``<output>.lock`` for the duration of the block; refuse at once if another run
+    holds it."""
+    path = output.with_name(output.name + ".lock")
+    sidecar = output.with_name(output.name + ".lock.owner")
+    lock = FileLock(path, timeout=0)
     try:
+        lock.acquire()
+    except Timeout:
+        raise OutputLocked(f"{output}: another atlas run ({_owner(sidecar)}) is writing this "
+                           "output; wait for it to finish") from None
+    try:
+        _write_owner(sidecar)
         yield
     finally:
-        if _holder(lock) == os.getpid():
-            lock.unlink(missing_ok=True)
+        sidecar.unlink(missing_ok=True)
+        lock.release()

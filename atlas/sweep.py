@@ -3,14 +3,23 @@
 The grid (θ̇0 rows × θ0 columns, for every α, ω0 of a parameter atlas) is cut into tiles of
 whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled independently
 (:func:`compute_tile`, which any backend can run) and each finished tile is written at once
-(:mod:`atlas.store`), so memory is bounded by a tile and a crash loses only tiles in flight.
-Orbits never interact, so results do not depend on tile size, backend or thread count.
+(:mod:`atlas.tiles`, one atomically written file per tile in ``<output>.partial/``), so memory
+is bounded by a tile and a crash loses only tiles in flight; when all are done
+:func:`atlas.store.finalize` assembles the HDF5 file. Orbits never interact, so results do not
+depend on tile size, backend or thread count.
+
+A run continues the partial run at its output if that has the same identity
+(:func:`run_identity`: grid, physics, integrator, kernel check interval, atlas version, kernel
+class) and refuses one of another identity unless ``restart=True`` discards it.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 import os
+import re
 import shutil
 import sys
 import time
@@ -21,15 +30,17 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import store
-from .certificate import labelled
+from . import store, zarrstore
+from .certificate import Certifier, add_tallies
 from .config import Config, config_hash
-from .errors import AtlasError, StorageError
+from .errors import AtlasError, InputFileError, StorageError
 from .labels import CHECK_EVERY, label, trap_margin
 from .lock import output_lock
 from .model import Pendulum, critical_points
+from .tiles import IdentityMismatch, PartialStoreError, TileStore, partial_path
 
-__all__ = ["run", "compute_tile", "layout_of", "critical_points_dataset"]
+__all__ = ["run", "compute_tile", "layout_of", "critical_points_dataset", "run_identity",
+           "identity_hash"]
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +62,28 @@ def layout_of(cfg: Config) -> store.Layout:
     )
 
 
+def run_identity(cfg: Config, backend: str) -> dict:
+    """What determines a run's tiles, so a partial run may be continued only by an equal one:
+    the grid, the physics (every ``pendulum`` key), the integrator, the kernels' trap-check
+    interval, the atlas version, the kernel class that computes the labels ('cuda' for the
+    GPU kernels; 'cpu' for the CPU kernels, which the Dask backend runs too), and the
+    separatrix settings when they are enabled (they measure d_cert, which decides each tile's
+    certified statuses). Not the tiling, the output path or the name."""
+    from . import __version__
+
+    return {"grid": cfg.grid.model_dump(mode="json"),
+            "pendulum": cfg.pendulum.model_dump(mode="json"),
+            "integrator": cfg.integrator.model_dump(mode="json"),
+            "separatrices": (cfg.separatrices.model_dump(mode="json")
+                             if cfg.separatrices.enabled else {"enabled": False}),
+            "check_every": int(CHECK_EVERY), "atlas_version": __version__,
+            "kernels": "cuda" if backend == "cuda" else "cpu"}
+
+
+def identity_hash(identity: dict) -> str:
+    return hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()[:16]
+
+
 def _pendulum(cfg: Config, params: tuple[int, ...]) -> Pendulum:
     if not params:
         return Pendulum(cfg.pendulum.alphas[0], cfg.pendulum.omega0s[0])
@@ -58,38 +91,67 @@ def _pendulum(cfg: Config, params: tuple[int, ...]) -> Pendulum:
     return Pendulum(cfg.pendulum.alphas[ia], cfg.pendulum.omega0s[iw])
 
 
-def compute_tile(theta0, theta_dot0, alpha, omega0, dt, t_max, backend="cpu",
+def compute_tile(certifier: Certifier, rows: slice, dt, t_max, backend="cpu",
                  numba_threads=None):
-    """Label the orbits of one tile: θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows.
+    """Label and certify the orbits of one tile: the grid rows ``rows`` of ``certifier``'s
+    parameter point (θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows).
 
-    Returns (attractor, status, t_trap), each shaped (rows, columns). A plain function of
-    plain arguments, so it can run as a Dask task on another machine.
+    Returns ({variable: array shaped (rows, columns)} for every per-orbit variable of the
+    file, the tile's tally). A plain function of picklable arguments, so it can run as a Dask
+    task on another machine.
     """
     if numba_threads is not None:
         import numba
 
         numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
-    res = label(theta0[None, :], theta_dot0[:, None], alpha=alpha, omega0=omega0, dt=dt,
-                t_max=t_max, backend=backend)
-    return res.attractor, res.status, res.t_trap
+    p = certifier.pendulum
+    res = label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
+                omega0=p.omega0, dt=dt, t_max=t_max, backend=backend)
+    status, distance, tally = certifier.tile(rows, res.attractor, res.status)
+    return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
+            "boundary_distance": distance}, tally
 
 
-def _tile_args(cfg: Config, layout: store.Layout, index: int) -> tuple:
-    params, rows = layout.tile(index)
-    p = _pendulum(cfg, params)
-    return (layout.theta0, layout.theta_dot0[rows], p.alpha, p.omega0,
-            cfg.integrator.dt, cfg.integrator.t_max)
+def _tile_args(cfg: Config, layout: store.Layout, certifiers: list, index: int) -> tuple:
+    return (certifiers[index // layout.bands], layout.tile(index)[1], cfg.integrator.dt,
+            cfg.integrator.t_max)
 
 
-def _local_results(cfg, layout, todo, backend) -> Iterator[tuple[int, tuple]]:
+def _local_results(cfg, layout, certifiers, todo, backend) -> Iterator[tuple[int, tuple]]:
     for index in todo:
-        yield index, compute_tile(*_tile_args(cfg, layout, index), backend=backend)
+        yield index, compute_tile(*_tile_args(cfg, layout, certifiers, index),
+                                  backend=backend)
 
 
-def _dask_results(cfg, layout, todo) -> Iterator[tuple[int, tuple]]:
+def compute_tile_into_zarr(path, layout, index, *args, numba_threads=None) -> dict:
+    """Label and certify tile ``index`` and write it by region into the Zarr store at
+    ``path`` (on the Dask worker itself); return its tally for the client's record."""
+    from . import zarrstore
+
+    values, tally = compute_tile(*args, numba_threads=numba_threads)
+    zarrstore.write_tile(path, layout, index, values)
+    return tally
+
+
+def _dask_results(cfg, tiles: TileStore, certifiers, todo) -> Iterator[tuple[int, tuple]]:
+    """(index, (arrays, tally)), or for a Zarr output (index, tally) of a tile the worker
+    has written itself."""
     from .distributed import dask_results
 
-    yield from dask_results(cfg, todo, lambda i: _tile_args(cfg, layout, i), compute_tile)
+    layout = tiles.layout
+    if tiles.format == "zarr":
+        from .zarrstore import DATA
+
+        def args_of(i):
+            return (tiles.path / DATA, layout, i, *_tile_args(cfg, layout, certifiers, i))
+
+        task = compute_tile_into_zarr
+    else:
+        def args_of(i):
+            return _tile_args(cfg, layout, certifiers, i)
+
+        task = compute_tile
+    yield from dask_results(cfg, todo, args_of, task, tiles.manifest["attrs"]["run_identity"])
 
 
 def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
@@ -157,35 +219,38 @@ def _separatrices_group(cfg: Config, traced: list[xr.Dataset | None]) -> xr.Data
         [(a, w, ds) for (a, w), ds in zip(params, traced)])
 
 
-def _certify(f, cfg: Config, layout: store.Layout, traced: list[xr.Dataset | None]):
-    """Certify every tile for the exact equation (:mod:`atlas.certificate`): rewrite its
-    status and boundary distances, and return each parameter point's summary."""
-    from .certificate import Certifier
-
-    points = []
+def _certifiers(cfg: Config, layout: store.Layout, traced: list) -> list[Certifier]:
+    """One :class:`Certifier` per parameter point, with the boundary shift its separatrices
+    measured (NaN without them: then no label is certified for the exact equation)."""
+    out = []
     for p_index, sep in enumerate(traced):
-        first = p_index * layout.bands
-        p = _pendulum(cfg, layout.tile(first)[0])
+        p = _pendulum(cfg, layout.tile(p_index * layout.bands)[0])
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
-        cert = Certifier(p, layout.theta0, layout.theta_dot0, shift, tol)
-        untrapped = 0
-        for index in range(first, first + layout.bands):
-            attractor, status = store.read_labels(f, layout, index)
-            status, distance = cert.tile(layout.tile(index)[1], attractor, status)
-            store.write_certificate(f, layout, index, status, distance)
-            untrapped += int(np.count_nonzero(~labelled(status)))
-        n = cert.n_points
-        points.append({**cert.fractions(), "unresolved_fraction": untrapped / n,
-                       "certified_fraction": cert.certified / n, "d_cert": cert.d_cert,
-                       "boundary_shift": shift, "side_mismatches": cert.mismatched,
-                       "boundary_reference_error": cert.reference_error,
-                       "trap_margin": trap_margin(cfg.integrator.dt, p.alpha, p.omega0)})
-        if cert.mismatched:
+        out.append(Certifier(p, layout.theta0, layout.theta_dot0, shift, tol))
+    return out
+
+
+def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.Dataset:
+    """The summary variables from the tiles' tallies (O(tiles) numbers, no label re-read)."""
+    layout = tiles.layout
+    tallies = [[] for _ in certifiers]
+    for index in range(layout.n_tiles):
+        try:
+            tallies[index // layout.bands].append(tiles.read_tile(index).tally)
+        except Exception as exc:  # a damaged record: OSError, ValueError, BadZipFile
+            raise store.DamagedTile(index, exc.__class__.__name__) from None
+    points = []
+    for cert, point in zip(certifiers, tallies):
+        summary = cert.summary(add_tallies(point))
+        p = cert.pendulum
+        summary["trap_margin"] = trap_margin(cfg.integrator.dt, p.alpha, p.omega0)
+        if summary["side_mismatches"]:
             log.warning("alpha = %g, omega0 = %g: %d labels farther than d_cert from every "
-                        "boundary disagree with the exact side; they are flagged near_boundary",
-                        p.alpha, p.omega0, cert.mismatched)
-    return points
+                        "boundary disagree with the exact side; they are flagged "
+                        "near_boundary", p.alpha, p.omega0, summary["side_mismatches"])
+        points.append(summary)
+    return store.summary_dataset(layout, points)
 
 
 def _versions() -> dict:
@@ -201,7 +266,7 @@ def _versions() -> dict:
             "python_version": sys.version.split()[0]}
 
 
-def _attrs(cfg: Config) -> dict:
+def _attrs(cfg: Config, identity: dict) -> dict:
     attrs = {
         "title": f"atlas basin map: {cfg.name}",
         "Conventions": "CF-1.10",
@@ -211,6 +276,7 @@ def _attrs(cfg: Config) -> dict:
         "check_every": np.int64(CHECK_EVERY),
         "config": cfg.to_json(),
         "config_hash": config_hash(cfg),
+        "run_identity": identity_hash(identity),
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         **_versions(),
     }
@@ -222,7 +288,7 @@ def _attrs(cfg: Config) -> dict:
 def _check_output_path(cfg: Config, layout: store.Layout) -> None:
     """Refuse an output that cannot be written or would not fit, before anything is made."""
     out = cfg.output
-    if out.is_dir():
+    if out.is_dir() and not (zarrstore.is_zarr(out) and (out / "zarr.json").exists()):
         raise AtlasError(f"{out}: the output path is a directory")
     existing = next(p for p in (out.parent, *out.parent.parents) if p.exists())
     if not existing.is_dir():
@@ -258,17 +324,51 @@ def _progress(total: int, initial: int, quiet: bool):
                 disable=quiet or not sys.stderr.isatty(), desc="atlas", leave=False)
 
 
-def _open_partial(cfg: Config, layout: store.Layout, resume: bool):
-    """The partial file to write into, its layout, and the tiles still to do."""
-    partial = store.partial_path(cfg.output)
-    if resume and partial.exists():
-        f, layout, todo = store.open_partial(partial, config_hash(cfg))
-        log.info("resuming %s: %d of %d tiles to do", partial, todo.size, layout.n_tiles)
-        return f, layout, todo
-    if resume:
-        log.info("nothing to resume at %s: starting afresh", partial)
-    partial.unlink(missing_ok=True)
-    return store.create(partial, layout, _attrs(cfg)), layout, np.arange(layout.n_tiles)
+def _refuse_another(partial: Path, identity: dict, opener=TileStore.open) -> TileStore:
+    """The partial run at ``partial`` if it has ``identity``, else one clear InputFileError
+    naming ``--restart``."""
+    try:
+        return opener(partial, identity)
+    except IdentityMismatch as exc:
+        raise InputFileError(f"{partial}: a partial run of a different config is in the way "
+                             f"({', '.join(exc.differs)} differ); run with --restart to discard "
+                             "it, or write elsewhere with -o") from None
+    except PartialStoreError as exc:
+        raise InputFileError(f"{partial}: cannot continue this partial run ({exc}); run with "
+                             "--restart to discard it") from None
+
+
+def _check_partial(partial: Path, identity: dict) -> None:
+    """Before anything is written (the lock included): refuse a partial run of another
+    identity. Reading is safe without the lock, the manifest being written atomically."""
+    def read_only(path, identity):
+        theirs = TileStore.read(path).manifest["identity"]
+        differs = sorted(k for k in {*identity, *theirs} if identity.get(k) != theirs.get(k))
+        if differs:
+            raise IdentityMismatch(differs)
+
+    if partial.exists():
+        _refuse_another(partial, identity, read_only)
+
+
+def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool) -> TileStore:
+    """The partial run to write into: the one at the output if it has this identity (said in
+    one line), a new one otherwise. One of another identity is refused, unless ``restart``."""
+    partial = partial_path(cfg.output)
+    TileStore.clear_leftovers(partial)
+    if restart and partial.exists():
+        log.warning("discarding the partial run %s (--restart)", partial)
+        if partial.is_dir():
+            shutil.rmtree(partial)
+        else:
+            partial.unlink()
+    if not partial.exists():
+        return TileStore.create(partial, layout, identity, _attrs(cfg, identity),
+                                "zarr" if zarrstore.is_zarr(cfg.output) else "hdf5")
+    tiles = _refuse_another(partial, identity)
+    log.warning("resuming %s: %d of %d tiles already done", partial, tiles.done().size,
+                tiles.layout.n_tiles)
+    return tiles
 
 
 def _orbits(layout: store.Layout, tiles) -> int:
@@ -276,26 +376,66 @@ def _orbits(layout: store.Layout, tiles) -> int:
         * layout.theta0.size
 
 
-def _compute_into(f, cfg: Config, layout: store.Layout, todo, backend: str, quiet: bool):
-    """Label the tiles ``todo`` and write each into ``f`` as it finishes."""
-    results = (_dask_results(cfg, layout, todo) if backend == "dask"
-               else _local_results(cfg, layout, todo, backend))
+def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], backend: str,
+                  quiet: bool) -> None:
+    """Label and certify the tiles still to do and store each as it finishes."""
+    layout, todo = tiles.layout, tiles.todo()
+    written_by_workers = backend == "dask" and tiles.format == "zarr"
+    results = (_dask_results(cfg, tiles, certifiers, todo) if backend == "dask"
+               else _local_results(cfg, layout, certifiers, todo, backend))
     total = _orbits(layout, range(layout.n_tiles))
     with _progress(total, total - _orbits(layout, todo), quiet) as bar:
-        for index, (attractor, status, t_trap) in results:
-            store.write_tile(f, layout, index, attractor, status, t_trap)
-            bar.update(status.size)
+        for index, result in results:
+            if written_by_workers:
+                tiles.record(index, result)
+            else:
+                tiles.write(index, *result, store.FILLS)
+            bar.update(_orbits(layout, [index]))
             log.debug("tile %d of %d written", index + 1, layout.n_tiles)
 
 
-def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
+def _groups(cfg: Config, layout: store.Layout, traced: list) -> dict[str, xr.Dataset]:
+    groups = {"critical_points": critical_points_dataset(cfg, layout)}
+    separatrices = _separatrices_group(cfg, traced)
+    if separatrices is not None:
+        groups["separatrices"] = separatrices
+    return groups
+
+
+def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float) -> None:
+    """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
+    and certify what is missing, then assemble the file. A tile file found damaged is set
+    aside (renamed, not deleted) and computed again."""
+    traced = _trace_separatrices(cfg)
+    certifiers = _certifiers(cfg, tiles.layout, traced)
+    groups = _groups(cfg, tiles.layout, traced)
+    for _ in range(3):
+        _compute_into(tiles, cfg, certifiers, backend, quiet)
+        finalize = zarrstore.finalize if tiles.format == "zarr" else store.finalize
+        assembly = time.perf_counter()
+        try:
+            summary = _summary(cfg, tiles, certifiers)
+            finalize(tiles, cfg.output, groups, summary,
+                     {"run_time_s": time.perf_counter() - start, "backend": backend})
+            log.info("assembled %s from %d tiles in %.2f s", cfg.output, tiles.layout.n_tiles,
+                     time.perf_counter() - assembly)
+            return
+        except store.DamagedTile as exc:
+            log.warning("%s: %s is damaged; computing it again", tiles.path, exc)
+            tiles.set_aside(exc.index)
+    raise StorageError(f"{tiles.path}: tile files keep coming back damaged; check the disk")
+
+
+def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool = False,
         backend: str | None = None) -> xr.DataTree:
     """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
 
-    ``resume=True`` continues an interrupted run from ``<output>.partial`` (made from the
-    same config), computing only the tiles it is missing. ``backend`` overrides
-    ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O error)
-    raises :class:`StorageError`; the tiles finished before it stay resumable.
+    An interrupted run of the same identity at the output (``<output>.partial/``) is
+    continued: only its missing tiles are computed, with its own tiling. A partial run of
+    another identity raises :class:`InputFileError`, unless ``restart=True`` discards it
+    first. ``resume`` is accepted for compatibility (continuing is always on). ``backend``
+    overrides ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O
+    error) raises :class:`StorageError`; the tiles finished before it are kept.
     """
     backend = backend or cfg.execution.backend
     layout = layout_of(cfg)
@@ -304,42 +444,32 @@ def run(cfg: Config, *, resume: bool = False, quiet: bool = False,
 
         require_cuda()
     _check_output_path(cfg, layout)
+    partial = partial_path(cfg.output)
+    identity = run_identity(cfg, backend)
+    if not restart:
+        _check_partial(partial, identity)
     _make_output_folder(cfg.output)
-    partial = store.partial_path(cfg.output)
     start = time.perf_counter()
     with output_lock(cfg.output):
         try:
-            f, layout, todo = _open_partial(cfg, layout, resume)
-        except OSError as exc:
-            raise StorageError(f"{partial}: cannot create the partial file "
-                               f"({exc.strerror or exc})") from None
-        try:
-            _compute_into(f, cfg, layout, todo, backend, quiet)
-            traced = _trace_separatrices(cfg)
-            points = _certify(f, cfg, layout, traced)
-            groups = {"critical_points": critical_points_dataset(cfg, layout)}
-            separatrices = _separatrices_group(cfg, traced)
-            if separatrices is not None:
-                groups["separatrices"] = separatrices
-            store.finalize(f, partial, cfg.output, points, groups,
-                           {"run_time_s": time.perf_counter() - start, "backend": backend})
+            tiles = _open_tiles(cfg, layout, identity, restart)
+            _finish(tiles, cfg, backend, quiet, start)
         except OverflowError as exc:
-            _close_quietly(f)
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:
-            _close_quietly(f)
-            raise StorageError(f"{partial}: writing failed ({exc.strerror or exc}); the "
+            raise StorageError(f"{partial}: writing failed ({_reason(exc)}); the "
                                "tiles finished before it are kept: free space or fix the "
-                               "disk, then run again with --resume") from None
-        except BaseException:
-            _close_quietly(f)
-            raise
+                               "disk, then run the same command again") from None
     log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
     return store.open_atlas(cfg.output)
 
 
-def _close_quietly(f) -> None:
-    try:
-        f.close()
-    except Exception:  # the file may be unwritable (disk full): its flushed tiles are safe
-        log.debug("closing the partial file failed", exc_info=True)
+def _reason(exc: OSError) -> str:
+    """The system's words for a failed write, on one line (HDF5's own messages are long)."""
+    if exc.errno:
+        return os.strerror(exc.errno)
+    text = str(exc)
+    found = re.search(r"errno = (\d+)", text)  # HDF5 quotes the system's errno
+    if found:
+        return os.strerror(int(found.group(1)))
+    return text.splitlines()[0] if text else exc.__class__.__name__

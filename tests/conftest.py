@@ -99,3 +99,14 @@ def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
         return real(*args, **kwargs)
 
     monkeypatch.setattr(sweep, "compute_tile", crashing)
+
+
+def lock_is_free(output: Path) -> bool:
+    """True if no process holds ``output``'s lock (the lock file itself stays in place)."""
+    from atlas.lock import OutputLocked, output_lock
+
+    try:
+        with output_lock(Path(output)):
+            return True
+    except OutputLocked:
+        return False

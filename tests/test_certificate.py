@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 
 import atlas
 from atlas import separatrices
-from atlas.certificate import SAFETY, Certifier, cert_distance, labelled
+from atlas.certificate import SAFETY, Certifier, add_tallies, cert_distance, labelled
 from atlas.kernels import NEAR_BOUNDARY, TRAPPED
 from atlas.model import Pendulum
 
@@ -97,9 +97,9 @@ def test_grid_error_bound_holds_and_shrinks_at_first_order():
         res = atlas.label(theta0[None, :], theta_dot0[:, None], alpha=0.1, omega0=1.0)
         cert = Certifier(p, theta0, theta_dot0, float(sep.attrs["discrepancy"]),
                          float(sep.attrs["tol"]))
-        cert.tile(slice(0, num // 2), res.attractor[:num // 2], res.status[:num // 2])
-        cert.tile(slice(num // 2, num), res.attractor[num // 2:], res.status[num // 2:])
-        f = cert.fractions()
+        halves = (slice(0, num // 2), slice(num // 2, num))
+        f = cert.summary(add_tallies(cert.tile(rows, res.attractor[rows], res.status[rows])[2]
+                                     for rows in halves))
         counted = [np.count_nonzero(res.attractor == k) / num**2 for k in f["k"]]
         np.testing.assert_array_equal(f["basin_fraction"], counted)
         assert np.all(f["basin_fraction_grid_error"] <= f["basin_fraction_grid_error_bound"])
@@ -116,8 +116,8 @@ def test_without_a_measured_shift_no_label_is_certified():
     theta0, theta_dot0 = np.linspace(-1, 1, 5), np.linspace(-1, 1, 4)
     res = atlas.label(theta0[None, :], theta_dot0[:, None], alpha=0.1, omega0=1.0)
     cert = Certifier(p, theta0, theta_dot0, float("nan"), float("nan"))
-    status, dist = cert.tile(slice(0, 4), res.attractor, res.status)
-    assert np.all(status == NEAR_BOUNDARY) and np.all(dist > 0) and cert.certified == 0
+    status, dist, tally = cert.tile(slice(0, 4), res.attractor, res.status)
+    assert np.all(status == NEAR_BOUNDARY) and np.all(dist > 0) and tally["certified"] == 0
 
 
 def test_an_atlas_file_stores_the_certificate(tmp_path):

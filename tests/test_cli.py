@@ -119,12 +119,13 @@ def test_figures_and_bench_refuse_an_output_folder_they_cannot_make(tmp_path):
 def test_plot_and_open_refuse_a_partial_file(small_config, tmp_path):
     import atlas
     from atlas import store
-    from atlas.sweep import layout_of
+    from atlas.sweep import layout_of, run_identity
+    from atlas.tiles import TileStore
 
     cfg = atlas.load_config(small_config())
     partial = store.partial_path(cfg.output)
-    store.create(partial, layout_of(cfg), {}).close()
-    _one_clean_line(run_cli("plot", partial), "a partial atlas", "--resume")
+    TileStore.create(partial, layout_of(cfg), run_identity(cfg, "cpu"), {})
+    _one_clean_line(run_cli("plot", partial), "a partial atlas", "atlas run CONFIG")
     assert not partial.with_suffix(".png").exists()
     with pytest.raises(atlas.InputFileError, match="partial"):
         atlas.open(partial)

@@ -1,4 +1,5 @@
-"""Faults: disk full mid-run, Ctrl-C, a second writer, stale locks, unwritable outputs.
+"""Faults: disk full mid-run, Ctrl-C, SIGTERM, a second writer, locks of dead runs, racing
+lockers, unwritable outputs.
 
 Each runs the real CLI in a subprocess where the behaviour is about exit status, messages
 and files."""
@@ -8,12 +9,14 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 
 import numpy as np
+import pytest
 
 import atlas
 from atlas.store import describe
-from tests.conftest import REPO, run_cli, write_config
+from tests.conftest import REPO, lock_is_free, run_cli, write_config
 
 SLOW = """\
 grid:
@@ -56,40 +59,90 @@ def test_disk_full_mid_run_keeps_finished_tiles_resumable(tmp_path):
     cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
     script = textwrap.dedent(f"""
         import errno, sys
-        from atlas import store
+        from atlas.tiles import TileStore
         from atlas.cli import main
-        real, calls = store.write_tile, []
+        real, calls = TileStore.write, []
         def full_disk(*args):
             calls.append(1)
             if len(calls) == 4:
                 raise OSError(errno.ENOSPC, "No space left on device")
             real(*args)
-        store.write_tile = full_disk
+        TileStore.write = full_disk
         sys.exit(main(["run", {str(cfg)!r}, "--quiet"]))
     """)
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                           cwd=REPO)
-    _one_line(proc, 1, "No space left on device", "--resume", "full.h5.partial")
+    _one_line(proc, 1, "No space left on device", "run the same command again",
+              "full.h5.partial")
     assert not out.exists()
     assert describe(out.with_name("full.h5.partial"))["tiles_done"] == 3
-    assert run_cli("run", cfg, "--resume", "--quiet").returncode == 0
+    resumed = run_cli("run", cfg, "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resuming" in resumed.stderr and "3 of 160 tiles already done" in resumed.stderr
     assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
     for a, b in zip(_labels(out), _labels(tmp_path / "ref.h5")):
         np.testing.assert_array_equal(a, b)
 
 
-def test_ctrl_c_stops_cleanly_and_keeps_finished_tiles(tmp_path):
+def _limit_file_size(n_bytes):
+    def limit():
+        import resource
+
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails: EFBIG
+        resource.setrlimit(resource.RLIMIT_FSIZE, (n_bytes, n_bytes))
+
+    return limit
+
+
+def test_a_real_write_failure_while_assembling_keeps_every_tile(tmp_path):
+    """A file-size limit that the small tile files fit under but the assembled file does
+    not: the kernel refuses the write (EFBIG), the run stops with one line and exit 1, every
+    tile is kept, and the next run without the limit gives the clean result."""
+    out = tmp_path / "big.h5"
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
+    proc = subprocess.run([sys.executable, "-m", "atlas.cli", "run", str(cfg), "--quiet"],
+                          capture_output=True, text=True, cwd=REPO,
+                          preexec_fn=_limit_file_size(20_000))
+    _one_line(proc, 1, "big.h5.partial", "File too large", "tiles finished before it are kept")
+    assert not out.exists() and describe(out.with_name("big.h5.partial"))["tiles_done"] == 160
+    assert run_cli("run", cfg, "--quiet").returncode == 0
+    assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
+    for a, b in zip(_labels(out), _labels(tmp_path / "ref.h5")):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_real_full_disk_mid_run(tmp_path):
+    """The output on a 64 KiB tmpfs (a private mount namespace): the disk fills up after some
+    tiles; exit 1 with one line; the tmpfs is enlarged and the next run finishes it, equal to
+    a clean run."""
+    from atlas.faults import _tmpfs_trial, _unshare_works
+
+    if not _unshare_works(tmp_path):
+        pytest.skip("unprivileged mount namespaces are not available here")
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=tmp_path / "x.h5"))
+    code, line, recovered = _tmpfs_trial(cfg, tmp_path, 64)
+    assert code == 1 and "No space left on device" in line and "kept" in line, line
+    assert len(line.splitlines()) == 1 and recovered
+    assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
+    for a, b in zip(_labels(tmp_path / "full-copy.h5"), _labels(tmp_path / "ref.h5")):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("sig, code, word", [(signal.SIGINT, 130, "interrupted"),
+                                             (signal.SIGTERM, 143, "terminated (SIGTERM)")])
+def test_ctrl_c_or_sigterm_stops_cleanly_and_keeps_finished_tiles(tmp_path, sig, code, word):
     out = tmp_path / "int.h5"
     cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.001, output=out))
     proc = _start(cfg)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     stderr = proc.stderr.read()
     proc.wait()
-    assert proc.returncode == 130
-    assert "Traceback" not in stderr and "interrupted" in stderr and "--resume" in stderr
+    assert proc.returncode == code, stderr
+    lines = [ln for ln in stderr.strip().splitlines() if not ln.startswith("atlas: tile")]
+    assert len(lines) == 1 and word in lines[0] and "run the same command again" in lines[0]
     partial = out.with_name("int.h5.partial")
     assert not out.exists() and describe(partial)["tiles_done"] >= 5
-    assert not out.with_name("int.h5.lock").exists()
+    assert lock_is_free(out)
     info = run_cli("info", partial)
     assert info.returncode == 0 and "partial" in info.stdout and "of 160 tiles" in info.stdout
 
@@ -100,21 +153,33 @@ def test_a_second_writer_is_refused_while_the_first_runs(tmp_path):
     first = _start(cfg)
     try:
         second = run_cli("run", cfg, "--quiet")
-        _one_line(second, 2, "another atlas run", f"pid {first.pid}")
+        _one_line(second, 3, "another atlas run", f"pid {first.pid})", "host ")
     finally:
         first.kill()
         first.wait()
 
 
-def test_a_stale_lock_from_a_dead_process_does_not_block(tmp_path):
+def test_the_lock_of_a_killed_run_does_not_block(tmp_path):
+    """A run killed with SIGKILL while holding the lock (its owner record left behind): the
+    kernel released its flock, so the next run takes the lock and finishes."""
     out = tmp_path / "stale.h5"
     cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True)
-    out.with_name("stale.h5.lock").write_text(dead.stdout.strip())
+    holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
+        import time
+        from pathlib import Path
+        from atlas.lock import output_lock
+        with output_lock(Path({str(out)!r})):
+            print("locked", flush=True)
+            time.sleep(600)
+    """)], stdout=subprocess.PIPE, text=True, cwd=REPO)
+    assert holder.stdout.readline().strip() == "locked"
+    assert not lock_is_free(out)
+    holder.kill()
+    holder.wait()
+    assert out.with_name("stale.h5.lock.owner").exists()  # the dead run's record
     proc = run_cli("run", cfg, "--quiet")
     assert proc.returncode == 0, proc.stderr
-    assert out.exists() and not out.with_name("stale.h5.lock").exists()
+    assert out.exists() and lock_is_free(out)
 
 
 def test_unwritable_output_paths(tmp_path):
@@ -141,7 +206,7 @@ output: {tmp_path / 'huge.h5'}
 
 def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
     """Disk full at the very end (groups written, rename failing, or a group failing):
-    the partial file is not 'complete', and --resume finishes it."""
+    the output is not written, every tile is kept, and running again finishes it."""
     import errno
 
     from atlas import store
@@ -155,24 +220,29 @@ def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
     def no_space(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
 
+    real_replace = store.os.replace
+
+    def no_space_for_the_output(src, dst):
+        if dst == out:
+            no_space()
+        real_replace(src, dst)
+
     for broken in ("os.replace", "to_netcdf"):
         with monkeypatch.context() as m:
             if broken == "os.replace":
-                m.setattr(store.os, "replace", no_space)
+                m.setattr(store.os, "replace", no_space_for_the_output)
             else:
                 m.setattr(store.xr.Dataset, "to_netcdf", no_space)
             try:
                 atlas.run(cfg, quiet=True)
             except StorageError as exc:
-                assert "No space left on device" in str(exc) and "--resume" in str(exc)
+                assert "No space left on device" in str(exc) and "again" in str(exc)
             else:
                 raise AssertionError("the simulated failure did not surface")
         partial = out.with_name("fin.h5.partial")
         info = describe(partial)
-        assert not out.exists() and info["tiles_done"] == 160
-        # only a file whose every part was written is marked complete
-        assert info["complete"] == (broken == "os.replace")
-        tree = atlas.run(cfg, resume=True, quiet=True)
+        assert not out.exists() and info["tiles_done"] == 160 and not info["complete"]
+        tree = atlas.run(cfg, quiet=True)
         assert set(tree.children) == {"critical_points", "separatrices"}
         assert tree.attrs["complete"] == 1
         fresh = atlas.run(cfg.model_copy(update={"output": tmp_path / "ref.h5"}), quiet=True)
@@ -196,7 +266,8 @@ output: {tmp_path / 'deep' / 'er' / 'huge.h5'}
 
 
 def test_concurrent_lock_attempts_admit_exactly_one(tmp_path):
-    """Many processes racing for one output's lock: exactly one holds it at a time."""
+    """Many processes racing for one output's lock: exactly one holds it, the others are
+    refused at once."""
     script = textwrap.dedent(f"""
         import sys, time
         from pathlib import Path
@@ -212,4 +283,46 @@ def test_concurrent_lock_attempts_admit_exactly_one(tmp_path):
                               text=True, cwd=REPO) for _ in range(8)]
     answers = sorted(p.communicate()[0].strip() for p in procs)
     assert answers == ["got it"] + ["refused"] * 7
-    assert list(tmp_path.iterdir()) == []
+    assert lock_is_free(tmp_path / "race.h5")
+
+
+def test_racing_takeovers_of_a_dead_runs_lock_never_overlap(tmp_path):
+    """A holder is SIGKILLed, then 8 processes started at once each retry until they hold
+    the lock, hold it briefly and record when they entered and left: all 8 get it, and no two
+    holding intervals overlap (time.monotonic is one clock for all processes on Linux)."""
+    out = tmp_path / "race.h5"
+    holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
+        import time
+        from pathlib import Path
+        from atlas.lock import output_lock
+        with output_lock(Path({str(out)!r})):
+            print("locked", flush=True)
+            time.sleep(600)
+    """)], stdout=subprocess.PIPE, text=True, cwd=REPO)
+    assert holder.stdout.readline().strip() == "locked"
+    racer = textwrap.dedent(f"""
+        import os, time
+        from pathlib import Path
+        from atlas.lock import output_lock, OutputLocked
+        while True:
+            try:
+                with output_lock(Path({str(out)!r})):
+                    entered = time.monotonic()
+                    time.sleep(0.05)
+                    left = time.monotonic()
+                break
+            except OutputLocked:
+                time.sleep(0.001)
+        Path({str(tmp_path)!r}, f"rec-{{os.getpid()}}").write_text(f"{{entered}} {{left}}")
+    """)
+    procs = [subprocess.Popen([sys.executable, "-c", racer], cwd=REPO) for _ in range(8)]
+    time.sleep(0.5)  # let the racers spin against the live holder first
+    holder.kill()
+    holder.wait()
+    for p in procs:
+        assert p.wait(timeout=120) == 0
+    intervals = sorted(tuple(map(float, f.read_text().split()))
+                       for f in tmp_path.glob("rec-*"))
+    assert len(intervals) == 8
+    for (_, left), (entered, _) in zip(intervals, intervals[1:]):
+        assert left <= entered, intervals

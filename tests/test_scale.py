@@ -60,7 +60,7 @@ def test_kill_9_then_resume_gives_identical_arrays(tmp_path):
     # the dead run's lock is stale and must not block the resume
     resumed = run_cli("run", cfg, "--resume", "--quiet", "-v")
     assert resumed.returncode == 0, resumed.stderr
-    assert "resuming" in resumed.stderr
+    assert "resuming" in resumed.stderr and "tiles already done" in resumed.stderr
     assert out.exists() and not partial.exists()
     fresh = run_cli("run", cfg, "--quiet", "-o", tmp_path / "fresh.h5")
     assert fresh.returncode == 0, fresh.stderr
@@ -77,25 +77,53 @@ def test_resume_with_another_tile_size_keeps_the_files_tiling(tmp_path, monkeypa
             atlas.run(cfg, quiet=True)
     bigger = cfg.model_copy(update={"execution": cfg.execution.model_copy(
         update={"tile_orbits": 48 * 7})})
-    resumed = atlas.run(bigger, resume=True, quiet=True).to_dataset(inherit=False)
-    assert resumed.sizes["tile"] == 160  # the partial file's tiling, not the new one
+    resumed = atlas.run(bigger, quiet=True).to_dataset(inherit=False)
+    # the partial run's tiling (one row per tile, one chunk per tile), not the new one
+    assert resumed["attractor"].encoding["chunksizes"] == (1, 48)
     atlas.run(cfg.model_copy(update={"output": tmp_path / "f.h5"}), quiet=True)
     _assert_same(_arrays(out), _arrays(tmp_path / "f.h5"))
 
 
-def test_resume_refuses_a_partial_file_from_another_config(tmp_path, monkeypatch):
+def _snapshot(folder):
+    return {p.relative_to(folder): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def test_a_partial_run_of_another_config_is_refused_until_restart(tmp_path, monkeypatch):
     out = tmp_path / "x.h5"
     cfg = write_config(tmp_path / "c.yaml", MANY_TILES.format(t_max=50, output=out))
     partial = out.with_name(out.name + ".partial")
     crash_on_tile(monkeypatch, 3, KeyboardInterrupt())
     with pytest.raises(KeyboardInterrupt):
         atlas.run(atlas.load_config(cfg), quiet=True)
-    before = partial.read_bytes()
+    before = _snapshot(partial)
+    assert len(before) == 3  # the manifest and two tiles
+    out.with_name("x.h5.lock").unlink()
     other = write_config(tmp_path / "other.yaml", MANY_TILES.format(t_max=60, output=out))
-    proc = run_cli("run", other, "--resume")
-    assert proc.returncode == 2
-    assert "different config" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
-    assert partial.read_bytes() == before and not out.exists()
+    for flags in ([], ["--resume"]):
+        proc = run_cli("run", other, *flags)
+        assert proc.returncode == 2, proc.stderr
+        line, = proc.stderr.strip().splitlines()
+        assert "different config" in line and "integrator differ" in line
+        assert "--restart" in line
+        assert _snapshot(partial) == before and not out.exists()
+        assert not out.with_name("x.h5.lock").exists()  # refused before taking the lock
+    # separatrix settings while they are off, tiling and the name make no other identity
+    same = write_config(tmp_path / "same.yaml", "name: renamed\n" + MANY_TILES.format(
+        t_max=50, output=out).replace("enabled: false", "enabled: false, tol: 1e-10")
+        .replace("tile_orbits: 48", "tile_orbits: 96"))
+    monkeypatch.undo()
+    resumed = atlas.run(atlas.load_config(same), quiet=True)
+    assert resumed.attrs["complete"] == 1 and not partial.exists()
+    # --restart discards a partial run of another config and starts over
+    with monkeypatch.context() as m:
+        crash_on_tile(m, 3, KeyboardInterrupt())
+        with pytest.raises(KeyboardInterrupt):
+            atlas.run(atlas.load_config(cfg), quiet=True)
+    proc = run_cli("run", other, "--restart", "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    assert not partial.exists()
+    assert atlas.open(out).attrs["t_max"] == 60
 
 
 def test_dask_local_cluster_matches_the_local_backend(tmp_path):

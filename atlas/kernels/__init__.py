@@ -18,9 +18,61 @@ Every labelling kernel follows one contract, so backends are interchangeable:
 Checks before any step and after a non-finite state are part of the contract: an initial
 condition already inside a trap has n_trap = 0, and a NaN/inf state is reported at the
 first check that sees it.
+
+Numba's on-disk cache (:func:`cached_njit`) lives in a folder named by a hash of every
+kernel source file here: Numba itself invalidates a cached kernel only when the kernel's own
+file changes, but the lane kernel inlines code from ``fastsin.py`` and ``rk4.py``, so an edit
+there would otherwise keep running stale machine code.
 """
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
 
 TRAPPED, UNRESOLVED, NONFINITE = 0, 1, 2
 #: Status set after labelling (never by a kernel): trapped, but not certified for the exact
 #: equation (closer than d_cert to a basin boundary; see :mod:`atlas.certificate`).
 NEAR_BOUNDARY = 3
+
+
+def source_hash() -> str:
+    """Digest of the kernel sources (every ``*.py`` of this package)."""
+    digest = hashlib.sha256()
+    for path in sorted(Path(__file__).parent.glob("*.py")):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
+
+
+def cache_dir() -> Path:
+    """Where the kernels' machine code is cached: ``<NUMBA_CACHE_DIR>/atlas/<hash>`` if the
+    user set NUMBA_CACHE_DIR, else ``~/.cache/atlas/numba/<hash>`` (XDG_CACHE_HOME honoured)."""
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    if user:
+        base = Path(user) / "atlas"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "atlas" / "numba"
+    return base / source_hash()
+
+
+def cached_njit(**options):
+    """``numba.njit(cache=True, **options)`` with the cache in :func:`cache_dir` (Numba fixes
+    a function's cache folder when it is decorated, so the setting is scoped to that call).
+    If the folder cannot be made, Numba's own default place is used."""
+    import numba
+
+    def decorate(func):
+        saved = numba.config.CACHE_DIR
+        try:
+            path = cache_dir()
+            path.mkdir(parents=True, exist_ok=True)
+            numba.config.CACHE_DIR = str(path)
+        except OSError:
+            pass
+        try:
+            return numba.njit(cache=True, **options)(func)
+        finally:
+            numba.config.CACHE_DIR = saved
+
+    return decorate

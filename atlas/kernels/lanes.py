@@ -61,7 +61,7 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, TRAPPED, UNRESOLVED
+from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit
 from .fastsin import EXACT_RANGE, POLY_RANGE, SIN_FASTMATH, fast_sin, reduce_pi, sin_near
 from .rk4 import label_orbit, make_rk4_step, make_well_energy, rk4_step
 
@@ -170,7 +170,7 @@ def _label_chunk(first, stride, theta0, theta_dot0, alpha, omega0, dt, n_checks,
             check[lane] += 1
 
 
-@nb.njit(parallel=True, nogil=True, cache=True, fastmath=SIN_FASTMATH)
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
 def label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
                 attractor, status, n_trap):
     """Label orbits with lane-blocked SIMD RK4 and the energy trap (kernel contract in
@@ -184,7 +184,7 @@ def label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, en
                      check_every, energy_cap, attractor, status, n_trap)
 
 
-@nb.njit(parallel=True, nogil=True, cache=True, fastmath=SIN_FASTMATH)
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
 def propagate_lanes(theta, theta_dot, alpha, omega0, dt, n_steps):
     """Advance every orbit [θ rad, θ̇ rad s⁻¹] by ``n_steps`` RK4 steps of ``dt`` [s] in place,
     no early exit: the lane-blocked counterpart of ``propagate_straightforward`` (bulk

@@ -15,7 +15,7 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, TRAPPED, UNRESOLVED
+from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit
 
 # Fast-math flags that keep NaN/inf semantics honest (no 'nnan'/'ninf'): the kernels must
 # see a non-finite state to report status NONFINITE.
@@ -114,7 +114,7 @@ def label_orbit(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, ener
     return UNRESOLVED, 0, -1
 
 
-@nb.njit(parallel=True, nogil=True, cache=True, fastmath=FASTMATH)
+@cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)
 def label_straightforward(
     theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
     attractor, status, n_trap,
@@ -131,7 +131,7 @@ def label_straightforward(
             attractor[i] = np.int32(k)
 
 
-@nb.njit(parallel=True, nogil=True, cache=True, fastmath=FASTMATH)
+@cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)
 def propagate_straightforward(theta, theta_dot, alpha, omega0, dt, n_steps):
     """Advance every orbit by ``n_steps`` RK4 steps in place (no early exit): bulk throughput
     reference and the fixed-duration integrator used by tests and figures."""
@@ -144,7 +144,7 @@ def propagate_straightforward(theta, theta_dot, alpha, omega0, dt, n_steps):
         theta_dot[i] = v
 
 
-@nb.njit(parallel=True, nogil=True, cache=True, fastmath=FASTMATH)
+@cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)
 def record_straightforward(theta, theta_dot, alpha, omega0, dt, every, out):
     """Trajectories: ``out[:, i, j]`` = (θ, θ̇) of orbit j after i·``every`` RK4 steps, for
     i < out.shape[1] (figures and phase portraits; the same step as every kernel here)."""
