@@ -161,7 +161,10 @@ class Soak:
 
     def _finish(self, cfg, out) -> tuple[bool, bool]:
         """Run again to completion: (recovered, identical to the clean run)."""
-        ok = _run(["run", str(cfg), "--quiet"], self.err()) == 0
+        err = self.err()
+        ok = _run(["run", str(cfg), "--quiet"], err) == 0
+        if not ok:
+            print(f"not recovered: {err.read_text().strip()}", file=sys.stderr)
         if out.suffix == ".zarr":
             same = ok and _same_zarr_in_child(out, self.ref)
             shutil.rmtree(out, ignore_errors=True)

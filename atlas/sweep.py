@@ -37,7 +37,7 @@ from .errors import AtlasError, InputFileError, StorageError
 from .labels import CHECK_EVERY, label, trap_margin
 from .lock import output_lock
 from .model import Pendulum, critical_points
-from .tiles import IdentityMismatch, PartialStoreError, TileStore, partial_path
+from .tiles import IdentityMismatch, PartialStoreError, TileStore, discard, partial_path
 
 __all__ = ["run", "compute_tile", "layout_of", "critical_points_dataset", "run_identity",
            "identity_hash"]
@@ -341,14 +341,8 @@ def _refuse_another(partial: Path, identity: dict, opener=TileStore.open) -> Til
 def _check_partial(partial: Path, identity: dict) -> None:
     """Before anything is written (the lock included): refuse a partial run of another
     identity. Reading is safe without the lock, the manifest being written atomically."""
-    def read_only(path, identity):
-        theirs = TileStore.read(path).manifest["identity"]
-        differs = sorted(k for k in {*identity, *theirs} if identity.get(k) != theirs.get(k))
-        if differs:
-            raise IdentityMismatch(differs)
-
     if partial.exists():
-        _refuse_another(partial, identity, read_only)
+        _refuse_another(partial, identity, lambda path, ident: TileStore.read(path).check(ident))
 
 
 def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool) -> TileStore:
@@ -358,10 +352,7 @@ def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool
     TileStore.clear_leftovers(partial)
     if restart and partial.exists():
         log.warning("discarding the partial run %s (--restart)", partial)
-        if partial.is_dir():
-            shutil.rmtree(partial)
-        else:
-            partial.unlink()
+        discard(partial)
     if not partial.exists():
         return TileStore.create(partial, layout, identity, _attrs(cfg, identity),
                                 "zarr" if zarrstore.is_zarr(cfg.output) else "hdf5")

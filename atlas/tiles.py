@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Layout", "TileStore", "Tile", "partial_path", "encode_chunk",
+__all__ = ["Layout", "TileStore", "Tile", "partial_path", "encode_chunk", "discard",
            "DEFLATE_LEVEL", "MANIFEST", "PartialStoreError", "IdentityMismatch", "VARIABLES"]
 
 MANIFEST = "manifest.json"
@@ -227,19 +227,25 @@ class TileStore:
         (checked before anything in the folder is touched), then leftovers of interrupted
         writes are cleared."""
         store = cls.read(path)
-        theirs = store.manifest["identity"]
-        differs = sorted(k for k in {*identity, *theirs} if identity.get(k) != theirs.get(k))
-        if differs:
-            raise IdentityMismatch(differs)
+        store.check(identity)
         for leftover in (*path.glob("tiles/.*.tmp"), *path.glob(".*.tmp")):
             leftover.unlink(missing_ok=True)
         return store
 
+    def check(self, identity: dict) -> None:
+        """Raise IdentityMismatch (naming the keys) unless this run has ``identity``."""
+        theirs = self.manifest["identity"]
+        differs = sorted(k for k in {*identity, *theirs} if identity.get(k) != theirs.get(k))
+        if differs:
+            raise IdentityMismatch(differs)
+
     @staticmethod
     def clear_leftovers(path: Path) -> None:
-        """Remove folders of creations that were cut short (they hold no tiles)."""
-        for new in path.parent.glob(f"{path.name}.*.new"):
-            shutil.rmtree(new, ignore_errors=True)
+        """Remove folders of creations cut short (they hold no tiles) and of removals cut
+        short (:func:`discard`)."""
+        for folder in (*path.parent.glob(f"{path.name}.*.new"),
+                       *path.parent.glob(f".{path.name}.*.discarded")):
+            shutil.rmtree(folder, ignore_errors=True)
 
     # ---------------------------------------------------------------- tiles
 
@@ -292,9 +298,21 @@ class TileStore:
         os.replace(self._tile_path(index), self.path / "damaged" / self._tile_path(index).name)
 
     def remove(self) -> None:
-        """Delete the partial run (after its output is in place, or on ``--restart``)."""
-        shutil.rmtree(self.path)
-        _fsync_dir(self.path.parent)
+        """Delete the partial run, once its output is in place."""
+        discard(self.path)
+
+
+def discard(path: Path) -> None:
+    """Delete a partial run (file or folder) so that an interruption never leaves half of
+    it at ``path``: it is renamed away first (atomic), then deleted; what an interruption
+    leaves under the new name is cleared by :meth:`TileStore.clear_leftovers`."""
+    away = path.with_name(f".{path.name}.{os.getpid()}.discarded")
+    os.rename(path, away)
+    _fsync_dir(path.parent)
+    if away.is_dir():
+        shutil.rmtree(away)
+    else:
+        away.unlink()
 
 
 def _jsonable(attrs: dict) -> dict:

@@ -115,6 +115,8 @@ def finalize(tiles, output: Path, groups: dict[str, xr.Dataset],
     with warnings.catch_warnings():  # "not part of the v3 spec yet": xarray reads it
         warnings.simplefilter("ignore")
         zarr.consolidate_metadata(path)  # one read opens the whole tree
+    for stale in output.parent.glob(f".{output.name}.*.old"):  # a rename cut short
+        shutil.rmtree(stale, ignore_errors=True)
     aside = output.with_name(f".{output.name}.{os.getpid()}.old")
     if output.exists():
         os.rename(output, aside)

@@ -106,3 +106,28 @@ def test_tile_write_is_atomic(cfg, monkeypatch):
     monkeypatch.undo()
     store.write(2, values, tally, FILLS)
     assert list(store.done()) == [2] and store.read_tile(2).tally["count"].tolist() == [96]
+
+
+def test_an_interrupted_removal_never_leaves_half_a_partial_run(cfg, monkeypatch):
+    """Killed while deleting the finished run's tiles (after the output is in place): the
+    partial folder was renamed away first, so the next run neither finds half a partial run
+    (no manifest) nor refuses; it clears the leftover."""
+    from atlas import tiles
+
+    real = tiles.shutil.rmtree
+
+    def dies_half_way(path, *args, **kwargs):
+        if ".partial" in path.name and (path / "manifest.json").exists():
+            (path / "manifest.json").unlink()  # rmtree got as far as the manifest
+            raise KeyboardInterrupt
+        real(path, *args, **kwargs)
+
+    monkeypatch.setattr(tiles.shutil, "rmtree", dies_half_way)
+    with pytest.raises(KeyboardInterrupt):
+        atlas.run(cfg, quiet=True)
+    monkeypatch.undo()
+    assert atlas.open(cfg.output).attrs["complete"] == 1
+    assert not partial_path(cfg.output).exists()
+    atlas.run(cfg, quiet=True)
+    assert sorted(p.name for p in cfg.output.parent.iterdir() if "small.h5" in p.name) == [
+        "small.h5", "small.h5.lock"]
