@@ -62,6 +62,9 @@ START_DISTANCE = 1e-7
 #: Arc-length spacing of the samples used to seed foot-point searches [rad-ish].
 SAMPLE_SPACING = 0.02
 _NEWTON = 6  # iterations for foot points and inverse functions (quadratic convergence)
+#: Side of the cells that bin boundary samples for the nearest-sample search [rad-ish], and
+#: the most cells an index may have.
+_CELL, _MAX_CELLS = 0.3, 1 << 20
 
 
 class _DenseOutput:
@@ -379,40 +382,65 @@ class StableManifold:
 
 
 class BoundaryIndex:
-    """Nearest basin boundaries of points, among the boundary copies that pass through a box
-    (a k-d tree over their samples, refined on the dense output of :class:`StableManifold`)."""
+    """Nearest basin boundaries of points, among the boundary copies that pass through a box:
+    their samples binned in square cells, searched and refined on the dense output of
+    :class:`StableManifold` by the kernel :func:`atlas.kernels.foot.nearest_boundary`."""
 
     def __init__(self, manifold: StableManifold, box):
-        from scipy.spatial import cKDTree
-
         self.manifold, self.box = manifold, box
         copies = manifold._copies(box)
         self.empty = copies is None
-        if not self.empty:
-            self.theta, self.theta_dot, self.n, self.branch, self.sample = copies
-            self.tree = cKDTree(np.column_stack([self.theta, self.theta_dot]))
+        self._tree = None
+        if self.empty:
+            return
+        self.theta, self.theta_dot, self.n, self.branch, self.sample = copies
+        (t0, t1), (v0, v1) = box
+        self.cell = max(_CELL, math.sqrt((t1 - t0) * (v1 - v0) / _MAX_CELLS))
+        self.shape = (max(1, math.ceil((t1 - t0) / self.cell)),
+                      max(1, math.ceil((v1 - v0) / self.cell)))
+        cx = np.clip(((self.theta - t0) // self.cell).astype(np.int64), 0, self.shape[0] - 1)
+        cy = np.clip(((self.theta_dot - v0) // self.cell).astype(np.int64), 0,
+                     self.shape[1] - 1)
+        bucket = cx * self.shape[1] + cy
+        self.items = np.argsort(bucket, kind="stable")
+        self.start = np.concatenate([[0], np.cumsum(np.bincount(
+            bucket, minlength=self.shape[0] * self.shape[1]))])
 
     def nearest(self, theta, theta_dot):
         """Distance [rad-ish, Euclidean in the (θ, θ̇) plane] from each point to the nearest
         boundary in the index, and that boundary's saddle n (odd); (inf, 0) if none. Exact
         (to ≈ 1e-12) wherever the true nearest boundary passes through the box."""
+        from .kernels.foot import nearest_boundary
+
         theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
         if self.empty or theta.size == 0:
             return np.full(theta.shape, np.inf), np.zeros(theta.shape, np.int64)
-        _, j = self.tree.query(np.column_stack([theta.ravel(), theta_dot.ravel()]), workers=-1)
-        n = self.n[j]
-        x, v = to_left_branch(n, self.branch[j] == 1, theta.ravel(), theta_dot.ravel())
-        _, dist = self.manifold._foot(x, v, self.sample[j])
+        m, d = self.manifold, self.manifold._sol
+        dist = np.empty(theta.size)
+        n = np.empty(theta.size, np.int64)
+        (t0, _), (v0, _) = self.box
+        nearest_boundary(np.ascontiguousarray(theta.ravel()),
+                         np.ascontiguousarray(theta_dot.ravel()), self.theta, self.theta_dot,
+                         self.n.astype(np.int64), self.branch.astype(np.int64),
+                         self.sample.astype(np.int64), self.start, self.items, float(t0),
+                         float(v0), float(self.cell), self.shape[0], self.shape[1], m.tau,
+                         m.theta, m.theta_dot, d.t, d.t_old, d.h, d.y_old,
+                         np.ascontiguousarray(d.F), float(m.pendulum.omega0),
+                         float(m.pendulum.alpha), float(m.start[0]), float(m.start[1]), dist, n)
         return dist.reshape(theta.shape), n.reshape(theta.shape)
 
     def saddles_within(self, theta, theta_dot, radius: float):
         """(lowest, highest) saddle n of the boundaries that pass within ``radius`` of each
         point (a superset: samples within radius + the sample spacing); (0, 0) where none."""
+        from scipy.spatial import cKDTree
+
         points = np.column_stack([np.ravel(theta), np.ravel(theta_dot)])
         lo, hi = np.zeros(len(points), np.int64), np.zeros(len(points), np.int64)
         if self.empty or not len(points):
             return lo, hi
-        for i, near in enumerate(self.tree.query_ball_point(points, radius + SAMPLE_SPACING)):
+        if self._tree is None:
+            self._tree = cKDTree(np.column_stack([self.theta, self.theta_dot]))
+        for i, near in enumerate(self._tree.query_ball_point(points, radius + SAMPLE_SPACING)):
             if near:
                 ns = self.n[near]
                 lo[i], hi[i] = ns.min(), ns.max()
