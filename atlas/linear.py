@@ -10,7 +10,7 @@ and near a saddle ((2j+1)π, 0), with φ = θ − (2j+1)π,
 
 Units throughout: θ, φ [rad], θ̇ [rad s⁻¹], t [s], α [s⁻¹], ω0 [rad s⁻¹].
 
-Errata of the essay handled here (see also SPEC.md):
+Errata of the essay handled here (see also the README):
 
 - eq. (7) drops the factors ω and α; the right derivative is eq. (8),
   θ̇ = A e^{−αt}[ω cos(ωt + Φ) − α sin(ωt + Φ)].

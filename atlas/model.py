@@ -63,7 +63,7 @@ class Pendulum:
 
     def energy(self, theta, theta_dot, k=0):
         """E_k = ½θ̇² + ω0²(1 − cos(θ − 2πk)) [rad² s⁻²] per unit ml²: the energy above the
-        bottom of well k. dE/dt = −2αθ̇² ≤ 0, so E is a Lyapunov function (SPEC.md)."""
+        bottom of well k. dE/dt = −2αθ̇² ≤ 0, so E is a Lyapunov function."""
         phi = np.asarray(theta) - 2.0 * np.pi * np.asarray(k)
         return 0.5 * np.asarray(theta_dot) ** 2 + 2.0 * self.omega0**2 * np.sin(0.5 * phi) ** 2
 

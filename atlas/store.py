@@ -14,7 +14,7 @@ tile is done, :func:`finalize` assembles the file:
    folder fsynced, and only then is the partial folder removed. The output path therefore only
    ever holds a complete file, and an interruption anywhere leaves the tiles to finish from.
 
-Layout (SPEC.md): root dims ``theta_dot0``, ``theta0`` (leading ``alpha``, ``omega0`` for a
+Layout: root dims ``theta_dot0``, ``theta0`` (leading ``alpha``, ``omega0`` for a
 parameter atlas); ``attractor`` int16 (``_FillValue`` where not trapped), ``status`` int8
 (CF flags), ``t_trap`` float32 [s], ``boundary_distance`` float32; per basin ``k`` the exact
 area fractions and the grid counts with their errors (:data:`BASIN_VARIABLES`); per parameter
@@ -25,7 +25,6 @@ attributes.
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import zipfile
 from pathlib import Path
@@ -266,17 +265,45 @@ def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:
     """Open an atlas file as a DataTree with the stored dtypes (``attractor`` stays int16 with
     its fill value; plain ``xr.open_dataset`` would mask it to float NaN instead).
 
-    ``chunks={}`` opens lazily with dask (for outputs larger than memory).
+    The file is checked before it is returned (:mod:`atlas.validate`: format version, the basin
+    map's variables, dtypes, dims and coordinates, the status flags, the summary, the stored
+    config): a file that fails raises :class:`InputFileError` with one line saying what is
+    wrong. ``chunks={}`` opens lazily with dask (for outputs larger than memory).
     """
+    from .validate import check_tree
+
     path = Path(path)
-    if not _check_atlas_file(path).get("complete", 0):
+    if not _complete(_check_atlas_file(path)):
         raise InputFileError(f"{path}: a partial atlas (an interrupted run); finish it by "
                              "running `atlas run CONFIG` again first")
-    if path.is_dir():
-        from . import zarrstore
+    try:
+        if path.is_dir():
+            from . import zarrstore
 
-        return zarrstore.open_tree(path, chunks)
-    return xr.open_datatree(path, engine="h5netcdf", mask_and_scale=False, chunks=chunks)
+            tree = zarrstore.open_tree(path, chunks)
+        else:
+            tree = xr.open_datatree(path, engine="h5netcdf", mask_and_scale=False,
+                                    chunks=chunks)
+    except InputFileError:
+        raise
+    except Exception as exc:  # a damaged file fails in h5py, h5netcdf, zarr or xarray
+        raise InputFileError(f"{path}: not a readable atlas file ({_first_line(exc)})") from None
+    try:
+        check_tree(tree, path)
+    except BaseException:
+        tree.close()
+        raise
+    return tree
+
+
+def _complete(attrs: dict) -> bool:
+    flag = np.asarray(attrs.get("complete", 0))
+    return flag.size == 1 and flag.dtype.kind in "iub" and bool(flag.reshape(()))
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0][:200] if text else exc.__class__.__name__
 
 
 def _check_atlas_file(path: Path) -> dict:
@@ -299,13 +326,20 @@ def _check_atlas_file(path: Path) -> dict:
         with h5netcdf.File(path, "r") as f:
             attrs = dict(f.attrs)
             has_vars = {"attractor", "status", "t_trap"} <= set(f.variables)
-    except (OSError, ValueError) as exc:
-        raise InputFileError(f"{path}: not a readable HDF5 file "
-                             f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})"
-                             ) from None
+    except Exception as exc:  # OSError for most damage; h5py/h5netcdf raise others too
+        raise InputFileError(f"{path}: not a readable HDF5 file ({_first_line(exc)})") from None
     if attrs.get("atlas_schema") != SCHEMA or not has_vars:
         raise InputFileError(f"{path}: an HDF5 file, but not an atlas (no atlas basin map in it)")
     return attrs
+
+
+def is_atlas_file(path: str | Path) -> bool:
+    """True if ``path`` is recognisably a file atlas wrote (an atlas file, complete or not,
+    damaged or not, as long as its attributes say so): one a run may write over."""
+    try:
+        return _check_atlas_file(Path(path)).get("atlas_schema") == SCHEMA
+    except InputFileError:
+        return False
 
 
 def describe(path: str | Path) -> dict:
@@ -318,12 +352,18 @@ def describe(path: str | Path) -> dict:
         except PartialStoreError as exc:
             raise InputFileError(f"{path}: a partial run that cannot be read ({exc})") from None
         attrs = tiles.manifest["attrs"]
+        if not isinstance(attrs, dict):
+            raise InputFileError(f"{path}: a partial run that cannot be read (its manifest "
+                                 "has no attributes)")
         return {"attrs": attrs, "complete": False, "tiles_done": int(tiles.done().size),
-                "tiles": tiles.layout.n_tiles, "config": _config(attrs)}
+                "tiles": tiles.layout.n_tiles, "config": _config(attrs, path)}
     attrs = _check_atlas_file(path)
-    return {"attrs": attrs, "complete": bool(attrs.get("complete", 0)), "tiles_done": None,
-            "tiles": None, "config": _config(attrs)}
+    return {"attrs": attrs, "complete": _complete(attrs), "tiles_done": None,
+            "tiles": None, "config": _config(attrs, path)}
 
 
-def _config(attrs: dict):
-    return json.loads(attrs["config"]) if "config" in attrs else None
+def _config(attrs: dict, path="atlas file"):
+    """The stored config as a dict (None if absent); InputFileError if it is not JSON."""
+    from .validate import parse_config
+
+    return parse_config(attrs, path)

@@ -51,11 +51,13 @@ def traced(request):
     return p, sep, cert
 
 
-def test_d_cert_is_the_stated_formula(traced):
+def test_d_cert_covers_the_measured_shift_tenfold(traced):
+    """d_cert exceeds ten times the RK4 map's measured boundary shift, and is not much more:
+    the reference's own error (rtol 1e-13) is far below the shift."""
     _, sep, cert = traced
-    assert cert.d_cert == SAFETY * (sep.attrs["discrepancy"] + sep.attrs["tol"]
-                                    + cert.reference_error)
-    assert 0 < cert.reference_error < 1e-9 and cert.d_cert < 1e-7
+    assert 0 < cert.reference_error < 1e-10
+    assert SAFETY * sep.attrs["discrepancy"] < cert.d_cert < SAFETY * 1.5 * (
+        sep.attrs["discrepancy"] + sep.attrs["tol"])
     assert math.isnan(cert_distance(float("nan"), 1e-12, 1e-11))
 
 

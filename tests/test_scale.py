@@ -238,5 +238,5 @@ output: {tmp_path / 's.h5'}
         np.testing.assert_array_equal(one["theta"].values, ref["theta"].values)
         np.testing.assert_array_equal(one["crossing_theta_dot"].values,
                                       ref["crossing_theta_dot"].values)
-    assert atlas.open(tmp_path / "s.h5") is not None
+    assert atlas.open(tmp_path / "s.h5").attrs["complete"] == 1
     assert run_cli("plot", tmp_path / "s.h5").returncode == 0
