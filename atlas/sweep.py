@@ -393,23 +393,48 @@ def _groups(cfg: Config, layout: store.Layout, traced: list) -> dict[str, xr.Dat
     return groups
 
 
+def _process_age() -> float | None:
+    """Seconds since this process started (Linux's /proc; None elsewhere)."""
+    try:
+        start_ticks = int(open("/proc/self/stat").read().rsplit(")", 1)[1].split()[19])
+        uptime = float(open("/proc/uptime").read().split()[0])
+        return uptime - start_ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+class _Phases:
+    """Wall time of the phases of a run, logged at INFO (``atlas run -v``)."""
+
+    def __init__(self):
+        self.last = time.perf_counter()
+
+    def done(self, name: str) -> None:
+        now = time.perf_counter()
+        log.info("%-32s %6.2f s", name, now - self.last)
+        self.last = now
+
+
 def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float) -> None:
     """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
     and certify what is missing, then assemble the file. A tile file found damaged is set
-    aside (renamed, not deleted) and computed again."""
+    aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``)."""
+    phase = _Phases()
     traced = _trace_separatrices(cfg)
+    phase.done("separatrices")
     certifiers = _certifiers(cfg, tiles.layout, traced)
     groups = _groups(cfg, tiles.layout, traced)
+    phase.done("exact boundaries and areas")
     for _ in range(3):
         _compute_into(tiles, cfg, certifiers, backend, quiet)
+        phase.done("map (label and certify tiles)")
         finalize = zarrstore.finalize if tiles.format == "zarr" else store.finalize
-        assembly = time.perf_counter()
         try:
             summary = _summary(cfg, tiles, certifiers)
+            phase.done("summary")
             finalize(tiles, cfg.output, groups, summary,
                      {"run_time_s": time.perf_counter() - start, "backend": backend})
-            log.info("assembled %s from %d tiles in %.2f s", cfg.output, tiles.layout.n_tiles,
-                     time.perf_counter() - assembly)
+            phase.done(f"writing ({tiles.layout.n_tiles} tiles assembled)")
             return
         except store.DamagedTile as exc:
             log.warning("%s: %s is damaged; computing it again", tiles.path, exc)
@@ -441,6 +466,9 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
         _check_partial(partial, identity)
     _make_output_folder(cfg.output)
     start = time.perf_counter()
+    age = _process_age()
+    if age is not None:
+        log.info("%-32s %6.2f s", "start-up (process, imports)", age)
     with output_lock(cfg.output):
         try:
             tiles = _open_tiles(cfg, layout, identity, restart)
