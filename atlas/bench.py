@@ -1,23 +1,26 @@
-"""CPU benchmark: the lane-blocked kernel against its peers, side by side in one run.
+"""CPU benchmark: the default kernel against its peers, side by side in one run.
 
 The default problem of :mod:`atlas.defaults` (the essay's Figure 9: α, ω0, dt, t_max) on an
-n × n grid of its θ0 and θ̇0 window (:func:`default_grid`). Every figure is the median of
+n × n grid of its θ0 and θ̇0 window (:func:`atlas.defaults.grid`). Every figure is the median of
 ``repeats`` timed runs after one warm-up run (which also compiles), all in this process; within
 each round the variants run in turn, so they see the same machine load and their ratios are
 meaningful even where absolute times drift (the best of the repeats is kept in the JSON too).
 
-* basin map (512², early exit): atlas = :func:`~atlas.kernels.lanes.label_lanes` with the
-  trap tested every ``CHECK_EVERY`` steps (what :func:`atlas.label` runs); the straightforward
+* basin map (512², early exit): atlas = :func:`~atlas.kernels.lanes.label_trigfree` (method
+  "rk4-trigfree") with the trap tested every ``CHECK_EVERY`` steps (what :func:`atlas.label`
+  runs); the lane kernel of method "rk4" (:func:`~atlas.kernels.lanes.label_lanes`, the default
+  before); the straightforward
   Numba kernel with the trap tested every step (one orbit per ``prange`` iteration,
   ``math.sin``) and every ``CHECK_EVERY`` steps; numpy over the whole grid without early exit
   (fixed duration t_max, timed on a short run and extrapolated); scipy ``solve_ivp`` LSODA
   (rtol 1e-8, atol 1e-10, one process) on a random sample of orbits to t_max, extrapolated to
   the grid. "steps/s" there is effective: the RK4 steps the orbits need (Σ n_trap at
   check_every = 1) per second of wall time; the run also reports whether the atlas labels
-  equal the straightforward ones.
-* bulk (fixed number of steps, no early exit): steps/s of ``propagate_lanes``,
-  ``propagate_straightforward`` and numpy; "512² map" there is the time to integrate every
-  orbit to t_max without early exit.
+  equal those of the method's straightforward kernel, and how many differ from the "rk4"
+  straightforward kernel's (a different discretisation: boundary cells only).
+* bulk (fixed number of steps, no early exit): steps/s of ``propagate_trigfree``,
+  ``propagate_lanes``, ``propagate_straightforward`` and numpy; "512² map" there is the time
+  to integrate every orbit to t_max without early exit.
 * scaling: the atlas map at 256² … 4096² (the same window, finer grids).
 * JIT: a subprocess with ``NUMBA_CACHE_DIR`` pointed at a fresh directory times import and the
   first call (compilation), then a second subprocess with the same directory (cache hit).
@@ -40,32 +43,23 @@ import numpy as np
 
 from . import defaults
 from .kernels import TRAPPED
-from .kernels.lanes import label_lanes, propagate_lanes
+from .kernels.lanes import label_lanes, label_trigfree, propagate_lanes, propagate_trigfree
 from .kernels.rk4 import label_straightforward, make_rk4_step, propagate_straightforward
-from .labels import CHECK_EVERY, n_checks_for, trap_margin
+from .kernels.trigfree import label_trigfree_straightforward
+from .labels import CHECK_EVERY, energy_cap, n_checks_for
 
 __all__ = ["run_bench", "format_table", "bench_to_json"]
 
-#: The default problem (:mod:`atlas.defaults`), shared with :mod:`atlas.bench_gpu`.
-DEFAULTS = {"alpha": defaults.ALPHA, "omega0": defaults.OMEGA0, "dt": defaults.DT,
-            "t_max": defaults.T_MAX}
 MAP_N = defaults.GRID_NUM
 SCALING = (256, 512, 1024, 2048, 4096)
 QUICK_SCALING = (256, 512, 1024)
 #: Targets on the 2-core development machine (issue 5).
 TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
-           "jit_cold_s": 5.0, "jit_warm_s": 1.0}
+           "bulk_vs_lanes": 1.5, "jit_cold_s": 5.0, "jit_warm_s": 1.0}
 
 # The same RK4 definition evaluated by numpy on whole arrays: make_rk4_step's Python body
 # with plain-Python sin/reduce (the Numba wrapper is never compiled).
 _numpy_step = make_rk4_step(lambda p, delta: np.sin(p + delta), reduce=lambda x: x).py_func
-
-
-def default_grid(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(θ0 [rad], θ̇0 [rad s⁻¹]) of the n × n grid over the default window, flattened."""
-    theta0, theta_dot0 = np.meshgrid(np.linspace(*defaults.THETA0_WINDOW, n),
-                                     np.linspace(*defaults.THETA_DOT0_WINDOW, n))
-    return theta0.ravel().copy(), theta_dot0.ravel().copy()
 
 
 def _median_times(runs: dict, repeats: int) -> dict:
@@ -86,9 +80,9 @@ def _median_times(runs: dict, repeats: int) -> dict:
 def _label(kernel, theta0, theta_dot0, check_every, p):
     n = theta0.size
     out = (np.zeros(n, np.int32), np.zeros(n, np.int8), np.zeros(n, np.int32))
-    energy_cap = 2.0 * p["omega0"] ** 2 * (1.0 - trap_margin(p["dt"], p["alpha"], p["omega0"]))
     kernel(theta0, theta_dot0, p["alpha"], p["omega0"], p["dt"],
-           n_checks_for(p["t_max"], p["dt"], check_every), check_every, energy_cap, *out)
+           n_checks_for(p["t_max"], p["dt"], check_every), check_every,
+           energy_cap(p["dt"], p["alpha"], p["omega0"]), *out)
     return out
 
 
@@ -128,11 +122,11 @@ _JIT_SCRIPT = """
 import time
 t0 = time.perf_counter()
 import numpy as np
-from atlas.kernels.lanes import label_lanes
+from atlas.kernels.lanes import label_trigfree
 t1 = time.perf_counter()
 n = 64
 out = (np.zeros(n, np.int32), np.zeros(n, np.int8), np.zeros(n, np.int32))
-label_lanes(np.linspace(-3.0, 3.0, n), np.zeros(n), 0.1, 1.0, 0.01, 10, 16, 1.9, *out)
+label_trigfree(np.linspace(-3.0, 3.0, n), np.zeros(n), 0.1, 1.0, 0.01, 10, 16, 1.9, *out)
 t2 = time.perf_counter()
 print(t1 - t0, t2 - t1)
 """
@@ -188,43 +182,51 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
     ``sizes``: grid sides of the scaling rows (default 256…4096; ``quick`` stops at 1024 and
     uses at most 2 repeats, shorter numpy/straightforward runs and a smaller LSODA sample).
     """
-    p = dict(DEFAULTS)
+    p = defaults.problem()
     if quick:
         repeats = min(repeats, 2)
     sizes = tuple(sizes or (QUICK_SCALING if quick else SCALING))
     lsoda_sample = lsoda_sample or (8 if quick else 32)
     full_steps = n_checks_for(p["t_max"], p["dt"], 1)  # steps to t_max
-    theta0, theta_dot0 = default_grid(MAP_N)
+    theta0, theta_dot0 = defaults.grid(MAP_N)
     n = theta0.size
 
     # basin map, early exit
     ref = _label(label_straightforward, theta0, theta_dot0, 1, p)
-    atl = _label(label_lanes, theta0, theta_dot0, CHECK_EVERY, p)
+    ref_tf = _label(label_trigfree_straightforward, theta0, theta_dot0, CHECK_EVERY, p)
+    atl = _label(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p)
     trapped = ref[1] == TRAPPED
     useful = float(np.where(trapped, ref[2], full_steps).sum())  # steps the orbits need
     np_steps = 5 if quick else 20
-    bulk_steps = {"atlas lanes propagate": 50 if quick else 200,
+    bulk_steps = {"atlas trig-free lanes propagate": 50 if quick else 200,
+                  "rk4 lanes propagate": 50 if quick else 200,
                   "straightforward numba propagate": 5 if quick else 20,
                   "numpy whole grid": np_steps}
     t = _median_times({
+        "trigfree": _label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p),
         "lanes": _label_run(label_lanes, theta0, theta_dot0, CHECK_EVERY, p),
         "sf1": _label_run(label_straightforward, theta0, theta_dot0, 1, p),
         "sf16": _label_run(label_straightforward, theta0, theta_dot0, CHECK_EVERY, p),
-        "atlas lanes propagate": _propagate_run(propagate_lanes, theta0, theta_dot0,
-                                                bulk_steps["atlas lanes propagate"], p),
+        "atlas trig-free lanes propagate": _propagate_run(
+            propagate_trigfree, theta0, theta_dot0,
+            bulk_steps["atlas trig-free lanes propagate"], p),
+        "rk4 lanes propagate": _propagate_run(propagate_lanes, theta0, theta_dot0,
+                                              bulk_steps["rk4 lanes propagate"], p),
         "straightforward numba propagate": _propagate_run(
             propagate_straightforward, theta0, theta_dot0,
             bulk_steps["straightforward numba propagate"], p),
         "numpy whole grid": _propagate_run(_numpy_propagate, theta0, theta_dot0, np_steps, p),
     }, repeats)
-    atlas_s, sf1_s, sf16_s = t["lanes"][0], t["sf1"][0], t["sf16"][0]
+    atlas_s, lanes_s, sf1_s, sf16_s = (t[k][0] for k in ("trigfree", "lanes", "sf1", "sf16"))
     rates = {name: n * steps / t[name][0] for name, steps in bulk_steps.items()}
     np_map_s = n * full_steps / rates["numpy whole grid"]
     lsoda_rate = _lsoda_orbits_per_s(theta0, theta_dot0, p, lsoda_sample)
     lsoda_map_s = n / lsoda_rate
     map_rows = [
-        _row(f"atlas lanes (check every {CHECK_EVERY})", useful / atlas_s, n / atlas_s,
-             atlas_s, atlas_s),
+        _row(f"atlas trig-free lanes (check every {CHECK_EVERY})", useful / atlas_s,
+             n / atlas_s, atlas_s, atlas_s),
+        _row(f"rk4 lanes, sin per stage (check every {CHECK_EVERY})", useful / lanes_s,
+             n / lanes_s, lanes_s, atlas_s),
         _row("straightforward numba (check every step)", useful / sf1_s, n / sf1_s, sf1_s,
              atlas_s),
         _row(f"straightforward numba (check every {CHECK_EVERY})", useful / sf16_s,
@@ -234,7 +236,7 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         _row("scipy LSODA rtol 1e-8, 1 process", useful / lsoda_map_s, lsoda_rate, lsoda_map_s,
              atlas_s, f"extrapolated from {lsoda_sample} random orbits"),
     ]
-    atlas_bulk_map = n * full_steps / rates["atlas lanes propagate"]
+    atlas_bulk_map = n * full_steps / rates["atlas trig-free lanes propagate"]
     bulk_rows = [
         _row(name, rate, rate / full_steps, n * full_steps / rate, atlas_bulk_map,
              f"{bulk_steps[name]} steps timed, map time extrapolated to {full_steps} steps")
@@ -243,9 +245,9 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
 
     scaling = []
     for side in sizes:
-        th, v = default_grid(side)
-        s = _median_times({"lanes": _label_run(label_lanes, th, v, CHECK_EVERY, p)},
-                          repeats if side <= 1024 else 1)["lanes"][0]
+        th, v = defaults.grid(side)
+        s = _median_times({"atlas": _label_run(label_trigfree, th, v, CHECK_EVERY, p)},
+                          repeats if side <= 1024 else 1)["atlas"][0]
         scaling.append({"n": side, "orbits": th.size, "wall_s": s, "orbits_per_s": th.size / s,
                         "ns_per_orbit": s / th.size * 1e9})
 
@@ -253,21 +255,24 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         "machine": machine_info(), "problem": {**p, "grid": MAP_N, "check_every": CHECK_EVERY},
         "repeats": repeats, "quick": quick, "targets": TARGETS,
         "map": {"rows": map_rows,
-                "labels_equal_straightforward": bool(
-                    np.array_equal(np.where(trapped, ref[0], 0),
-                                   np.where(atl[1] == TRAPPED, atl[0], 0))),
-                "status_equal": bool(np.array_equal(ref[1], atl[1])),
-                "label_mismatches": int(np.sum((ref[0] != atl[0]) & trapped)),
+                "labels_equal_straightforward": _same_labels(atl, ref_tf),
+                "status_equal": bool(np.array_equal(ref_tf[1], atl[1])),
+                "label_mismatches": int(np.sum((ref_tf[0] != atl[0]) & (ref_tf[1] == TRAPPED))),
+                "rk4_label_mismatches": int(np.sum((ref[0] != atl[0]) & trapped)),
+                "rk4_status_mismatches": int(np.sum(ref[1] != atl[1])),
                 "useful_steps": useful},
         "bulk": {"rows": bulk_rows},
         "scaling": scaling,
         "best_of_repeats_s": {name: best for name, (_, best) in t.items()},
         "summary": {"map_speedup": sf1_s / atlas_s,
-                    "bulk_msteps_s": rates["atlas lanes propagate"] / 1e6,
-                    "bulk_msteps_s_best": n * bulk_steps["atlas lanes propagate"]
-                    / t["atlas lanes propagate"][1] / 1e6,
-                    "bulk_speedup": rates["atlas lanes propagate"]
-                    / rates["straightforward numba propagate"]},
+                    "map_vs_lanes": lanes_s / atlas_s,
+                    "bulk_msteps_s": rates["atlas trig-free lanes propagate"] / 1e6,
+                    "bulk_msteps_s_best": n * bulk_steps["atlas trig-free lanes propagate"]
+                    / t["atlas trig-free lanes propagate"][1] / 1e6,
+                    "bulk_speedup": rates["atlas trig-free lanes propagate"]
+                    / rates["straightforward numba propagate"],
+                    "bulk_vs_lanes": rates["atlas trig-free lanes propagate"]
+                    / rates["rk4 lanes propagate"]},
     }
     if jit:
         cold, warm = _jit_times()
@@ -276,6 +281,13 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         result["summary"].update(jit_cold_s=cold["import_s"] + cold["first_call_s"],
                                  jit_warm_s=warm["import_s"] + warm["first_call_s"])
     return result
+
+
+def _same_labels(a, b) -> bool:
+    """Equal statuses, and equal attractors where trapped."""
+    return bool(np.array_equal(a[1], b[1])
+                and np.array_equal(np.where(a[1] == TRAPPED, a[0], 0),
+                                   np.where(b[1] == TRAPPED, b[0], 0)))
 
 
 def _fmt_rows(rows):
@@ -299,8 +311,10 @@ def format_table(result: dict) -> str:
              f"python {m['python']}, numpy {m['numpy']}, numba {m['numba']}, "
              f"llvmlite {m['llvmlite']}; {m['timestamp']}",
              f"Basin map {MAP_N}² (early exit; steps/s = needed RK4 steps / wall; labels equal "
-             f"straightforward: {result['map']['labels_equal_straightforward']}, status equal: "
-             f"{result['map']['status_equal']})"]
+             f"the trig-free straightforward kernel's: "
+             f"{result['map']['labels_equal_straightforward']}; differ from the rk4 "
+             f"straightforward kernel's in {result['map']['rk4_label_mismatches']} labels, "
+             f"{result['map']['rk4_status_mismatches']} statuses)"]
     lines += _fmt_rows(result["map"]["rows"])
     lines.append("Bulk RK4, fixed steps, no early exit")
     lines += _fmt_rows(result["bulk"]["rows"])
@@ -316,10 +330,11 @@ def format_table(result: dict) -> str:
     jit = (f"; JIT cold {s['jit_cold_s']:.2f} s (< {t['jit_cold_s']:g}), warm cache "
            f"{s['jit_warm_s']:.2f} s (< {t['jit_warm_s']:g})" if "jit_cold_s" in s else "")
     lines.append(f"Summary: map {s['map_speedup']:.1f}× straightforward (target ≥ "
-                 f"{t['map_speedup']:g}×); bulk {s['bulk_msteps_s']:.0f} M steps/s (target ≥ "
-                 f"{t['bulk_msteps_s']:g}; best of repeats {s['bulk_msteps_s_best']:.0f}), "
-                 f"{s['bulk_speedup']:.1f}× straightforward (target ≥ "
-                 f"{t['bulk_speedup']:g}×){jit}")
+                 f"{t['map_speedup']:g}×), {s['map_vs_lanes']:.2f}× rk4 lanes; bulk "
+                 f"{s['bulk_msteps_s']:.0f} M steps/s (target ≥ {t['bulk_msteps_s']:g}; best of "
+                 f"repeats {s['bulk_msteps_s_best']:.0f}), {s['bulk_speedup']:.1f}× "
+                 f"straightforward (target ≥ {t['bulk_speedup']:g}×), {s['bulk_vs_lanes']:.2f}× "
+                 f"rk4 lanes (target ≥ {t['bulk_vs_lanes']:g}×){jit}")
     return "\n".join(lines)
 
 

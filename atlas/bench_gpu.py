@@ -1,7 +1,7 @@
 """GPU benchmark: the CUDA kernels of :mod:`atlas.kernels.cuda` on the default problem.
 
-The default problem of :mod:`atlas.defaults` (``bench.DEFAULTS``) on an n × n grid of its
-window (``bench.default_grid``). For each kernel variant ("fast": wrapped θ and a
+The default problem of :mod:`atlas.defaults` (``defaults.problem()``) on an n × n grid of its
+window (``defaults.grid``). For each kernel variant ("fast": wrapped θ and a
 reduced-range polynomial sin; "straightforward": one orbit per thread with libdevice sin):
 
 * basin map: kernel time by CUDA events (median of ``repeats`` after one warm-up launch,
@@ -22,10 +22,11 @@ import time
 
 import numpy as np
 
-from .bench import DEFAULTS, default_grid
+from . import defaults
 from .kernels import TRAPPED, UNRESOLVED
-from .kernels.cuda import VARIANTS, cuda_status, kernels, label_cuda
-from .labels import CHECK_EVERY, n_checks_for, trap_margin
+from .kernels.cuda import VARIANTS, cuda_status, kernels
+from .kernels.cuda_host import label_cuda
+from .labels import CHECK_EVERY, energy_cap, n_checks_for
 
 __all__ = ["run_gpu_bench", "format_gpu_rows", "TARGETS"]
 
@@ -58,7 +59,7 @@ def _wall_ms(run, repeats):
     return statistics.median(times)
 
 
-def _bench_variant(cuda, variant, theta0, theta_dot0, p, n_checks, energy_cap, bulk_steps,
+def _bench_variant(cuda, variant, theta0, theta_dot0, p, n_checks, cap, bulk_steps,
                    repeats):
     k = kernels(variant)
     n = theta0.size
@@ -67,7 +68,7 @@ def _bench_variant(cuda, variant, theta0, theta_dot0, p, n_checks, energy_cap, b
     d_st = cuda.device_array(n, np.int8)
     d_nt = cuda.device_array(n, np.int32)
     grid = -(-n // k.label_block)
-    scalars = (p["alpha"], p["omega0"], p["dt"], n_checks, CHECK_EVERY, energy_cap)
+    scalars = (p["alpha"], p["omega0"], p["dt"], n_checks, CHECK_EVERY, cap)
     label_ms = _event_ms(cuda, lambda: k.label[grid, k.label_block](
         d_th, d_v, *scalars, d_att, d_st, d_nt), repeats)
     status, n_trap, attractor = d_st.copy_to_host(), d_nt.copy_to_host(), d_att.copy_to_host()
@@ -127,7 +128,7 @@ def _jax_bulk(theta0, theta_dot0, p, bulk_steps, repeats):
             "version": jax.__version__}
 
 
-def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = DEFAULTS["t_max"],
+def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = defaults.T_MAX,
                   bulk_steps: int = 1000, allow_simulator: bool = False) -> dict | None:
     """Benchmark the CUDA kernels on an n × n default-parameter grid (module doc).
 
@@ -140,11 +141,11 @@ def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = DEFAULTS["t
         return None
     from numba import cuda
 
-    p = dict(DEFAULTS, t_max=t_max)
-    theta0, theta_dot0 = default_grid(n)
+    p = dict(defaults.problem(), t_max=t_max)
+    theta0, theta_dot0 = defaults.grid(n)
     n_checks = n_checks_for(t_max, p["dt"], CHECK_EVERY)
-    energy_cap = 2.0 * p["omega0"] ** 2 * (1.0 - trap_margin(p["dt"], p["alpha"], p["omega0"]))
-    variants = {v: _bench_variant(cuda, v, theta0, theta_dot0, p, n_checks, energy_cap,
+    cap = energy_cap(p["dt"], p["alpha"], p["omega0"])
+    variants = {v: _bench_variant(cuda, v, theta0, theta_dot0, p, n_checks, cap,
                                   bulk_steps, repeats) for v in VARIANTS}
     (att_f, st_f), (att_s, st_s) = (variants[v].pop("labels") for v in VARIANTS)
     same = (st_f == st_s) & ((st_f != TRAPPED) | (att_f == att_s))

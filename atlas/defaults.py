@@ -6,6 +6,8 @@ benchmarks all read these, so a default changes in one place.
 
 import math
 
+import numpy as np
+
 ALPHA = 0.1                                 #: damping constant α [s⁻¹]
 OMEGA0 = 1.0                                #: natural angular frequency ω0 [rad s⁻¹]
 THETA0_WINDOW = (-3 * math.pi, 3 * math.pi)  #: θ0 range of the grid [rad]
@@ -17,3 +19,16 @@ SEPARATRIX_TOL = 1e-12                      #: bisection bracket width of a sepa
 MAX_SPACING = 0.05                          #: largest vertex spacing of a separatrix polyline
 TILE_ORBITS = 1 << 18                       #: orbits per tile of a sweep
 OUTPUT = "outputs/default.h5"               #: output file of a config without `output:`
+
+
+def problem() -> dict:
+    """The default problem as keyword values: α, ω0, dt, t_max (benchmarks, CPU and GPU)."""
+    return {"alpha": ALPHA, "omega0": OMEGA0, "dt": DT, "t_max": T_MAX}
+
+
+def grid(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(θ0 [rad], θ̇0 [rad s⁻¹]) of the n × n grid over the default window, flattened
+    (θ0 fastest)."""
+    theta0, theta_dot0 = np.meshgrid(np.linspace(*THETA0_WINDOW, n),
+                                     np.linspace(*THETA_DOT0_WINDOW, n))
+    return theta0.ravel().copy(), theta_dot0.ravel().copy()

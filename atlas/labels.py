@@ -19,14 +19,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import defaults
-from .kernels import TRAPPED
+from .kernels import ATTRACTOR_FILL, METHODS, TRAPPED
 from .limits import MAX_STEPS, MAX_TRAP_MARGIN, MAX_WELL, check_reach
 from .model import Pendulum, rk4_stable
 
-__all__ = ["LabelResult", "label", "trap_margin", "ATTRACTOR_FILL", "BACKENDS"]
+__all__ = ["LabelResult", "label", "trap_margin", "energy_cap", "ATTRACTOR_FILL", "BACKENDS",
+           "METHODS", "DEFAULT_METHOD"]
 
-#: Fill value of ``attractor`` where status ≠ trapped (also the HDF5 _FillValue).
-ATTRACTOR_FILL = np.iinfo(np.int16).min
+#: ``ATTRACTOR_FILL`` (defined in :mod:`atlas.kernels` with the status codes): fill value of
+#: ``attractor`` where status ≠ trapped (also the HDF5 _FillValue).
+#: The CPU discretisation :func:`label` uses unless told (see :data:`atlas.kernels.METHODS`).
+DEFAULT_METHOD = METHODS[0]
 #: Steps between two trap tests in the fast kernels (trapping times are resolved to this).
 CHECK_EVERY = 16
 BACKENDS = ("cpu", "cuda")
@@ -48,6 +51,12 @@ def trap_margin(dt: float, alpha: float, omega0: float) -> float:
     return 1e-9 + (lam * dt) ** 4
 
 
+def energy_cap(dt: float, alpha: float, omega0: float) -> float:
+    """The trap level 2ω0²(1 − m) [rad² s⁻²] that every kernel is given (``energy_cap`` of
+    the kernel contract, :mod:`atlas.kernels`), m = :func:`trap_margin`."""
+    return 2.0 * omega0**2 * (1.0 - trap_margin(dt, alpha, omega0))
+
+
 @dataclass(frozen=True)
 class LabelResult:
     """Per-orbit labels, arrays shaped like the broadcast initial conditions.
@@ -62,20 +71,43 @@ class LabelResult:
     t_trap: np.ndarray
 
 
-def _kernel(backend: str, kernel: str | None):
-    if backend == "cpu":
-        if kernel == "straightforward":
+KERNELS = (None, "straightforward")
+
+
+def resolve_method(backend: str, kernel: str | None, method: str | None) -> str:
+    """The discretisation :func:`label` runs: ``method`` if given, else "rk4" for the
+    straightforward kernel and the CUDA backend, :data:`DEFAULT_METHOD` otherwise. Raises
+    ValueError (one line) for unknown names and combinations that do not exist."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if kernel not in KERNELS:
+        raise ValueError(f"kernel must be one of {KERNELS}, got {kernel!r}")
+    if method is None:
+        return "rk4" if backend == "cuda" or kernel == "straightforward" else DEFAULT_METHOD
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if backend == "cuda" and method != "rk4":
+        raise ValueError(f"method {method!r} has no CUDA kernel; the cuda backend runs 'rk4'")
+    return method
+
+
+def _kernel(backend: str, kernel: str | None, method: str | None = None):
+    method = resolve_method(backend, kernel, method)
+    if backend == "cuda":
+        from .kernels.cuda_host import label_cuda
+
+        return label_cuda
+    if kernel == "straightforward":
+        if method == "rk4":
             from .kernels.rk4 import label_straightforward
 
             return label_straightforward
-        from .kernels.lanes import label_lanes
+        from .kernels.trigfree import label_trigfree_straightforward
 
-        return label_lanes
-    if backend == "cuda":
-        from .kernels.cuda import label_cuda
+        return label_trigfree_straightforward
+    from .kernels.lanes import label_lanes, label_trigfree
 
-        return label_cuda
-    raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    return label_lanes if method == "rk4" else label_trigfree
 
 
 def n_checks_for(t_max: float, dt: float, check_every: int) -> int:
@@ -132,17 +164,23 @@ def label(
     backend: str = "cpu",
     kernel: str | None = None,
     check_every: int = CHECK_EVERY,
+    method: str | None = None,
 ) -> LabelResult:
     """Label initial conditions (θ0 [rad], θ̇0 [rad s⁻¹]) by the attractor they reach.
 
     Integrates eq. (1) with fixed-step RK4 (step ``dt`` [s], at most ``t_max`` [s] rounded up
     to a whole number of trap tests) and stops each orbit once certified by the energy trap.
-    ``kernel="straightforward"`` selects the plain one-orbit-per-thread CPU kernel.
+    ``method`` picks the discretisation (:data:`atlas.kernels.METHODS`): on the CPU
+    "rk4-trigfree" by default (RK4 with cos θ, sin θ carried as state), or "rk4" (RK4 with a
+    sin per stage, the lane kernel of earlier versions and the CUDA backend's method).
+    ``kernel="straightforward"`` selects the plain one-orbit-per-thread CPU kernel of the
+    method, "rk4" unless ``method`` says otherwise.
     Raises ValueError for settings that cannot give certified labels
     (:func:`check_integration`) or initial conditions whose orbits may reach wells beyond
     |k| ≤ MAX_WELL (:func:`atlas.limits.check_reach`); OverflowError if one does anyway.
     """
     check_integration(alpha, omega0, dt, t_max, check_every)
+    run = _kernel(backend, kernel, method)
     theta0, theta_dot0 = np.broadcast_arrays(
         np.asarray(theta0, dtype=np.float64), np.asarray(theta_dot0, dtype=np.float64)
     )
@@ -154,10 +192,8 @@ def label(
     attractor = np.zeros(n, np.int32)
     status = np.zeros(n, np.int8)
     n_trap = np.zeros(n, np.int32)
-    energy_cap = 2.0 * omega0**2 * (1.0 - trap_margin(dt, alpha, omega0))
-    run = _kernel(backend, kernel)
     run(th, v, float(alpha), float(omega0), float(dt), n_checks_for(t_max, dt, check_every),
-        int(check_every), energy_cap, attractor, status, n_trap)
+        int(check_every), energy_cap(dt, alpha, omega0), attractor, status, n_trap)
     trapped = status == TRAPPED
     if np.any(np.abs(attractor[trapped]) > MAX_WELL):
         raise OverflowError(f"an orbit reached a well |k| > {MAX_WELL}, beyond the int16 "

@@ -14,6 +14,14 @@ Every labelling kernel follows one contract, so backends are interchangeable:
 * outputs (preallocated, length N): ``attractor`` int32 (k, untouched unless trapped),
   ``status`` int8 (0 trapped, 1 unresolved, 2 nonfinite), ``n_trap`` int32 (the step
   count n at trapping, −1 otherwise).
+* the return value is not part of the contract (the lane kernels return how many orbits each
+  of their paths took, for logging).
+
+Methods (the discretisation, :data:`METHODS`): ``"rk4-trigfree"`` (default on the CPU,
+classical RK4 on (θ, θ̇, cos θ, sin θ), :mod:`atlas.kernels.trigfree`) and ``"rk4"``
+(classical RK4 on (θ, θ̇) with a sin per stage, :mod:`atlas.kernels.rk4`; the CUDA kernels'
+method). Both are of order 4; their trajectories differ by O(dt⁴), so labels differ only on
+basin-boundary cells.
 
 Checks before any step and after a non-finite state are part of the contract: an initial
 condition already inside a trap has n_trap = 0, and a NaN/inf state is reported at the
@@ -31,10 +39,17 @@ import hashlib
 import os
 from pathlib import Path
 
+import numpy as np
+
 TRAPPED, UNRESOLVED, NONFINITE = 0, 1, 2
 #: Status set after labelling (never by a kernel): trapped, but not certified for the exact
 #: equation (closer than d_cert to a basin boundary; see :mod:`atlas.certificate`).
 NEAR_BOUNDARY = 3
+#: Attractor index where status ≠ trapped in a label result (int16; also the file's
+#: _FillValue), the counterpart of the status codes above.
+ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
+#: Discretisations the CPU kernels offer; the first is the default.
+METHODS = ("rk4-trigfree", "rk4")
 
 
 def source_hash() -> str:

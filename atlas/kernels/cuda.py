@@ -19,14 +19,16 @@ decided by rounding (within ~1e-12 of a separatrix, or an energy within ~1e-13 o
 test): libdevice's sin, the polynomial sin and FMA contraction each round differently from the
 CPU's libm sin. ``tests/test_cuda.py`` checks equality on a grid and hand-picked orbits.
 
-Host numpy arrays in and out; the batch is cut into chunks that fit in free device memory
-and run on two streams with pinned staging buffers, so chunk i+1's transfers overlap chunk i's
-kernel. numba.cuda is imported only when a function here is called: the CPU path never
-imports it. Under ``NUMBA_ENABLE_CUDASIM=1`` the kernels run in numba's simulator (tests).
+This module holds the device side (availability, device functions, compiled kernels); the
+host orchestration — chunks, streams, pinned staging, :func:`label_cuda` on host arrays — is
+:mod:`atlas.kernels.cuda_host`. numba.cuda is imported only when a function here is called:
+the CPU path never imports it. Under ``NUMBA_ENABLE_CUDASIM=1`` the kernels run in numba's
+simulator (tests).
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 from typing import NamedTuple
@@ -38,14 +40,10 @@ from . import NONFINITE, TRAPPED, UNRESOLVED
 from .fastsin import INV_PI, PI_1, PI_2, PI_3, sin_poly
 from .rk4 import INV_TWO_PI, make_rk4_step, make_well_energy
 
-__all__ = ["VARIANTS", "cuda_status", "kernels", "label_cuda", "propagate_cuda", "require_cuda"]
+__all__ = ["VARIANTS", "cuda_status", "kernels", "require_cuda"]
 
 #: Kernel variants: name -> (sin implementation, keep θ wrapped near [−π, π]).
 VARIANTS = ("fast", "straightforward")
-#: Most orbits per chunk (≈ 25 B each on the device for labelling, two chunks in flight).
-CHUNK_CAP = 1 << 22
-#: Fraction of the free device memory the two in-flight chunks may take.
-MEMORY_FRACTION = 0.5
 #: Steps between two wraps of θ in the fast fixed-steps kernel (stage offsets stay < 1 rad).
 WRAP_EVERY = 16
 #: 1.5·2⁵²: (x + R) − R rounds x to the nearest integer in float arithmetic for |x| < 2⁵¹,
@@ -62,10 +60,6 @@ cuda = None
 @functools.cache
 def _import_cuda():
     """Import numba.cuda once; raise BackendUnavailable with one line when it cannot be."""
-    # numba-cuda 0.30 still calls numpy.row_stack, removed in numpy 2.5; without this alias
-    # compiling any kernel fails with "module 'numpy' has no attribute 'row_stack'".
-    if not hasattr(np, "row_stack"):
-        np.row_stack = np.vstack
     global cuda
     try:
         from numba import cuda as module
@@ -76,6 +70,22 @@ def _import_cuda():
         ) from None
     cuda = module
     return module
+
+
+@contextlib.contextmanager
+def _row_stack_alias():
+    """numba-cuda 0.30 still calls ``numpy.row_stack``, removed in numpy 2.5; without it
+    compiling a kernel fails with "module 'numpy' has no attribute 'row_stack'". The alias
+    (``numpy.vstack``) exists only while kernels compile here, and is removed afterwards:
+    a library must not change numpy for the whole process."""
+    if hasattr(np, "row_stack"):
+        yield
+        return
+    np.row_stack = np.vstack
+    try:
+        yield
+    finally:
+        del np.row_stack
 
 
 def _simulator() -> bool:
@@ -194,6 +204,11 @@ def kernels(variant: str = "fast") -> Kernels:
     if variant not in VARIANTS:
         raise ValueError(f"CUDA variant must be one of {VARIANTS}, got {variant!r}")
     require_cuda()  # binds the global `cuda` the kernels below refer to
+    with _row_stack_alias():
+        return _compile(variant)
+
+
+def _compile(variant: str) -> Kernels:
     step, well_energy = _device_functions(cuda, variant)
     wrap = variant == "fast"
     f8, i8, i4, i1 = "float64", "int64", "int32", "int8"
@@ -250,92 +265,3 @@ def kernels(variant: str = "fast") -> Kernels:
         theta_dot[i] = v
 
     return Kernels(label, propagate, _block_size(cuda, label), _block_size(cuda, propagate))
-
-
-def _chunk_size(cuda, bytes_per_item: int, block: int, cap: int | None) -> int:
-    """Orbits per chunk: two chunks in flight within MEMORY_FRACTION of free device memory."""
-    free, _total = cuda.current_context().get_memory_info()
-    fit = MEMORY_FRACTION * float(free) / (2 * bytes_per_item)
-    size = int(min(float(cap or CHUNK_CAP), fit))
-    return max(block, size // block * block) if cap is None else max(1, size)
-
-
-def _run_chunked(cuda, kernel, block, args, modes, chunk):
-    """Launch ``kernel(*args)`` over length-n host arrays in chunks, double-buffered.
-
-    ``modes[i]`` is "in", "out", "inout" for array arguments and None for scalars. Each of two
-    buffer sets owns a stream, pinned staging arrays and device arrays; chunk c uses set c % 2
-    and the host waits for a set only when it reuses it, so one chunk's copies overlap the
-    other chunk's kernel.
-    """
-    arrays = [(i, a) for i, (a, m) in enumerate(zip(args, modes, strict=True)) if m is not None]
-    n = arrays[0][1].size
-    size = min(n, _chunk_size(cuda, sum(a.itemsize for _, a in arrays), block, chunk))
-    sets = []
-    for _ in range(min(2, -(-n // size))):
-        stream = cuda.stream()
-        pinned = {i: cuda.pinned_array(size, a.dtype) for i, a in arrays}
-        device = {i: cuda.device_array(size, a.dtype, stream=stream) for i, a in arrays}
-        sets.append({"stream": stream, "pinned": pinned, "device": device, "pending": None})
-
-    def finish(buf):
-        if buf["pending"] is None:
-            return
-        lo, hi = buf["pending"]
-        buf["stream"].synchronize()
-        for i, a in arrays:
-            if modes[i] != "in":
-                a[lo:hi] = buf["pinned"][i][: hi - lo]
-        buf["pending"] = None
-
-    for c, lo in enumerate(range(0, n, size)):
-        hi = min(n, lo + size)
-        m = hi - lo
-        buf = sets[c % 2]
-        finish(buf)
-        stream, pinned, device = buf["stream"], buf["pinned"], buf["device"]
-        call = list(args)
-        for i, a in arrays:
-            view = device[i][:m]
-            if modes[i] != "out":
-                pinned[i][:m] = a[lo:hi]
-                view.copy_to_device(pinned[i][:m], stream=stream)
-            call[i] = view
-        kernel[-(-m // block), block, stream](*call)
-        for i, _ in arrays:
-            if modes[i] != "in":
-                device[i][:m].copy_to_host(pinned[i][:m], stream=stream)
-        buf["pending"] = (lo, hi)
-    for buf in sets:
-        finish(buf)
-
-
-def label_cuda(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
-               attractor, status, n_trap, *, variant: str = "fast", chunk: int | None = None):
-    """Label orbits on the GPU; the contract of :mod:`atlas.kernels` on host numpy arrays.
-
-    ``variant`` picks the kernel (module doc); ``chunk`` caps the orbits per chunk (default:
-    by free device memory, at most CHUNK_CAP). Raises BackendUnavailable (one line) when CUDA
-    cannot be used.
-    """
-    k = kernels(variant)
-    if theta0.size == 0:
-        return
-    args = (theta0, theta_dot0, float(alpha), float(omega0), float(dt), int(n_checks),
-            int(check_every), float(energy_cap), attractor, status, n_trap)
-    # attractor is "inout": the contract leaves it untouched where nothing is trapped.
-    modes = ("in", "in", None, None, None, None, None, None, "inout", "out", "out")
-    _run_chunked(_import_cuda(), k.label, k.label_block, args, modes, chunk)
-
-
-def propagate_cuda(theta, theta_dot, alpha, omega0, dt, n_steps, *, variant: str = "fast",
-                   chunk: int | None = None):
-    """Advance every orbit (θ [rad], θ̇ [rad s⁻¹], float64 1-D host arrays) by ``n_steps`` RK4
-    steps of ``dt`` [s] in place, no early exit: the GPU twin of
-    :func:`atlas.kernels.rk4.propagate_straightforward` (bulk-throughput benchmark)."""
-    k = kernels(variant)
-    if theta.size == 0:
-        return
-    args = (theta, theta_dot, float(alpha), float(omega0), float(dt), int(n_steps))
-    modes = ("inout", "inout", None, None, None, None)
-    _run_chunked(_import_cuda(), k.propagate, k.propagate_block, args, modes, chunk)

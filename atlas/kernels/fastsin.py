@@ -26,6 +26,11 @@ FMA contraction x − q·P1 is exact and the error stays ≈ 6e-16 (measured to 
 CPU without FMA q·P1 is exact only for |x| < 2²⁶π ≈ 2e8, beyond which r carries the rounding of
 q·P1 (up to ulp(x), the uncertainty of x itself). NaN and ±inf give NaN.
 
+``sin_cos_vers`` gives sin x, cos x and the versine 1 − cos x from one reduction (cos r and
+1 − cos r by the half angle, 1 − cos r = 2 sin²(r/2): no cancellation anywhere), for the
+trig-free kernel's re-synchronisation and energy test (:mod:`atlas.kernels.trigfree`); its
+errors are within ``ERROR_BOUND`` on the same range (tested).
+
 ``reduce_pi`` and ``sin_poly`` are exported so a kernel can share one reduction between
 nearby arguments (:mod:`atlas.kernels.lanes` does it for the four RK4 stage angles);
 ``sin_poly`` stays within ``ERROR_BOUND`` for |r| ≤ ``POLY_RANGE`` = 2.0, which leaves room
@@ -110,3 +115,16 @@ def sin_near(reduced, delta):
     |r + δ| ≤ POLY_RANGE, i.e. for every |δ| ≤ POLY_RANGE − π/2 ≈ 0.43 rad."""
     r, sign = reduced
     return sign * sin_poly(r + delta)
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def sin_cos_vers(x):
+    """(sin x, cos x, 1 − cos x) [x in rad] from one Cody–Waite reduction x = qπ + r:
+    sin x = ±sin r, cos x = ±(1 − 2 sin²(r/2)), and 1 − cos x = 2 sin²(r/2) for even q,
+    2 − 2 sin²(r/2) for odd q (|r/2| ≤ π/4, so neither has cancellation). Branch-free
+    (the parity choice is a select), max abs error ERROR_BOUND for |x| ≤ EXACT_RANGE."""
+    r, sign = reduce_pi(x)
+    h = sin_poly(0.5 * r)
+    vers = 2.0 * (h * h)
+    vers_x = vers if sign > 0.0 else 2.0 - vers
+    return sign * sin_poly(r), sign * (1.0 - vers), vers_x

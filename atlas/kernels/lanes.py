@@ -56,6 +56,7 @@ boundary); t_trap is equal whenever the two kernels trap at the same check (same
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numba as nb
@@ -64,132 +65,256 @@ import numpy as np
 from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit
 from .fastsin import EXACT_RANGE, POLY_RANGE, SIN_FASTMATH, fast_sin, reduce_pi, sin_near
 from .rk4 import label_orbit, make_rk4_step, make_well_energy, rk4_step
+from .trigfree import (
+    SYNC_EVERY,
+    label_orbit_trigfree,
+    sync_libm,
+    sync_poly,
+    trigfree_step,
+)
+
+log = logging.getLogger(__name__)
 
 #: Orbits per lane block (a compile-time constant; see the module docstring).
 LANES = 32
-#: Orbits per chunk before the chunk count grows, and the largest chunk count.
-ORBITS_PER_CHUNK = 8192
-MAX_CHUNKS = 32
 #: Contiguous orbits a chunk takes at a time (tiles are dealt to chunks in turn).
 TILE = 256
-#: Largest stage offset |δ| the lane path admits (sin_near is accurate to POLY_RANGE − π/2).
+#: Chunks per Numba thread (``numba.get_num_threads()`` at the call): enough for the static
+#: split of chunks between threads to stay balanced although orbits exit early.
+CHUNKS_PER_THREAD = 16
+#: Largest stage offset |δ| the shared-reduction path admits (sin_near is accurate to
+#: POLY_RANGE − π/2).
 MAX_STAGE_OFFSET = 0.3
 assert MAX_STAGE_OFFSET < POLY_RANGE - math.pi / 2
 
-_step = make_rk4_step(sin_near, reduce_pi)
+#: Paths an orbit can take, indices of the per-call counts the labelling kernels return.
+SHARED, FULL, SCALAR = 0, 1, 2
+PATHS = ("lanes", "full-reduction lanes", "scalar")
+
+
+def n_chunks(n: int) -> int:
+    """Chunks of a labelling call over ``n`` orbits: ``CHUNKS_PER_THREAD`` per Numba thread
+    (``numba.get_num_threads()`` now), fewer on small batches so that each chunk has at least
+    two tiles (the separatrix bisection labels a few hundred orbits at a time). Results never
+    depend on it. (Computed outside the jitted kernels: a kernel that asks Numba for its thread
+    count cannot be cached.)"""
+    return max(1, min(CHUNKS_PER_THREAD * nb.get_num_threads(), n // (2 * TILE)))
+
+
+# --------------------------------------------------------------------- method "rk4"
+_shared_step = make_rk4_step(sin_near, reduce_pi)
+_full_step = make_rk4_step(fast_sin)
 _well_energy = make_well_energy(fast_sin)
 
 
-@nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _advance(th, v, alpha, omega0, dt, n_steps):
-    """``n_steps`` RK4 steps of every lane; the lane loop is the one LLVM vectorises."""
-    for _ in range(n_steps):
-        for lane in range(LANES):
-            th[lane], v[lane] = _step(th[lane], v[lane], alpha, omega0, dt)
+def _lane_step(rk4):
+    """The rk4 step in the lane signature (θ, θ̇, c, s) → (θ, θ̇, c, s), c and s unused."""
 
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def step(th, v, c, s, alpha, omega0, dt):
+        th, v = rk4(th, v, alpha, omega0, dt)
+        return th, v, c, s
 
-@nb.njit(inline="always")
-def _n_chunks(n):
-    # enough chunks to keep every core busy on small batches too (the separatrix bisection
-    # labels a few hundred orbits at a time); results never depend on the chunking
-    return max(1, min(MAX_CHUNKS, max(n // ORBITS_PER_CHUNK, n // (2 * TILE))))
+    return step
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _fits_lanes(theta, theta_dot, alpha, omega0, dt):
-    """True if the shared-reduction stage offsets stay below MAX_STAGE_OFFSET for the whole
-    orbit. With α ≥ 0 the energy never grows, so |θ̇| ≤ V = √(θ̇0² + 2ω0²(1 − cos θ0))
+def _rk4_sync(th, v, omega0):
+    k, energy = _well_energy(th, v, omega0)
+    return 0.0, 0.0, k, energy
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _rk4_path(theta, theta_dot, alpha, omega0, dt):
+    """SHARED if the shared-reduction stage offsets stay below MAX_STAGE_OFFSET for the
+    whole orbit, FULL (per-stage reduction, any speed) otherwise, SCALAR for non-finite
+    input, α < 0 and |θ0| beyond half of fast_sin's EXACT_RANGE (its accuracy is stated up to
+    there). With α ≥ 0 the energy never grows, so |θ̇| ≤ V = √(θ̇0² + 2ω0²(1 − cos θ0))
     ≤ √(θ̇0² + 4ω0²); a stage velocity exceeds |θ̇| by at most ½dt(ω0² + 2α|k|) per stage.
-    The margin 0.43/MAX_STAGE_OFFSET ≈ 1.4 in speed absorbs RK4's small energy error. False
-    for non-finite input (which the reference path reports at its first check) and for
-    |θ0| beyond half of fast_sin's EXACT_RANGE (its accuracy is stated up to there)."""
+    The margin 0.43/MAX_STAGE_OFFSET ≈ 1.4 in speed absorbs RK4's small energy error."""
+    if not (alpha >= 0.0 and abs(theta) <= 0.5 * EXACT_RANGE and math.isfinite(theta_dot)):
+        return SCALAR
     speed = math.sqrt(theta_dot * theta_dot + 4.0 * omega0 * omega0)
     offset = dt * (speed * (1.0 + 2.0 * alpha * dt) + dt * omega0 * omega0)
-    return alpha >= 0.0 and abs(theta) <= 0.5 * EXACT_RANGE and offset <= MAX_STAGE_OFFSET
+    return SHARED if offset <= MAX_STAGE_OFFSET else FULL
 
 
-@nb.njit(nogil=True, fastmath=SIN_FASTMATH)
-def _label_chunk(first, stride, theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
-                 energy_cap, attractor, status, n_trap):
-    """Label the orbits of tiles first, first + stride, … with one lane block and refill."""
-    n = theta0.size
-    th = np.zeros(LANES)
-    v = np.zeros(LANES)
-    well = np.zeros(LANES)
-    energy = np.zeros(LANES)
-    orbit = np.full(LANES, -1, np.int64)  # orbit index held by each lane, −1 if idle
-    check = np.zeros(LANES, np.int64)  # checks done by the lane's orbit
-    nxt = first * TILE
-    while True:
-        for lane in range(LANES):
-            well[lane], energy[lane] = _well_energy(th[lane], v[lane], omega0)
-        active = 0
-        for lane in range(LANES):
-            while True:
-                i = orbit[lane]
-                if i >= 0:
-                    if not (math.isfinite(th[lane]) and math.isfinite(v[lane])):
-                        status[i] = NONFINITE
-                        n_trap[i] = -1
-                    elif energy[lane] < energy_cap:
-                        attractor[i] = np.int32(well[lane])
-                        status[i] = TRAPPED
-                        n_trap[i] = check[lane] * check_every
-                    elif check[lane] == n_checks:
-                        status[i] = UNRESOLVED
-                        n_trap[i] = -1
-                    else:
-                        active += 1
+# ------------------------------------------------------------ method "rk4-trigfree"
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_path(theta, theta_dot, alpha, omega0, dt):
+    """SHARED (the lane path: a trig-free step has no stage-offset limit) unless the input is
+    non-finite, α < 0 or |θ0| is beyond half of fast_sin's EXACT_RANGE: SCALAR."""
+    if alpha >= 0.0 and abs(theta) <= 0.5 * EXACT_RANGE and math.isfinite(theta_dot):
+        return SHARED
+    return SCALAR
+
+
+# ------------------------------------------------------------------ the lane machinery
+def make_label_chunk(step, sync, path, classify, scalar_label, first_pass):
+    """Return ``chunk(first, stride, <contract args>, counts)``: label, with one lane block of
+    ``step`` and refill, the orbits of tiles first, first + stride, … that ``classify`` sends
+    to ``path``. The ``first_pass`` also labels the SCALAR orbits by ``scalar_label`` and
+    counts every orbit's path into ``counts``."""
+
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def advance(th, v, c, s, alpha, omega0, dt, n_steps):
+        # n_steps steps of every lane; the lane loop is the one LLVM vectorises
+        for _ in range(n_steps):
+            for lane in range(LANES):
+                th[lane], v[lane], c[lane], s[lane] = step(th[lane], v[lane], c[lane],
+                                                           s[lane], alpha, omega0, dt)
+
+    @nb.njit(nogil=True, fastmath=SIN_FASTMATH)
+    def chunk(first, stride, theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+              energy_cap, attractor, status, n_trap, counts):
+        n = theta0.size
+        th = np.zeros(LANES)
+        v = np.zeros(LANES)
+        c = np.ones(LANES)
+        s = np.zeros(LANES)
+        well = np.zeros(LANES)
+        energy = np.zeros(LANES)
+        orbit = np.full(LANES, -1, np.int64)  # orbit index held by each lane, −1 if idle
+        check = np.zeros(LANES, np.int64)  # checks done by the lane's orbit
+        nxt = first * TILE
+        while True:
+            for lane in range(LANES):
+                c[lane], s[lane], well[lane], energy[lane] = sync(th[lane], v[lane], omega0)
+            active = 0
+            for lane in range(LANES):
+                while True:
+                    i = orbit[lane]
+                    if i >= 0:
+                        if not (math.isfinite(th[lane]) and math.isfinite(v[lane])):
+                            status[i] = NONFINITE
+                            n_trap[i] = -1
+                        elif energy[lane] < energy_cap:
+                            attractor[i] = np.int32(well[lane])
+                            status[i] = TRAPPED
+                            n_trap[i] = check[lane] * check_every
+                        elif check[lane] == n_checks:
+                            status[i] = UNRESOLVED
+                            n_trap[i] = -1
+                        else:
+                            active += 1
+                            break
+                        orbit[lane] = -1
+                    if nxt >= n:  # chunk exhausted: the lane idles at the fixed point (0, 0)
+                        th[lane] = 0.0
+                        v[lane] = 0.0
+                        c[lane] = 1.0
+                        s[lane] = 0.0
                         break
-                    orbit[lane] = -1
-                if nxt >= n:  # chunk exhausted: the lane idles at the fixed point (0, 0)
-                    th[lane] = 0.0
-                    v[lane] = 0.0
-                    break
-                i = nxt
-                nxt += 1
-                if nxt % TILE == 0:  # end of a tile: jump to this chunk's next tile
-                    nxt += (stride - 1) * TILE
-                if not _fits_lanes(theta0[i], theta_dot0[i], alpha, omega0, dt):
-                    st, k, status_n = label_orbit(theta0[i], theta_dot0[i], alpha, omega0, dt,
-                                                  n_checks, check_every, energy_cap)
-                    status[i] = st
-                    n_trap[i] = status_n
-                    if st == TRAPPED:
-                        attractor[i] = np.int32(k)
-                    continue
-                orbit[lane] = i
-                check[lane] = 0
-                th[lane] = theta0[i]
-                v[lane] = theta_dot0[i]
-                well[lane], energy[lane] = _well_energy(th[lane], v[lane], omega0)
-        if active == 0:
-            return
-        _advance(th, v, alpha, omega0, dt, check_every)
-        for lane in range(LANES):
-            check[lane] += 1
+                    i = nxt
+                    nxt += 1
+                    if nxt % TILE == 0:  # end of a tile: jump to this chunk's next tile
+                        nxt += (stride - 1) * TILE
+                    kind = classify(theta0[i], theta_dot0[i], alpha, omega0, dt)
+                    if first_pass:
+                        counts[kind] += 1
+                    if kind != path:
+                        if first_pass and kind == SCALAR:
+                            st, k, nt = scalar_label(theta0[i], theta_dot0[i], alpha, omega0,
+                                                     dt, n_checks, check_every, energy_cap)
+                            status[i] = st
+                            n_trap[i] = nt
+                            if st == TRAPPED:
+                                attractor[i] = np.int32(k)
+                        continue
+                    orbit[lane] = i
+                    check[lane] = 0
+                    th[lane] = theta0[i]
+                    v[lane] = theta_dot0[i]
+                    c[lane], s[lane], well[lane], energy[lane] = sync(th[lane], v[lane],
+                                                                      omega0)
+            if active == 0:
+                return
+            advance(th, v, c, s, alpha, omega0, dt, check_every)
+            for lane in range(LANES):
+                check[lane] += 1
+
+    return chunk
+
+
+_rk4_shared_chunk = make_label_chunk(_lane_step(_shared_step), _rk4_sync, SHARED, _rk4_path,
+                                     label_orbit, True)
+_rk4_full_chunk = make_label_chunk(_lane_step(_full_step), _rk4_sync, FULL, _rk4_path,
+                                   label_orbit, False)
+_trigfree_chunk = make_label_chunk(trigfree_step, sync_poly, SHARED, _trigfree_path,
+                                   label_orbit_trigfree, True)
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
-def label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
-                attractor, status, n_trap):
-    """Label orbits with lane-blocked SIMD RK4 and the energy trap (kernel contract in
-    :mod:`atlas.kernels`; design, accuracy and differences from the straightforward kernel in
-    the module docstring)."""
-    n_chunks = _n_chunks(theta0.size)
+def _label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+                 attractor, status, n_trap, n_chunks):
+    counts = np.zeros((n_chunks, 3), np.int64)
     for b in nb.prange(n_chunks):
         # int64 chunk index: the parfor would otherwise type the call twice (int64 and uint64)
-        # and compile _label_chunk twice
-        _label_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt, n_checks,
-                     check_every, energy_cap, attractor, status, n_trap)
+        # and compile the chunk twice
+        _rk4_shared_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
+                          n_checks, check_every, energy_cap, attractor, status, n_trap,
+                          counts[b])
+        if counts[b, FULL] > 0:
+            _rk4_full_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
+                            n_checks, check_every, energy_cap, attractor, status, n_trap,
+                            counts[b])
+    return counts.sum(axis=0)
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def _label_trigfree(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+                    attractor, status, n_trap, n_chunks):
+    counts = np.zeros((n_chunks, 3), np.int64)
+    for b in nb.prange(n_chunks):
+        _trigfree_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
+                        n_checks, check_every, energy_cap, attractor, status, n_trap,
+                        counts[b])
+    return counts.sum(axis=0)
+
+
+def _log_paths(kernel_name: str, counts) -> None:
+    if log.isEnabledFor(logging.DEBUG):
+        log.debug("%s: %s", kernel_name,
+                  ", ".join(f"{int(n)} {name}" for name, n in zip(PATHS, counts)))
+
+
+def label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+                attractor, status, n_trap):
+    """Label orbits with lane-blocked SIMD RK4 (method "rk4") and the energy trap (kernel
+    contract in :mod:`atlas.kernels`; design, accuracy and differences from the
+    straightforward kernel in the module docstring). Returns the orbits each path took
+    (int64 [SHARED, FULL, SCALAR]), also logged at debug level."""
+    counts = _label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                          energy_cap, attractor, status, n_trap, n_chunks(theta0.size))
+    _log_paths("label_lanes", counts)
+    return counts
+
+
+def label_trigfree(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+                   attractor, status, n_trap):
+    """Label orbits with lane-blocked trig-free RK4 (method "rk4-trigfree",
+    :mod:`atlas.kernels.trigfree`) and the energy trap (kernel contract in
+    :mod:`atlas.kernels`): the default CPU kernel. Returns the orbits each path took (int64
+    [SHARED, FULL, SCALAR]; FULL is always 0), also logged at debug level."""
+    counts = _label_trigfree(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                             energy_cap, attractor, status, n_trap, n_chunks(theta0.size))
+    _log_paths("label_trigfree", counts)
+    return counts
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _advance_rk4(th, v, alpha, omega0, dt, n_steps):
+    for _ in range(n_steps):
+        for lane in range(LANES):
+            th[lane], v[lane] = _shared_step(th[lane], v[lane], alpha, omega0, dt)
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
 def propagate_lanes(theta, theta_dot, alpha, omega0, dt, n_steps):
     """Advance every orbit [θ rad, θ̇ rad s⁻¹] by ``n_steps`` RK4 steps of ``dt`` [s] in place,
     no early exit: the lane-blocked counterpart of ``propagate_straightforward`` (bulk
-    throughput). Orbits outside the shared-reduction domain (:func:`_fits_lanes`) are advanced
-    by the scalar ``math.sin`` step instead, their lane idling at (0, 0)."""
+    throughput). Orbits outside the shared-reduction domain (:func:`_rk4_path` not SHARED)
+    are advanced by the scalar ``math.sin`` step instead, their lane idling at (0, 0)."""
     n = theta.size
     for b in nb.prange((n + LANES - 1) // LANES):
         lo = b * LANES
@@ -198,14 +323,57 @@ def propagate_lanes(theta, theta_dot, alpha, omega0, dt, n_steps):
         lanes = np.zeros(LANES, np.bool_)
         for lane in range(min(LANES, n - lo)):
             i = lo + lane
-            if _fits_lanes(theta[i], theta_dot[i], alpha, omega0, dt):
+            if _rk4_path(theta[i], theta_dot[i], alpha, omega0, dt) == SHARED:
                 th[lane] = theta[i]
                 v[lane] = theta_dot[i]
                 lanes[lane] = True
             else:
                 for _ in range(n_steps):
                     theta[i], theta_dot[i] = rk4_step(theta[i], theta_dot[i], alpha, omega0, dt)
-        _advance(th, v, alpha, omega0, dt, n_steps)
+        _advance_rk4(th, v, alpha, omega0, dt, n_steps)
+        for lane in range(LANES):
+            if lanes[lane]:
+                theta[lo + lane] = th[lane]
+                theta_dot[lo + lane] = v[lane]
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def propagate_trigfree(theta, theta_dot, alpha, omega0, dt, n_steps):
+    """Advance every orbit by ``n_steps`` trig-free RK4 steps in place (re-synchronised at the
+    start and after every ``SYNC_EVERY`` steps), no early exit: bulk throughput of the default
+    method. Orbits outside its lane domain take the scalar form (libm re-synchronisation)."""
+    n = theta.size
+    for b in nb.prange((n + LANES - 1) // LANES):
+        lo = b * LANES
+        th = np.zeros(LANES)
+        v = np.zeros(LANES)
+        c = np.ones(LANES)
+        s = np.zeros(LANES)
+        lanes = np.zeros(LANES, np.bool_)
+        for lane in range(min(LANES, n - lo)):
+            i = lo + lane
+            if _trigfree_path(theta[i], theta_dot[i], alpha, omega0, dt) == SHARED:
+                th[lane] = theta[i]
+                v[lane] = theta_dot[i]
+                lanes[lane] = True
+            else:
+                t, w = theta[i], theta_dot[i]
+                cc, ss, _, _ = sync_libm(t, w, omega0)
+                for j in range(n_steps):
+                    if j > 0 and j % SYNC_EVERY == 0:
+                        cc, ss, _, _ = sync_libm(t, w, omega0)
+                    t, w, cc, ss = trigfree_step(t, w, cc, ss, alpha, omega0, dt)
+                theta[i], theta_dot[i] = t, w
+        done = 0
+        while done < n_steps:
+            for lane in range(LANES):
+                c[lane], s[lane], _, _ = sync_poly(th[lane], v[lane], omega0)
+            m = min(SYNC_EVERY, n_steps - done)
+            for _ in range(m):
+                for lane in range(LANES):
+                    th[lane], v[lane], c[lane], s[lane] = trigfree_step(
+                        th[lane], v[lane], c[lane], s[lane], alpha, omega0, dt)
+            done += m
         for lane in range(LANES):
             if lanes[lane]:
                 theta[lo + lane] = th[lane]

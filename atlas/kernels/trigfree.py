@@ -1,0 +1,162 @@
+"""Trig-free RK4: eq. (1) integrated with cos θ and sin θ carried as state.
+
+With c = cos θ and s = sin θ the pendulum is the polynomial system
+
+    θ' = θ̇,   θ̇' = −ω0² s − 2αθ̇,   c' = −s·θ̇,   s' = c·θ̇,
+
+whose flow leaves c² + s² = 1 and c = cos θ, s = sin θ invariant; on that set it is eq. (1).
+Classical RK4 applied to it (:func:`make_trigfree_step`) needs no trigonometric function in a
+step: ≈ 45 floating-point operations instead of the ≈ 90 of a step with a polynomial sin
+(:mod:`atlas.kernels.lanes`, method "rk4"). It is a different discretisation of the same
+order: RK4 is of order 4 on any smooth system, and the exact flow of the extended system
+restricted to the invariant set is the pendulum's (``tests/test_trigfree.py`` fits the
+order against DOP853). The RK4 map does not preserve the invariant exactly, so (c, s) is
+*re-synchronised* from θ — c, s ← cos θ, sin θ by :func:`~atlas.kernels.fastsin.sin_cos_vers`
+— at every trap test (every ``check_every`` steps; every ``SYNC_EVERY`` = 16 in the
+fixed-steps kernels). Between two of them c² + s² drifts by O(dt⁵) per step, below the
+method's own local error; the re-synchronisation is part of the method (a trajectory depends
+on where it happens, at the level of RK4's local error).
+
+The energy trap needs only cos θ, which the re-synchronisation computes anyway:
+E_k = ½θ̇² + ω0²(1 − cos(θ − 2πk)) = ½θ̇² + ω0²·(1 − cos θ) with k = round(θ/2π), 1 − cos θ
+taken cancellation-free from the same reduction (:func:`sin_cos_vers`).
+
+The method's scalar form (:func:`label_orbit_trigfree`, libm sin/cos at the
+re-synchronisation) labels the orbits the lane kernel does not take (non-finite input,
+α < 0, |θ0| beyond half of fast_sin's stated range); it is the same discretisation, rounded
+differently.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit
+from .fastsin import SIN_FASTMATH, sin_cos_vers
+from .rk4 import INV_TWO_PI
+
+#: Steps between two re-synchronisations of (c, s) in the fixed-steps kernels (the labelling
+#: kernels re-synchronise at every trap test instead, the default ``check_every`` = 16).
+SYNC_EVERY = 16
+
+
+def make_trigfree_step():
+    """Return a jitted ``step(theta, theta_dot, c, s, alpha, omega0, dt) -> (θ, θ̇, c, s)``:
+    one classical RK4 step of the extended system (module docstring)."""
+
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def step(theta, theta_dot, c, s, alpha, omega0, dt):
+        w2 = omega0 * omega0
+        a2 = 2.0 * alpha
+        h2 = 0.5 * dt
+        k1v = -w2 * s - a2 * theta_dot
+        k1c = -s * theta_dot
+        k1s = c * theta_dot
+        v2 = theta_dot + h2 * k1v
+        c2 = c + h2 * k1c
+        s2 = s + h2 * k1s
+        k2v = -w2 * s2 - a2 * v2
+        k2c = -s2 * v2
+        k2s = c2 * v2
+        v3 = theta_dot + h2 * k2v
+        c3 = c + h2 * k2c
+        s3 = s + h2 * k2s
+        k3v = -w2 * s3 - a2 * v3
+        k3c = -s3 * v3
+        k3s = c3 * v3
+        v4 = theta_dot + dt * k3v
+        c4 = c + dt * k3c
+        s4 = s + dt * k3s
+        k4v = -w2 * s4 - a2 * v4
+        k4c = -s4 * v4
+        k4s = c4 * v4
+        h6 = dt / 6.0
+        return (
+            theta + h6 * (theta_dot + 2.0 * (v2 + v3) + v4),
+            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
+            c + h6 * (k1c + 2.0 * (k2c + k3c) + k4c),
+            s + h6 * (k1s + 2.0 * (k2s + k3s) + k4s),
+        )
+
+    return step
+
+
+def make_sync(sin_cos_vers_impl):
+    """Return a jitted ``sync(theta, theta_dot, omega0) -> (c, s, k, E_k)``: the
+    re-synchronised c = cos θ, s = sin θ, the nearest well k = round(θ/2π) and its energy
+    E_k = ½θ̇² + ω0²(1 − cos θ) (cancellation-free)."""
+
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def sync(theta, theta_dot, omega0):
+        k = math.floor(theta * INV_TWO_PI + 0.5)
+        s, c, vers = sin_cos_vers_impl(theta)
+        return c, s, k, 0.5 * theta_dot * theta_dot + omega0 * omega0 * vers
+
+    return sync
+
+
+@nb.njit(inline="always")
+def _libm_sin_cos_vers(x):
+    h = math.sin(0.5 * x)
+    return math.sin(x), math.cos(x), 2.0 * (h * h)
+
+
+trigfree_step = make_trigfree_step()
+sync_poly = make_sync(sin_cos_vers)
+sync_libm = make_sync(_libm_sin_cos_vers)
+
+
+@nb.njit(nogil=True, fastmath=SIN_FASTMATH)
+def label_orbit_trigfree(theta, theta_dot, alpha, omega0, dt, n_checks, check_every,
+                         energy_cap):
+    """Label one orbit with the trig-free method, libm sin/cos at the re-synchronisation
+    (kernel contract in :mod:`atlas.kernels`); returns (status, k, n_trap)."""
+    for j in range(n_checks + 1):
+        if not (math.isfinite(theta) and math.isfinite(theta_dot)):
+            return NONFINITE, 0, -1
+        c, s, k, energy = sync_libm(theta, theta_dot, omega0)
+        if energy < energy_cap:
+            return TRAPPED, k, j * check_every
+        if j == n_checks:
+            break
+        for _ in range(check_every):
+            theta, theta_dot, c, s = trigfree_step(theta, theta_dot, c, s, alpha, omega0, dt)
+    return UNRESOLVED, 0, -1
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def label_trigfree_straightforward(
+    theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
+    attractor, status, n_trap,
+):
+    """The trig-free method one orbit per ``prange`` iteration, libm at the
+    re-synchronisation (kernel contract in :mod:`atlas.kernels`): the plain form of the
+    method, against which its lane kernel is checked."""
+    for i in nb.prange(theta0.size):
+        st, k, nt = label_orbit_trigfree(theta0[i], theta_dot0[i], alpha, omega0, dt,
+                                         n_checks, check_every, energy_cap)
+        status[i] = st
+        n_trap[i] = nt
+        if st == TRAPPED:
+            attractor[i] = np.int32(k)
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def record_trigfree(theta, theta_dot, alpha, omega0, dt, every, out):
+    """Trajectories of the trig-free method (libm re-synchronisation every ``SYNC_EVERY``
+    steps): ``out[:, i, j]`` = (θ, θ̇) of orbit j after i·``every`` steps."""
+    for j in nb.prange(theta.size):
+        th, v = theta[j], theta_dot[j]
+        c, s, _, _ = sync_libm(th, v, omega0)
+        out[0, 0, j], out[1, 0, j] = th, v
+        n = 0
+        for i in range(1, out.shape[1]):
+            for _ in range(every):
+                th, v, c, s = trigfree_step(th, v, c, s, alpha, omega0, dt)
+                n += 1
+                if n % SYNC_EVERY == 0:
+                    c, s, _, _ = sync_libm(th, v, omega0)
+            out[0, i, j], out[1, i, j] = th, v
