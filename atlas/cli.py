@@ -1,9 +1,11 @@
 """The ``atlas`` command line: a thin layer over the Python API.
 
-Bad input of any kind ends with one line ``atlas: error: …`` on stderr and exit status 2.
-Exit statuses: 0 done; 1 a fault during a run (disk full, write error), finished tiles kept;
-2 bad input; 3 the output is locked by another run; 130 interrupted by Ctrl-C (SIGINT) and
-143 by SIGTERM, finished tiles kept.
+Failures become messages here and nowhere else: every :class:`~atlas.errors.AtlasError` ends
+with one line ``atlas: error: …`` on stderr and its ``exit_code``. Exit statuses: 0 done; 1 a
+failure of the environment during a run (disk full, write refused), finished tiles kept; 2 bad
+input (config, arguments, files, an output in the way), nothing created or overwritten; 3 the
+output is locked by another run; 130 interrupted by Ctrl-C (SIGINT) and 143 by SIGTERM,
+finished tiles kept.
 """
 
 from __future__ import annotations
@@ -15,9 +17,8 @@ import signal
 import sys
 from pathlib import Path
 
-from .errors import AtlasError, Terminated
+from .errors import EXIT_BAD_INPUT, AtlasError, Terminated
 
-EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
 
@@ -41,8 +42,10 @@ class _Parser(argparse.ArgumentParser):
 def _cmd_run(args) -> int:
     from . import sweep
     from .config import load_config
+    from .validate import check_output_target
 
     cfg = load_config(args.config, output=args.output)
+    check_output_target(cfg.output, args.config, force=args.force)
     try:
         tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend)
     except KeyboardInterrupt as exc:
@@ -180,6 +183,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--restart", action="store_true",
                    help="discard an interrupted run at the output (its finished tiles) and "
                    "start over")
+    p.add_argument("--force", action="store_true",
+                   help="write over an existing file at the output that atlas did not write "
+                   "(never over the config itself)")
     p.add_argument("--backend", choices=["cpu", "cuda", "dask"],
                    help="override execution.backend")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
@@ -207,17 +213,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _configure_logging(verbose: int) -> None:
+    """Warnings from anyone; atlas's own progress (-v) and detail (-vv) from the ``atlas``
+    logger only: third-party loggers (Numba's compiler, filelock, Dask) stay at WARNING."""
+    logging.basicConfig(level=logging.WARNING, format="atlas: %(message)s")
+    level = [logging.WARNING, logging.INFO, logging.DEBUG][min(verbose, 2)]
+    logging.getLogger("atlas").setLevel(level)
+
+
+def _one_line(text: str) -> str:
+    """A message on one line (text taken from a file or a library may hold newlines)."""
+    return " ".join(text.split())
+
+
 def main(argv: list[str] | None = None) -> int:
     if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:  # SIGTERM stops a run like Ctrl-C
         signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         args = build_parser().parse_args(argv)
-        level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
-        logging.basicConfig(level=level, format="atlas: %(message)s")
-        logging.getLogger("filelock").setLevel(logging.WARNING)
+        _configure_logging(args.verbose)
         return args.func(args)
     except AtlasError as exc:
-        print(f"atlas: error: {exc}", file=sys.stderr)
+        print(f"atlas: error: {_one_line(str(exc))}", file=sys.stderr)
         return getattr(exc, "exit_code", EXIT_BAD_INPUT)
     except KeyboardInterrupt as exc:
         print("atlas: terminated (SIGTERM)" if isinstance(exc, Terminated)

@@ -1,13 +1,31 @@
 """atlas's exceptions: each carries one line that names the culprit (a key, a file, a backend).
 
-The CLI prints ``atlas: error: <message>`` for any :class:`AtlasError` and exits with status 2
-(bad input) or the error's ``exit_code`` (1 for a fault during a run, 3 for an output locked
-by another run).
+Failures become messages in one place, the CLI (:func:`atlas.cli.main`), which prints
+``atlas: error: <message>`` for any :class:`AtlasError` and exits with its ``exit_code``:
+
+* **2** — bad input (:class:`AtlasError` itself and :class:`ConfigError`,
+  :class:`InputFileError`, :class:`OutputInTheWay`, :class:`BackendUnavailable`): nothing
+  was created or overwritten;
+* **1** — a failure of the environment during a run (:class:`EnvironmentFailure`:
+  :class:`StorageError`, a disk full or a write refused; :class:`SeparatrixError`): the
+  finished tiles are kept and running the same command again continues;
+* **3** — the output is locked by another run (:class:`atlas.lock.OutputLocked`, an
+  :class:`EnvironmentFailure` too).
+
+Ctrl-C and SIGTERM are not errors: the CLI exits 130 and 143 (:class:`Terminated`).
 """
+
+#: Exit status of bad input.
+EXIT_BAD_INPUT = 2
+#: Exit status of a failure of the environment during a run (disk full, write refused).
+EXIT_ENVIRONMENT = 1
 
 
 class AtlasError(Exception):
-    """Bad input or an unusable environment, reported to the user as one clear line."""
+    """Bad input (exit status 2) or, in the subclasses that say so, an unusable environment,
+    reported to the user as one clear line."""
+
+    exit_code = EXIT_BAD_INPUT
 
 
 class ConfigError(AtlasError, ValueError):
@@ -15,25 +33,34 @@ class ConfigError(AtlasError, ValueError):
 
 
 class InputFileError(AtlasError):
-    """A file given to atlas (``atlas info``/``atlas plot``/``--resume``) that it cannot use."""
+    """A file given to atlas (``atlas info``/``plot``/``view``/``orbit``, :func:`atlas.open`)
+    that it cannot use: missing, unreadable, not an atlas, or failing the schema check."""
+
+
+class OutputInTheWay(AtlasError):
+    """An output path that holds something atlas must not write over: the config being run,
+    or an existing file that atlas did not write (``--force`` writes over the latter)."""
 
 
 class BackendUnavailable(AtlasError, RuntimeError):
     """A requested backend (CUDA, Dask) that is not installed or has no device."""
 
 
-class StorageError(AtlasError):
+class EnvironmentFailure(AtlasError):
+    """The environment failed a run that was asked for correctly (exit status 1 unless a
+    subclass says otherwise); finished tiles are kept."""
+
+    exit_code = EXIT_ENVIRONMENT
+
+
+class StorageError(EnvironmentFailure):
     """Writing the output failed mid-run (disk full, I/O error); finished tiles are kept."""
 
-    exit_code = 1
 
-
-class SeparatrixError(AtlasError, RuntimeError):
+class SeparatrixError(EnvironmentFailure, RuntimeError):
     """A separatrix that cannot be certified during a run (a bracket that meets a third basin
     or finds no certified label, a branch with too many vertices, a failed DOP853 reference):
     one line naming the point or branch and what to change."""
-
-    exit_code = 1
 
 
 class Terminated(KeyboardInterrupt):

@@ -82,7 +82,9 @@ def _separatrix_lines(sep: xr.Dataset) -> list[str]:
 
 
 def info_lines(path: str | Path) -> list[str]:
-    """Completeness, then :func:`summary_lines` for a complete file, then provenance."""
+    """Completeness, then :func:`summary_lines` for a complete file (opened and checked by
+    :func:`atlas.store.open_atlas`), then provenance. A file that fails the check raises
+    :class:`~atlas.errors.InputFileError`."""
     path = Path(path)
     d = store.describe(path)
     attrs = d["attrs"]
@@ -91,10 +93,23 @@ def info_lines(path: str | Path) -> list[str]:
              "again to continue)")
     lines = [f"{path}: atlas file, {state}"]
     if d["complete"]:
-        lines += ["  " + line for line in summary_lines(store.open_atlas(path))]
-    lines.append(f"  created   {attrs.get('created', '?')} by atlas "
-                 f"{attrs.get('atlas_version', '?')} (numba {attrs.get('numba_version', '?')}, "
-                 f"numpy {attrs.get('numpy_version', '?')})")
-    lines.append(f"  method    {attrs.get('method', '?')}, dt = {attrs.get('dt', '?')} s, "
-                 f"t_max = {attrs.get('t_max', '?')} s, config hash {attrs.get('config_hash')}")
+        tree = store.open_atlas(path)
+        try:
+            lines += ["  " + line for line in summary_lines(tree)]
+            attrs = tree.attrs
+        finally:
+            tree.close()
+    lines.append(f"  created   {_text(attrs, 'created')} by atlas "
+                 f"{_text(attrs, 'atlas_version')} (numba {_text(attrs, 'numba_version')}, "
+                 f"numpy {_text(attrs, 'numpy_version')})")
+    lines.append(f"  method    {_text(attrs, 'method')}, dt = {_text(attrs, 'dt')} s, "
+                 f"t_max = {_text(attrs, 't_max')} s, config hash "
+                 f"{_text(attrs, 'config_hash')}")
     return lines
+
+
+def _text(attrs: dict, name: str) -> str:
+    """An attribute for display, on one line and not too long (a file's text is untrusted)."""
+    value = attrs.get(name, "?")
+    text = " ".join(str(value).split())
+    return text if len(text) <= 80 else text[:77] + "..."
