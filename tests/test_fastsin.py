@@ -14,6 +14,7 @@ from atlas.kernels.fastsin import (
     SIN_FASTMATH,
     fast_sin,
     reduce_pi,
+    sin_cos_vers,
     sin_near,
     sin_poly,
 )
@@ -37,6 +38,12 @@ def _sin_poly_all(x, out):
 def _sin_near_all(x, delta, out):
     for i in range(x.size):
         out[i] = sin_near(reduce_pi(x[i]), delta[i])
+
+
+@nb.njit(fastmath=SIN_FASTMATH)
+def _sin_cos_vers_all(x, out):
+    for i in range(x.size):
+        out[0, i], out[1, i], out[2, i] = sin_cos_vers(x[i])
 
 
 def _max_error(f, x):
@@ -93,3 +100,24 @@ def test_nonfinite_gives_nan():
     _fast_sin_all(x, out)
     assert np.isnan(out).all()
     assert math.isnan(fast_sin(math.nan)) and math.isnan(fast_sin(math.inf))
+
+
+@pytest.mark.parametrize("bound", [4.0 * math.pi, 1e4, EXACT_RANGE])
+def test_sin_cos_vers_error_bound(bound):
+    """sin x, cos x and 1 − cos x from one reduction, each within ERROR_BOUND (abs); the
+    versine also relatively accurate near x = 0 (no cancellation: 2 sin²(x/2))."""
+    rng = np.random.default_rng(3)
+    x = np.concatenate([np.linspace(-bound, bound, 500_001), rng.uniform(-bound, bound, 500_000),
+                        _near_multiples_of_half_pi(min(int(bound / (math.pi / 2)), 20_000))])
+    x = x[np.abs(x) <= bound]
+    out = np.empty((3, x.size))
+    _sin_cos_vers_all(x, out)
+    assert np.max(np.abs(out[0] - np.sin(x))) <= ERROR_BOUND
+    assert np.max(np.abs(out[1] - np.cos(x))) <= ERROR_BOUND
+    vers = 2.0 * np.sin(0.5 * x) ** 2
+    assert np.max(np.abs(out[2] - vers)) <= 2 * ERROR_BOUND  # |1 − cos x| ≤ 2
+    small = np.linspace(-1e-3, 1e-3, 20_001)
+    out = np.empty((3, small.size))
+    _sin_cos_vers_all(small, out)
+    exact = 2.0 * np.sin(0.5 * small) ** 2
+    assert np.max(np.abs(out[2] - exact) / np.maximum(exact, 1e-300)) < 1e-14

@@ -7,6 +7,7 @@ import pytest
 
 import atlas
 from atlas.kernels.rk4 import propagate_straightforward
+from atlas.kernels.trigfree import record_trigfree
 from atlas.labels import ATTRACTOR_FILL, trap_margin
 from atlas.model import Pendulum
 from tests.conftest import boundary_adjacent, dop853_attractor
@@ -76,26 +77,41 @@ def test_straightforward_kernel_agrees(small_grid):
     np.testing.assert_array_equal(a.t_trap, b.t_trap)
 
 
+def _one_step_each(method):
+    """advance(θ, θ̇, alpha, omega0, dt, n) -> every state of n steps, shape (n + 1, N)."""
+    if method == "rk4":
+        def advance(theta, theta_dot, alpha, omega0, dt, n):
+            states = [(theta.copy(), theta_dot.copy())]
+            for _ in range(n):
+                propagate_straightforward(theta, theta_dot, alpha, omega0, dt, 1)
+                states.append((theta.copy(), theta_dot.copy()))
+            return np.array([s[0] for s in states]), np.array([s[1] for s in states])
+        return advance
+
+    def advance(theta, theta_dot, alpha, omega0, dt, n):
+        # the trig-free method with its re-synchronisation every SYNC_EVERY steps (libm sin/cos
+        # there; the lane kernel's polynomial differs by rounding only)
+        out = np.empty((2, n + 1, theta.size))
+        record_trigfree(theta, theta_dot, alpha, omega0, dt, 1, out)
+        return out[0], out[1]
+    return advance
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk4-trigfree"])
 @pytest.mark.parametrize("alpha,omega0,dt", [(0.1, 1.0, 0.01), (0.02, 1.0, 0.01),
                                              (1.0, 2.0, 0.02), (3.0, 1.0, 0.05)])
-def test_energy_never_increases_beyond_the_trap_margin(alpha, omega0, dt):
-    """Along computed orbits, the largest rise of E over any stretch stays far below the
-    trap margin m·2ω0² (so a trapped orbit cannot climb out of its well)."""
+def test_energy_never_increases_beyond_the_trap_margin(alpha, omega0, dt, method):
+    """Along computed orbits of each method, the largest rise of E over any stretch stays far
+    below the trap margin m·2ω0² (so a trapped orbit cannot climb out of its well)."""
     p = Pendulum(alpha, omega0)
     rng = np.random.default_rng(1)
     # orbits near the separatrix energy (the hardest case) and generic ones
     phi = rng.uniform(-np.pi, np.pi, 400)
     e_target = p.saddle_energy * rng.uniform(0.95, 1.0, 400)
     theta_dot = np.sqrt(np.maximum(2 * (e_target - p.energy(phi, 0.0)), 0.0))
-    theta = phi.copy()
-    energy, wells = [p.energy(theta, theta_dot)], [np.zeros_like(theta)]
-    for _ in range(3000):
-        propagate_straightforward(theta, theta_dot, alpha, omega0, dt, 1)
-        k = np.round(theta / (2 * np.pi))
-        energy.append(p.energy(theta, theta_dot, k))
-        wells.append(k)
-    energy = np.array(energy)
-    wells = np.array(wells)
+    thetas, speeds = _one_step_each(method)(phi.copy(), theta_dot, alpha, omega0, dt, 3000)
+    wells = np.round(thetas / (2 * np.pi))
+    energy = p.energy(thetas, speeds, wells)
     # E_k is the energy in well k: compare only orbits that stay in one well
     one_well = np.all(wells == wells[0], axis=0)
     assert one_well.sum() > 100
@@ -105,18 +121,43 @@ def test_energy_never_increases_beyond_the_trap_margin(alpha, omega0, dt):
     assert rise < 0.05 * margin, (rise, margin)
 
 
-def test_trapped_orbits_never_leave_their_well():
+@pytest.mark.parametrize("method", ["rk4", "rk4-trigfree"])
+def test_trapped_orbits_never_leave_their_well(method):
     p = Pendulum(ALPHA, OMEGA0)
     m = trap_margin(0.01, ALPHA, OMEGA0)
     # start just inside the trap level, at every phase of the well
     phi = np.linspace(-np.pi + 1e-3, np.pi - 1e-3, 501)
     cap = p.saddle_energy * (1 - m)
     theta_dot = np.sqrt(np.maximum(2 * (cap * (1 - 1e-12) - p.energy(phi, 0.0)), 0.0))
-    theta = phi.copy()
-    for _ in range(200):
-        propagate_straightforward(theta, theta_dot, ALPHA, OMEGA0, 0.01, 50)
-        assert np.all(np.abs(theta) < math.pi)
-        assert np.all(p.energy(theta, theta_dot) < cap)
+    if method == "rk4":
+        theta = phi.copy()
+        states = []
+        for _ in range(200):
+            propagate_straightforward(theta, theta_dot, ALPHA, OMEGA0, 0.01, 50)
+            states.append((theta.copy(), theta_dot.copy()))
+        thetas, speeds = (np.array(x) for x in zip(*states))
+    else:
+        out = np.empty((2, 201, phi.size))
+        record_trigfree(phi, theta_dot, ALPHA, OMEGA0, 0.01, 50, out)
+        thetas, speeds = out[0, 1:], out[1, 1:]
+    assert np.all(np.abs(thetas) < math.pi)
+    assert np.all(p.energy(thetas, speeds) < cap)
+
+
+def test_the_energy_rise_measurement_sees_an_energy_gaining_method():
+    """The measurement of the test above is not vacuous: forward Euler, which gains energy
+    (E grows by the factor 1 + ω²dt² per step near the bottom), fails it."""
+    alpha, omega0, dt = 0.1, 1.0, 0.01
+    p = Pendulum(alpha, omega0)
+    theta, theta_dot = np.linspace(-3.0, 3.0, 50), np.zeros(50)
+    energy = [p.energy(theta, theta_dot)]
+    for _ in range(3000):
+        theta, theta_dot = (theta + dt * theta_dot,
+                            theta_dot + dt * (-omega0**2 * np.sin(theta) - 2 * alpha * theta_dot))
+        energy.append(p.energy(theta, theta_dot))
+    energy = np.array(energy)
+    rise = np.max(energy - np.minimum.accumulate(energy, axis=0))
+    assert rise > 0.05 * trap_margin(dt, alpha, omega0) * p.saddle_energy
 
 
 @pytest.mark.parametrize("kwargs,message", [

@@ -11,12 +11,22 @@ from conftest import boundary_adjacent
 
 from atlas.kernels import NONFINITE, TRAPPED, UNRESOLVED
 from atlas.kernels.fastsin import SIN_FASTMATH
-from atlas.kernels.lanes import LANES, label_lanes, propagate_lanes
+from atlas.kernels.lanes import (
+    FULL,
+    LANES,
+    SCALAR,
+    SHARED,
+    label_lanes,
+    label_trigfree,
+    n_chunks,
+    propagate_lanes,
+    propagate_trigfree,
+)
 from atlas.kernels.rk4 import label_straightforward, propagate_straightforward
-from atlas.labels import n_checks_for, trap_margin
+from atlas.labels import energy_cap, n_checks_for
 
 ALPHA, OMEGA0, DT, T_MAX = 0.1, 1.0, 0.01, 200.0
-CAP = 2.0 * OMEGA0**2 * (1.0 - trap_margin(DT, ALPHA, OMEGA0))
+CAP = energy_cap(DT, ALPHA, OMEGA0)
 SENTINEL = 777
 
 
@@ -75,43 +85,48 @@ def test_propagate_matches_straightforward():
     np.testing.assert_allclose(v, ref_v, rtol=0, atol=1e-10)
 
 
-def test_independent_of_threads_chunking_and_order():
+@pytest.mark.parametrize("kernel", [label_lanes, label_trigfree])
+def test_independent_of_threads_chunking_and_order(kernel):
     th, v = _grid(160, 128)  # 20480 orbits: several chunks
-    full = _run(label_lanes, th, v)
+    full = _run(kernel, th, v)
     n_threads = nb.get_num_threads()
     try:
         nb.set_num_threads(1)
-        one = _run(label_lanes, th, v)
+        chunks_one = n_chunks(th.size)
+        one = _run(kernel, th, v)
     finally:
         nb.set_num_threads(n_threads)
+    if n_threads > 1:  # the chunking follows the thread count (and the results do not)
+        assert n_chunks(th.size) > chunks_one
     for x, y in zip(full, one):
         np.testing.assert_array_equal(x, y)
     rng = np.random.default_rng(0)
     perm = rng.permutation(th.size)
-    shuffled = _run(label_lanes, th[perm], v[perm])
+    shuffled = _run(kernel, th[perm], v[perm])
     for x, y in zip(full, shuffled):
         np.testing.assert_array_equal(x[perm], y)
     for size in (1, 7, 1000):
         idx = rng.choice(th.size, size, replace=False)
-        part = _run(label_lanes, th[idx], v[idx])
+        part = _run(kernel, th[idx], v[idx])
         for x, y in zip(full, part):
             np.testing.assert_array_equal(x[idx], y)
 
 
-def test_propagate_independent_of_threads_and_blocks():
+@pytest.mark.parametrize("propagate", [propagate_lanes, propagate_trigfree])
+def test_propagate_independent_of_threads_and_blocks(propagate):
     th, v = _grid(40, 25)
     a_th, a_v = th.copy(), v.copy()
-    propagate_lanes(a_th, a_v, ALPHA, OMEGA0, DT, 300)
+    propagate(a_th, a_v, ALPHA, OMEGA0, DT, 300)
     for sl in (slice(0, 1), slice(3, 10), slice(5, 1000)):
         b_th, b_v = th[sl].copy(), v[sl].copy()
-        propagate_lanes(b_th, b_v, ALPHA, OMEGA0, DT, 300)
+        propagate(b_th, b_v, ALPHA, OMEGA0, DT, 300)
         np.testing.assert_array_equal(b_th, a_th[sl])
         np.testing.assert_array_equal(b_v, a_v[sl])
     n_threads = nb.get_num_threads()
     try:
         nb.set_num_threads(1)
         c_th, c_v = th.copy(), v.copy()
-        propagate_lanes(c_th, c_v, ALPHA, OMEGA0, DT, 300)
+        propagate(c_th, c_v, ALPHA, OMEGA0, DT, 300)
     finally:
         nb.set_num_threads(n_threads)
     np.testing.assert_array_equal(c_th, a_th)
@@ -143,12 +158,38 @@ def test_anti_damping_falls_back_to_reference_path():
         np.testing.assert_array_equal(x, y)
 
 
-def test_lane_loop_is_vectorised():
+@pytest.mark.parametrize("propagate", [propagate_lanes, propagate_trigfree])
+def test_lane_loop_is_vectorised(propagate):
     # the cached dispatcher cannot be inspected: compile an uncached copy of the same code
-    fresh = nb.njit(parallel=True, fastmath=SIN_FASTMATH)(propagate_lanes.py_func)
+    fresh = nb.njit(parallel=True, fastmath=SIN_FASTMATH)(propagate.py_func)
     th = np.zeros(LANES)
     fresh(th, th.copy(), ALPHA, OMEGA0, DT, 1)
     asm = fresh.inspect_asm(fresh.signatures[0])
     packed_fma = re.findall(r"vfmadd\w*pd\s[^\n]*%[yz]mm", asm)
     assert len(packed_fma) >= 30, "the RK4 lane loop was not vectorised"
     assert math.isfinite(th[0])
+
+
+def test_fast_orbits_take_the_full_reduction_lanes_and_say_so(caplog):
+    """|θ̇| beyond the shared reduction's reach (≳ 30 rad/s at dt = 0.01) runs in vector lanes
+    with a full reduction per stage, not in scalar libm; the same labels as the
+    straightforward kernel (no orbit of this grid passes near a separatrix: speeds ≥ 25);
+    the paths taken are counted per call and logged at debug level."""
+    import logging
+
+    th, v = np.meshgrid(np.linspace(-3.0, 3.0, 9), np.concatenate([np.linspace(-90, -25, 9),
+                                                                   np.linspace(25, 90, 9)]))
+    th, v = th.ravel().copy(), v.ravel().copy()
+    paths = np.zeros(3, np.int64)
+    with caplog.at_level(logging.DEBUG, logger="atlas.kernels.lanes"):
+        n = th.size
+        out = (np.full(n, SENTINEL, np.int32), np.zeros(n, np.int8), np.zeros(n, np.int32))
+        paths[:] = label_lanes(th, v, ALPHA, OMEGA0, DT, n_checks_for(T_MAX, DT, 16), 16, CAP,
+                               *out)
+    assert paths[FULL] > 0.5 * th.size and paths[SCALAR] == 0
+    assert paths.sum() == th.size
+    assert f"{paths[SHARED]} lanes, {paths[FULL]} full-reduction lanes, 0 scalar" in caplog.text
+    ref = _run(label_straightforward, th, v)
+    for name, x, y in zip(("attractor", "status", "n_trap"), out, ref):
+        np.testing.assert_array_equal(x, y, err_msg=name)
+    assert np.all(out[1] == TRAPPED)
