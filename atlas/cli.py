@@ -77,7 +77,12 @@ def _cmd_plot(args) -> int:
     from .store import open_atlas
 
     tree = open_atlas(args.file)
-    for path in plot_atlas(tree, args.file):
+    try:
+        tree.load()  # every array read (and found readable) before the first PNG is written
+        paths = plot_atlas(tree, args.file)
+    finally:
+        tree.close()
+    for path in paths:
         print(f"wrote {path}")
     return 0
 
@@ -219,16 +224,45 @@ def _configure_logging(verbose: int) -> None:
     logging.basicConfig(level=logging.WARNING, format="atlas: %(message)s")
     level = [logging.WARNING, logging.INFO, logging.DEBUG][min(verbose, 2)]
     logging.getLogger("atlas").setLevel(level)
+    for name in ("numba", "filelock"):  # explicit: they may have set their own levels
+        logging.getLogger(name).setLevel(logging.WARNING)
+
+
+def _input_file(args) -> str | None:
+    """The atlas file a reading command was given (None for ``run`` and the others)."""
+    if getattr(args, "command", None) in ("info", "plot", "view"):
+        return args.file
+    if getattr(args, "command", None) == "orbit" and len(args.values) == 3:
+        return args.values[0]
+    return None
+
+
+def _os_error(exc: OSError, args) -> tuple[str, int]:
+    """An OSError that reached the CLI: a read of the input file that failed inside HDF5 (no
+    system errno: damaged data, checked metadata notwithstanding) is bad input, exit 2; a
+    failure of the system (disk full, write refused) is the environment's, exit 1."""
+    from .errors import EXIT_ENVIRONMENT
+
+    reason = os.strerror(exc.errno) if exc.errno else (str(exc).strip().splitlines() or
+                                                       [type(exc).__name__])[0]
+    source = _input_file(args)
+    if not exc.errno and source is not None:
+        return f"{source}: damaged data, cannot be read ({reason})", EXIT_BAD_INPUT
+    where = exc.filename or source or "atlas"
+    return f"{where}: {reason}", EXIT_ENVIRONMENT
 
 
 def _one_line(text: str) -> str:
-    """A message on one line (text taken from a file or a library may hold newlines)."""
-    return " ".join(text.split())
+    """A message on one line, printable (text taken from a file, a config or a library may
+    hold newlines or terminal control characters)."""
+    text = " ".join(text.split())
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def main(argv: list[str] | None = None) -> int:
     if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:  # SIGTERM stops a run like Ctrl-C
         signal.signal(signal.SIGTERM, _raise_terminated)
+    args = None
     try:
         args = build_parser().parse_args(argv)
         _configure_logging(args.verbose)
@@ -243,6 +277,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # `atlas info x.h5 | head`: the reader left, nothing is wrong
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:  # one that no layer below turned into an AtlasError
+        message, code = _os_error(exc, args)
+        print(f"atlas: error: {_one_line(message)}", file=sys.stderr)
+        return code
 
 
 if __name__ == "__main__":

@@ -322,15 +322,25 @@ def _check_atlas_file(path: Path) -> dict:
         if attrs.get("atlas_schema") != SCHEMA:
             raise InputFileError(f"{path}: a Zarr store, but not an atlas")
         return attrs
-    try:
-        with h5netcdf.File(path, "r") as f:
-            attrs = dict(f.attrs)
-            has_vars = {"attractor", "status", "t_trap"} <= set(f.variables)
-    except Exception as exc:  # OSError for most damage; h5py/h5netcdf raise others too
+    try:  # h5py, not h5netcdf: a half-made h5netcdf.File complains again when collected
+        with h5py.File(path, "r") as f:
+            attrs = {name: _plain_attr(value) for name, value in f.attrs.items()
+                     if not name.startswith("_")}
+            has_vars = all(isinstance(f.get(name), h5py.Dataset)
+                           for name in ("attractor", "status", "t_trap"))
+    except Exception as exc:  # OSError for most damage; h5py raises others too
         raise InputFileError(f"{path}: not a readable HDF5 file ({_first_line(exc)})") from None
     if attrs.get("atlas_schema") != SCHEMA or not has_vars:
         raise InputFileError(f"{path}: an HDF5 file, but not an atlas (no atlas basin map in it)")
     return attrs
+
+
+def _plain_attr(value):
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray) and value.size == 1:  # as h5netcdf reads it
+        return _plain_attr(value.reshape(())[()])
+    return value
 
 
 def is_atlas_file(path: str | Path) -> bool:

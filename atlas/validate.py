@@ -92,17 +92,19 @@ def parse_config(attrs: dict, path):
     return config
 
 
-def _number(attrs: dict, name: str, path, *, positive=False, nonnegative=False) -> float:
+def _number(attrs: dict, name: str, path, *, positive=False, nonnegative=False, finite=True,
+            where="") -> float:
     if name not in attrs:
-        _refuse(path, f"no {name} attribute")
+        _refuse(path, f"no {where}attribute {name}")
     value = attrs[name]
     if isinstance(value, np.ndarray) and value.size == 1:
         value = value.reshape(()).item()
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        _refuse(path, f"attribute {name} is not a number ({value!r:.40})")
+        _refuse(path, f"{where}attribute {name} is not a number ({str(value)[:40]!r})")
     value = float(value)
-    if not math.isfinite(value) or (positive and value <= 0) or (nonnegative and value < 0):
-        _refuse(path, f"attribute {name} = {value!r} is out of range")
+    if ((finite and not math.isfinite(value)) or (positive and not value > 0)
+            or (nonnegative and not value >= 0)):
+        _refuse(path, f"{where}attribute {name} = {value!r} is out of range")
     return value
 
 
@@ -179,13 +181,44 @@ def check_dataset(ds, path) -> None:
 
 def check_tree(tree, path) -> None:
     """Check an opened atlas (:class:`xarray.DataTree`): the root group
-    (:func:`check_dataset`) and that its groups can be read."""
+    (:func:`check_dataset`), then the groups the readers draw from (their small arrays are
+    read: the separatrices' branch codes index a table)."""
     check_dataset(tree.to_dataset(inherit=False), path)
-    for name in ("critical_points", "separatrices"):
-        if name in tree.children:
-            group = tree[name].to_dataset(inherit=False)
-            if name == "critical_points" and not {"theta", "n"} <= set(group.variables):
-                _refuse(path, "the critical_points group has no theta or n")
+    if "critical_points" in tree.children:
+        cp = tree["critical_points"].to_dataset(inherit=False)
+        _vector(cp, "critical_points", "theta", "f", path, dim="point")
+        _vector(cp, "critical_points", "n", "iu", path, dim="point")
+    if "separatrices" in tree.children:
+        _check_separatrices(tree["separatrices"].to_dataset(inherit=False), path)
+
+
+def _vector(ds, group: str, name: str, kinds: str, path, dim: str):
+    if name not in ds.variables:
+        _refuse(path, f"the {group} group has no {name}")
+    var = ds[name]
+    if var.dims != (dim,) or var.dtype.kind not in kinds:
+        _refuse(path, f"{group}/{name} has dims {var.dims} and dtype {var.dtype}, not a "
+                f"{'float' if kinds == 'f' else 'integer'} vector over {dim}")
+    return var.values
+
+
+def _check_separatrices(sep, path) -> None:
+    group = "separatrices"
+    branch = _vector(sep, group, "branch", "iu", path, "point")
+    for name in ("saddle_n", "vertex"):
+        _vector(sep, group, name, "iu", path, "point")
+    for name in ("theta", "theta_dot"):
+        _vector(sep, group, name, "f", path, "point")
+    if branch.size and not np.isin(branch, (0, 1)).all():
+        _refuse(path, "separatrices/branch holds codes other than 0 (left) and 1 (right)")
+    if "point_alpha" in sep.coords:
+        for name in ("point_alpha", "point_omega0"):
+            _vector(sep, group, name, "f", path, "point")
+    for name in ("tol", "max_spacing", "discrepancy_bound"):
+        _number(sep.attrs, name, path, positive=True, where="separatrices ")
+    if "discrepancy" not in sep.attrs:
+        _refuse(path, "no separatrices attribute discrepancy")
+    _number(sep.attrs, "discrepancy", path, finite=False, where="separatrices ")
 
 
 def check_output_target(output, config=None, *, force: bool = False) -> None:
