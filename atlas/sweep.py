@@ -38,6 +38,7 @@ from .labels import CHECK_EVERY, label, trap_margin
 from .lock import output_lock
 from .model import Pendulum, critical_points
 from .tiles import IdentityMismatch, PartialStoreError, TileStore, discard, partial_path
+from .validate import FORMAT_VERSION
 
 __all__ = ["run", "compute_tile", "layout_of", "critical_points_dataset", "run_identity",
            "identity_hash"]
@@ -270,6 +271,7 @@ def _attrs(cfg: Config, identity: dict) -> dict:
     attrs = {
         "title": f"atlas basin map: {cfg.name}",
         "Conventions": "CF-1.10",
+        "format_version": np.int64(FORMAT_VERSION),
         "method": "rk4",
         "dt": cfg.integrator.dt,
         "t_max": cfg.integrator.t_max,
