@@ -11,6 +11,9 @@ few minutes on two cores:
 * a real full disk: the run writes into a small tmpfs (a private mount namespace made with
   ``unshare``; where that is not permitted, a file-size limit, RLIMIT_FSIZE, instead), which
   is enlarged before the second run;
+* the disk taken by another process mid-run: a small tmpfs that a second writer (``dd``)
+  fills at a chosen phase of the run (while tiles are written, while the file's map is
+  assembled, while its summary and while its groups are written); the space is then freed;
 * racing takeovers of a lock whose holder was SIGKILLed (8 processes; no two may hold it
   at once, every one must get it);
 * two runs of different physics on one Dask scheduler at once;
@@ -236,6 +239,27 @@ class Soak:
                           "and one line)", len(sizes_kib), min(recovered, failed_cleanly),
                           identical))
 
+    def disk_taken(self, phases: list[str]) -> None:
+        """Another process fills the disk at each phase of ``phases`` (:data:`PHASES`)."""
+        if not _unshare_works(self.work):
+            self.rows.append(("disk taken by another process (skipped: no mount namespaces)",
+                              1, 1, 1))
+            return
+        cfg, _ = self.config("taken")
+        clean = recovered = identical = 0
+        for phase in phases:
+            code, line, ok = _taken_trial(cfg, self.work, phase)
+            got = _arrays(self.work / "taken-copy.h5")
+            stopped = code == 1 and len(line.splitlines()) == 1 and "No space left" in line
+            if not stopped:
+                print(f"disk taken at {phase}: exit {code}, stderr {line!r}", file=sys.stderr)
+            clean += stopped
+            recovered += ok
+            identical += ok and _same(got, self.ref)
+        self.rows.append((f"disk taken by another process mid-run (tmpfs filled by dd at "
+                          f"{', '.join(phases)}; {clean} stopped with exit 1 and one line)",
+                          len(phases), min(recovered, clean), identical))
+
     def lock_races(self, n: int, racers: int = 8) -> None:
         out = self.work / "race.h5"
         recovered = clean = 0
@@ -386,6 +410,51 @@ def _tmpfs_trial(cfg: Path, work: Path, size_kib: int) -> tuple[int, str, bool]:
     return code, (work / "full-err.txt").read_text().strip(), done.returncode == 0
 
 
+#: Where :func:`_taken_trial` lets another process fill the disk: the function of atlas that
+#: is about to write when the space goes.
+PHASES = {"tiles": ("atlas.tiles", "TileStore", "record", 3),
+          "assembly": ("atlas.store", None, "_copy_tiles", 1),
+          "summary": ("atlas.store", None, "_write_summary", 1),
+          "groups": ("xarray", "Dataset", "to_netcdf", 1)}
+_TAKER = """\
+import importlib, subprocess, sys
+from pathlib import Path
+module, owner, name, call = {hook!r}
+target = importlib.import_module(module)
+target = getattr(target, owner) if owner else target
+real, calls = getattr(target, name), []
+def taken(*args, **kwargs):
+    calls.append(1)
+    if len(calls) == call:  # another process takes every free byte, now
+        subprocess.run(["dd", "if=/dev/zero", "of={hog}", "bs=4096"], capture_output=True)
+    return real(*args, **kwargs)
+setattr(target, name, taken)
+from atlas.cli import main
+sys.exit(main(["run", {cfg!r}, "--quiet", "-o", {out!r}]))
+"""
+
+
+def _taken_trial(cfg: Path, work: Path, phase: str) -> tuple[int, str, bool]:
+    """In a private mount namespace: a 4 MiB tmpfs at the output folder; run, another process
+    (dd) filling the disk at ``phase``; free the space, run again, copy the result out."""
+    disk = work / "taken"
+    disk.mkdir(exist_ok=True)
+    out, hog = disk / "out.h5", disk / "hog"
+    script = work / "taken.py"
+    script.write_text(_TAKER.format(hook=PHASES[phase], hog=hog, cfg=str(cfg), out=str(out)))
+    run = f"{sys.executable} -m atlas.cli run {cfg} --quiet -o {out}"
+    shell = (f"mount -t tmpfs -o size=4m none {disk} || exit 90; "
+             f"{sys.executable} {script} 2> {work}/taken-err.txt; "
+             f"echo $? > {work}/taken-code.txt; rm -f {hog}; "
+             f"{run} 2> {work}/taken-err2.txt && cp {out} {work}/taken-copy.h5")
+    (work / "taken-copy.h5").unlink(missing_ok=True)
+    done = subprocess.run(["unshare", "--user", "--map-root-user", "--mount", "sh", "-c",
+                           shell], capture_output=True, env={**os.environ,
+                                                             "PYTHONPATH": _package_root()})
+    code = int((work / "taken-code.txt").read_text())
+    return code, (work / "taken-err.txt").read_text().strip(), done.returncode == 0
+
+
 def _package_root() -> str:
     return str(Path(__file__).resolve().parents[1])
 
@@ -430,6 +499,7 @@ def main(argv: list[str] | None = None) -> int:
         soak.kills(zarr_kills, ".zarr")
         soak.sigterms(terms)
         soak.disk_full([16, 64, 128, 200] if not args.quick else [96])
+        soak.disk_taken(list(PHASES) if not args.quick else ["assembly"])
         soak.lock_races(races)
         soak.dask(pairs, dask_kills)
     print(_table(soak.rows))

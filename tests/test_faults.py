@@ -326,3 +326,43 @@ def test_racing_takeovers_of_a_dead_runs_lock_never_overlap(tmp_path):
     assert len(intervals) == 8
     for (_, left), (entered, _) in zip(intervals, intervals[1:]):
         assert left <= entered, intervals
+
+
+@pytest.fixture(scope="module")
+def taken_reference(tmp_path_factory):
+    """A 48 x 48 config (48 tiles) and its clean result."""
+    tmp = tmp_path_factory.mktemp("taken")
+    cfg = write_config(tmp / "c.yaml", SLOW.format(dt=0.01, output=tmp / "ref.h5")
+                       .replace("num: 160", "num: 48"))
+    assert run_cli("run", cfg, "--quiet").returncode == 0
+    return cfg, _labels(tmp / "ref.h5")
+
+
+# Known bug, writer side (atlas.store._write_summary): a flush that fails on a full disk while
+# the summary or the groups are written leaves HDF5 objects that retry it when they are
+# collected, and the process dies by SIGSEGV at exit (exit 139). Strict: fixing it fails these
+# marks, so remove them then.
+_CRASHES = pytest.mark.xfail(strict=True, reason="HDF5 objects retry a failed flush after the "
+                             "summary/groups write fails: SIGSEGV at exit")
+
+
+@pytest.mark.parametrize("phase", ["tiles", "assembly", pytest.param("summary", marks=_CRASHES),
+                                   pytest.param("groups", marks=_CRASHES)])
+def test_the_disk_taken_by_another_process_at_any_phase(tmp_path, taken_reference, phase):
+    """A second process (dd) fills a 4 MiB tmpfs while the run writes its tiles, assembles the
+    map, writes the summary or the groups: exit 1 with one line naming the partial folder and
+    the system's reason (no crash: HDF5 objects are closed before they are collected), every
+    finished tile kept, nothing at the output; once the space is freed the same command
+    finishes, identical to a clean run."""
+    from atlas.faults import _taken_trial, _unshare_works
+
+    if not _unshare_works(tmp_path):
+        pytest.skip("unprivileged mount namespaces are not available here")
+    cfg, reference = taken_reference
+    code, line, recovered = _taken_trial(cfg, tmp_path, phase)
+    assert code == 1, line
+    assert len(line.splitlines()) == 1 and "Traceback" not in line, line
+    assert "out.h5.partial: writing failed (No space left on device)" in line, line
+    assert "run the same command again" in line and recovered
+    for a, b in zip(_labels(tmp_path / "taken-copy.h5"), reference):
+        np.testing.assert_array_equal(a, b)
