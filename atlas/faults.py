@@ -14,6 +14,10 @@ few minutes on two cores:
 * the disk taken by another process mid-run: a small tmpfs that a second writer (``dd``)
   fills at a chosen phase of the run (while tiles are written, while the file's map is
   assembled, while its summary and while its groups are written); the space is then freed;
+* hostile input: Hypothesis-generated configs (from the schema's keys, and mutations of a
+  valid one) and byte-level damage to a valid atlas file, fed to ``atlas run``, ``info``,
+  ``plot`` and ``view`` (``tests/test_fuzz.py`` with ``ATLAS_FUZZ_SCALE=10``: ten times the
+  examples of ``make test``);
 * racing takeovers of a lock whose holder was SIGKILLed (8 processes; no two may hold it
   at once, every one must get it);
 * two runs of different physics on one Dask scheduler at once;
@@ -260,6 +264,25 @@ class Soak:
                           f"{', '.join(phases)}; {clean} stopped with exit 1 and one line)",
                           len(phases), min(recovered, clean), identical))
 
+    def hostile_input(self, scale: int) -> None:
+        """The property tests of hostile input, ``scale`` times their ``make test`` size: each
+        example exits 0 with a sound file, or 2 with one line and nothing created or
+        overwritten."""
+        tests = Path(_package_root()) / "tests" / "test_fuzz.py"
+        n = 4 * 40 * scale  # four property tests of 40 examples each at scale 1
+        if not tests.exists():
+            self.rows.append(("hostile input (skipped: tests/test_fuzz.py not found)", 1, 1, 1))
+            return
+        proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                               str(tests)], capture_output=True, text=True, cwd=_package_root(),
+                              env={**os.environ, "ATLAS_FUZZ_SCALE": str(scale)})
+        if proc.returncode != 0:
+            print(proc.stdout[-3000:], file=sys.stderr)
+        ok = n if proc.returncode == 0 else 0
+        self.rows.append((f"hostile input: fuzzed configs and damaged atlas files (up to {n} "
+                          "examples; recovered = exit 0 or one line, identical = nothing "
+                          "created or overwritten)", n, ok, ok))
+
     def lock_races(self, n: int, racers: int = 8) -> None:
         out = self.work / "race.h5"
         recovered = clean = 0
@@ -500,6 +523,7 @@ def main(argv: list[str] | None = None) -> int:
         soak.sigterms(terms)
         soak.disk_full([16, 64, 128, 200] if not args.quick else [96])
         soak.disk_taken(list(PHASES) if not args.quick else ["assembly"])
+        soak.hostile_input(1 if args.quick else 10)
         soak.lock_races(races)
         soak.dask(pairs, dask_kills)
     print(_table(soak.rows))
