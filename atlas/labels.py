@@ -26,8 +26,9 @@ from .model import Pendulum, rk4_stable
 __all__ = ["LabelResult", "label", "trap_margin", "energy_cap", "ATTRACTOR_FILL", "BACKENDS",
            "METHODS", "DEFAULT_METHOD"]
 
-#: ``ATTRACTOR_FILL`` (defined in :mod:`atlas.kernels` with the status codes): fill value of
-#: ``attractor`` where status ≠ trapped (also the HDF5 _FillValue).
+# ATTRACTOR_FILL, the attractor where status ≠ trapped (also the HDF5 _FillValue), is defined
+# in atlas.kernels with the status codes and re-exported here.
+
 #: The CPU discretisation :func:`label` uses unless told (see :data:`atlas.kernels.METHODS`).
 DEFAULT_METHOD = METHODS[0]
 #: Steps between two trap tests in the fast kernels (trapping times are resolved to this).
@@ -44,8 +45,8 @@ def trap_margin(dt: float, alpha: float, omega0: float) -> float:
     oscillation that accumulates to ≈ 0.05(λ·dt)⁴·E, while damping removes energy every
     period. m = 10⁻⁹ + (λ·dt)⁴ covers that accumulation twenty-fold (m ≈ 1.6e-8 at the
     default dt = 0.01, α = 0.1, ω0 = 1). ``tests/test_labels.py`` measures the largest energy
-    rise along computed orbits near the separatrix energy and checks it stays below 5 % of
-    m·2ω0².
+    rise along computed orbits near the separatrix energy, for both methods ("rk4" and
+    "rk4-trigfree"), and checks it stays below 5 % of m·2ω0².
     """
     lam = alpha + math.hypot(alpha, omega0)
     return 1e-9 + (lam * dt) ** 4

@@ -29,8 +29,8 @@ first check that sees it.
 
 Numba's on-disk cache (:func:`cached_njit`) lives in a folder named by a hash of every
 kernel source file here: Numba itself invalidates a cached kernel only when the kernel's own
-file changes, but the lane kernel inlines code from ``fastsin.py`` and ``rk4.py``, so an edit
-there would otherwise keep running stale machine code.
+file changes, but the lane kernels inline code from ``fastsin.py``, ``rk4.py`` and
+``trigfree.py``, so an edit there would otherwise keep running stale machine code.
 """
 
 from __future__ import annotations
