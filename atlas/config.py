@@ -82,7 +82,11 @@ def _number(value):
     if isinstance(value, str):
         value = parse_pi_expression(value)
     if isinstance(value, (int, float)):
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:  # an integer beyond double precision
+            raise ValueError("must be a finite number, got an integer beyond the range of "
+                             "double precision") from None
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {value}")
         return value

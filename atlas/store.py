@@ -69,19 +69,19 @@ _SPECS = {
 
 @contextlib.contextmanager
 def _netcdf(path: Path, mode: str):
-    """``h5netcdf.File`` that, if anything fails inside (a full disk), is closed without the
-    final flush: h5netcdf would otherwise flush the broken file again when it is garbage
-    collected, and HDF5 can crash the process doing so."""
+    """``h5netcdf.File`` that, if anything fails inside or while closing (a full disk), is
+    closed without another flush: h5netcdf would otherwise flush the broken file again when it
+    is garbage collected, and HDF5 can crash the process doing so."""
     f = h5netcdf.File(path, mode)
     try:
         yield f
+        f.close()
     except BaseException:
         h5 = f._h5file
         f._closed = True
         with contextlib.suppress(Exception):
             h5.close()
         raise
-    f.close()
 
 
 class DamagedTile(Exception):
@@ -219,10 +219,9 @@ def _write_summary(path: Path, groups: dict[str, xr.Dataset], root_vars: xr.Data
     with _netcdf(path, "a") as f:
         _write_root_vars(f, root_vars)
         f.attrs.update({key: value for key, value in attrs.items() if value is not None})
-    for name, ds in groups.items():
-        ds.to_netcdf(path, mode="a", group=name, engine="h5netcdf")
-    with h5py.File(path, "a") as h:
-        h.attrs["complete"] = np.int8(1)
+        for name, ds in groups.items():  # xarray's encoding, into this guarded handle
+            ds.dump_to_store(xr.backends.H5NetCDFStore(f.create_group(name), mode="a"))
+        f.attrs["complete"] = np.int8(1)
 
 
 def _fsync(path: Path) -> None:

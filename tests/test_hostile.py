@@ -322,8 +322,6 @@ def test_a_partial_file_from_an_older_atlas_is_refused(tmp_path):
     assert (partial / "manifest.json").read_text() == "{broken"
 
 
-@pytest.mark.xfail(strict=True, reason="atlas.config: float() of an integer beyond float range "
-                   "raises OverflowError, not a config error")
 def test_an_integer_beyond_float_range_in_a_config_is_one_line(tmp_path):
     """Found by tests/test_fuzz.py at ATLAS_FUZZ_SCALE=10."""
     cfg = tmp_path / "c.yaml"
