@@ -438,7 +438,7 @@ def _tmpfs_trial(cfg: Path, work: Path, size_kib: int) -> tuple[int, str, bool]:
 PHASES = {"tiles": ("atlas.tiles", "TileStore", "record", 3),
           "assembly": ("atlas.store", None, "_copy_tiles", 1),
           "summary": ("atlas.store", None, "_write_summary", 1),
-          "groups": ("xarray", "Dataset", "to_netcdf", 1)}
+          "groups": ("h5netcdf", "Group", "create_group", 1)}
 _TAKER = """\
 import importlib, subprocess, sys
 from pathlib import Path

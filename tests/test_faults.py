@@ -227,12 +227,13 @@ def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
             no_space()
         real_replace(src, dst)
 
-    for broken in ("os.replace", "to_netcdf"):
+    for broken in ("os.replace", "groups"):
         with monkeypatch.context() as m:
             if broken == "os.replace":
                 m.setattr(store.os, "replace", no_space_for_the_output)
-            else:
+            else:  # writing a group, whichever way the writer hands it to xarray
                 m.setattr(store.xr.Dataset, "to_netcdf", no_space)
+                m.setattr(store.xr.Dataset, "dump_to_store", no_space)
             try:
                 atlas.run(cfg, quiet=True)
             except StorageError as exc:
