@@ -36,9 +36,10 @@ def exact_label(p: Pendulum, theta0: float, theta_dot0: float) -> int | None:
     return _exact_after(p, theta0, theta_dot0)
 
 
-def test_default_cpu_method_is_trigfree():
-    assert DEFAULT_METHOD == "rk4-trigfree"
-    assert resolve_method("cpu", None, None) == "rk4-trigfree"
+def test_default_cpu_method_is_classical_rk4():
+    assert DEFAULT_METHOD == "rk4"
+    assert resolve_method("cpu", None, None) == "rk4"
+    assert resolve_method("cpu", None, "rk4-trigfree") == "rk4-trigfree"
     assert resolve_method("cpu", "straightforward", None) == "rk4"
     assert resolve_method("cuda", None, None) == "rk4"
     for bad in ({"method": "rk5"}, {"kernel": "lanes"}, {"backend": "tpu"}):
@@ -50,11 +51,12 @@ def test_default_cpu_method_is_trigfree():
 
 
 @pytest.mark.parametrize("alpha", [0.1, 2.0])
-def test_certified_trigfree_labels_are_the_exact_equations(alpha):
+def test_certified_trigfree_labels_are_the_exact_equations(alpha, monkeypatch):
     """Random points of the window plus points 1.5 and 3 d_cert off the exact boundaries,
     labelled with method "rk4-trigfree"; d_cert from the separatrix bisection, which labels
-    with atlas.label's default kernel (the same method: asserted). Every label certified
-    (boundary distance > d_cert, on the exact side) must be DOP853's."""
+    with atlas.label's default kernel (made the same method here: asserted). Every label
+    certified (boundary distance > d_cert, on the exact side) must be DOP853's."""
+    monkeypatch.setattr(atlas.labels, "DEFAULT_METHOD", "rk4-trigfree")
     assert resolve_method("cpu", None, None) == "rk4-trigfree"
     p = Pendulum(alpha, 1.0)
     sep = separatrices.trace(p, *WINDOW)
