@@ -53,7 +53,7 @@ __all__ = ["run_bench", "format_table", "bench_to_json"]
 MAP_N = defaults.GRID_NUM
 SCALING = (256, 512, 1024, 2048, 4096)
 QUICK_SCALING = (256, 512, 1024)
-#: Targets on the 2-core development machine (issue 5).
+#: Targets on the 2-core development machine.
 TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
            "bulk_vs_lanes": 1.5, "jit_cold_s": 5.0, "jit_warm_s": 1.0}
 

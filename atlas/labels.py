@@ -1,4 +1,4 @@
-"""Which attractor does an orbit reach? Certified labels by the energy trap (SPEC.md).
+"""Which attractor does an orbit reach? Certified labels by the energy trap.
 
 An orbit is *trapped* in well k (the basin of the rest state (2πk, 0)) the first time
 

@@ -1,7 +1,7 @@
 """A branch-free polynomial sin that Numba inlines and LLVM vectorises.
 
 ``math.sin`` is a scalar libm call and blocks vectorisation of the lane loops in
-:mod:`atlas.kernels.lanes` (Numba's SVML path is off with this llvmlite, see NOTES.md).
+:mod:`atlas.kernels.lanes` (Numba's SVML path is off with current llvmlite).
 This module computes sin x from float arithmetic only (no int conversion, no branch, no
 table), so a loop over lanes becomes AVX-512/AVX2 code:
 
