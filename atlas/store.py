@@ -35,8 +35,16 @@ import numpy as np
 import xarray as xr
 
 from .errors import InputFileError
-from .labels import ATTRACTOR_FILL
-from .tiles import DEFLATE_LEVEL, MANIFEST, Layout, PartialStoreError, TileStore, partial_path
+from .kernels import ATTRACTOR_FILL
+from .tiles import (
+    DEFLATE_LEVEL,
+    MANIFEST,
+    Layout,
+    PartialStoreError,
+    TileStore,
+    fsync,
+    partial_path,
+)
 
 __all__ = ["Layout", "finalize", "open_atlas", "partial_path", "describe", "FILLS",
            "DamagedTile", "summary_dataset"]
@@ -224,14 +232,6 @@ def _write_summary(path: Path, groups: dict[str, xr.Dataset], root_vars: xr.Data
         f.attrs["complete"] = np.int8(1)
 
 
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
 def finalize(tiles: TileStore, output: Path, groups: dict[str, xr.Dataset],
              root_vars: xr.Dataset, attrs: dict) -> None:
     """Assemble the finished tiles of ``tiles`` into the atlas file ``output``; then remove
@@ -254,9 +254,9 @@ def finalize(tiles: TileStore, output: Path, groups: dict[str, xr.Dataset],
         f.attrs["complete"] = np.int8(0)
         _copy_tiles(f, tiles)
     _write_summary(path, groups, root_vars, attrs)
-    _fsync(path)
+    fsync(path)
     os.replace(path, output)
-    _fsync(output.parent)
+    fsync(output.parent)
     tiles.remove()
 
 

@@ -35,7 +35,8 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["Layout", "TileStore", "Tile", "partial_path", "encode_chunk", "discard",
-           "DEFLATE_LEVEL", "MANIFEST", "PartialStoreError", "IdentityMismatch", "VARIABLES"]
+           "DEFLATE_LEVEL", "MANIFEST", "PartialStoreError", "IdentityMismatch", "VARIABLES",
+           "fsync"]
 
 MANIFEST = "manifest.json"
 SCHEMA = "atlas-partial/2"
@@ -143,7 +144,8 @@ class Tile:
     tally: dict[str, np.ndarray]
 
 
-def _fsync_dir(path: Path) -> None:
+def fsync(path: Path) -> None:
+    """Push a file's or a folder's contents (a folder: its entries) to disk."""
     fd = os.open(path, os.O_RDONLY)
     try:
         os.fsync(fd)
@@ -164,7 +166,7 @@ def _write_durably(path: Path, write) -> None:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
-    _fsync_dir(path.parent)
+    fsync(path.parent)
 
 
 class TileStore:
@@ -197,12 +199,12 @@ class TileStore:
                 zarrstore.create(new / zarrstore.DATA, layout)
             _write_durably(new / MANIFEST,
                            lambda fh: fh.write(json.dumps(manifest, indent=1).encode()))
-            _fsync_dir(new / "tiles")
+            fsync(new / "tiles")
             os.rename(new, path)  # fails if path exists: never over someone's tiles
         except BaseException:
             shutil.rmtree(new, ignore_errors=True)
             raise
-        _fsync_dir(path.parent)
+        fsync(path.parent)
         return cls(path, manifest)
 
     @classmethod
@@ -308,7 +310,7 @@ def discard(path: Path) -> None:
     leaves under the new name is cleared by :meth:`TileStore.clear_leftovers`."""
     away = path.with_name(f".{path.name}.{os.getpid()}.discarded")
     os.rename(path, away)
-    _fsync_dir(path.parent)
+    fsync(path.parent)
     if away.is_dir():
         shutil.rmtree(away)
     else:
