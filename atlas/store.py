@@ -25,7 +25,9 @@ attributes.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import re
 import zipfile
 from pathlib import Path
 
@@ -223,13 +225,54 @@ def _write_root_vars(f: h5netcdf.File, ds: xr.Dataset) -> None:
 def _write_summary(path: Path, groups: dict[str, xr.Dataset], root_vars: xr.Dataset,
                    attrs: dict) -> None:
     """Everything a finished file has beyond the basin map, in one place: the root variables
-    of the summary, the groups, the attributes; ``complete`` last."""
-    with _netcdf(path, "a") as f:
-        _write_root_vars(f, root_vars)
-        f.attrs.update({key: value for key, value in attrs.items() if value is not None})
-        for name, ds in groups.items():  # xarray's encoding, into this guarded handle
-            ds.dump_to_store(xr.backends.H5NetCDFStore(f.create_group(name), mode="a"))
-        f.attrs["complete"] = np.int8(1)
+    of the summary, the groups, the attributes; ``complete`` last. Written by a forked child
+    (:func:`_in_child`)."""
+    def write():
+        with _netcdf(path, "a") as f:
+            _write_root_vars(f, root_vars)
+            f.attrs.update({key: value for key, value in attrs.items() if value is not None})
+            for name, ds in groups.items():  # xarray's encoding, into this guarded handle
+                ds.dump_to_store(xr.backends.H5NetCDFStore(f.create_group(name), mode="a"))
+            f.attrs["complete"] = np.int8(1)
+
+    _in_child(write)
+
+
+def _in_child(work) -> None:
+    """Run ``work`` (HDF5 writes) in a forked child that leaves by ``os._exit``. After a write
+    fails (a full disk), HDF5 retries the failed flush whenever one of the file's objects is
+    collected and at exit, and crashes the process doing so (SIGSEGV); the child is never torn
+    down, so that cannot happen, and this process raises an OSError with the system's errno."""
+    if not hasattr(os, "fork"):  # no fork (Windows): write in this process
+        work()
+        return
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        code = 0
+        try:
+            os.close(read)
+            null = os.open(os.devnull, os.O_WRONLY)  # HDF5's complaints after a failed
+            os.dup2(null, 2)  # write: the reason goes through the pipe
+            work()
+        except BaseException as exc:
+            code = 1
+            text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            number = getattr(exc, "errno", None)
+            found = re.search(r"errno = (\d+)", str(exc))
+            number = number or (int(found.group(1)) if found else 0)
+            with contextlib.suppress(Exception):
+                os.write(write, f"{number} {type(exc).__name__}: {text}".encode()[:4000])
+        finally:
+            os._exit(code)
+    os.close(write)
+    with os.fdopen(read, "rb") as pipe:
+        message = pipe.read().decode(errors="replace")
+    _, status = os.waitpid(pid, 0)
+    if os.waitstatus_to_exitcode(status) != 0:
+        number, _, text = message.partition(" ")
+        raise OSError(int(number) if number.isdigit() and int(number) else errno.EIO,
+                      text or f"the writer ended with status {status}")
 
 
 def finalize(tiles: TileStore, output: Path, groups: dict[str, xr.Dataset],

@@ -341,16 +341,7 @@ def taken_reference(tmp_path_factory):
     return cfg, _labels(tmp / "ref.h5")
 
 
-# Known bug, writer side (atlas.store._write_summary): a flush that fails on a full disk while
-# the summary or the groups are written leaves HDF5 objects that retry it when they are
-# collected, and the process dies by SIGSEGV at exit (exit 139). Strict: fixing it fails these
-# marks, so remove them then.
-_CRASHES = pytest.mark.xfail(strict=True, reason="HDF5 objects retry a failed flush after the "
-                             "summary/groups write fails: SIGSEGV at exit")
-
-
-@pytest.mark.parametrize("phase", ["tiles", "assembly", pytest.param("summary", marks=_CRASHES),
-                                   pytest.param("groups", marks=_CRASHES)])
+@pytest.mark.parametrize("phase", ["tiles", "assembly", "summary", "groups"])
 def test_the_disk_taken_by_another_process_at_any_phase(tmp_path, taken_reference, phase):
     """A second process (dd) fills a 4 MiB tmpfs while the run writes its tiles, assembles the
     map, writes the summary or the groups: exit 1 with one line naming the partial folder and
