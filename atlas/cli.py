@@ -42,12 +42,10 @@ class _Parser(argparse.ArgumentParser):
 def _cmd_run(args) -> int:
     from . import sweep
     from .config import load_config
-    from .validate import check_output_target
-
     cfg = load_config(args.config, output=args.output)
-    check_output_target(cfg.output, args.config, force=args.force)
     try:
-        tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend)
+        tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend,
+                         force=args.force, config_path=args.config)
     except KeyboardInterrupt as exc:
         from .tiles import partial_path
 

@@ -445,7 +445,8 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
 
 
 def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool = False,
-        backend: str | None = None) -> xr.DataTree:
+        backend: str | None = None, force: bool = False,
+        config_path: str | Path | None = None) -> xr.DataTree:
     """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
 
     An interrupted run of the same identity at the output (``<output>.partial/``) is
@@ -453,8 +454,13 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
     another identity raises :class:`InputFileError`, unless ``restart=True`` discards it
     first. ``resume`` is accepted for compatibility (continuing is always on). ``backend``
     overrides ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O
-    error) raises :class:`StorageError`; the tiles finished before it are kept.
+    error) raises :class:`StorageError`; the tiles finished before it are kept. An output
+    that atlas did not write is refused (:class:`~atlas.errors.OutputInTheWay`) unless
+    ``force``, and one that is the config file ``config_path`` itself always.
     """
+    from .validate import check_output_target
+
+    check_output_target(cfg.output, config_path, force=force)
     backend = backend or cfg.execution.backend
     layout = layout_of(cfg)
     if backend == "cuda":

@@ -124,3 +124,16 @@ def test_failed_run_leaves_no_file_at_the_output(written, tmp_path, monkeypatch)
 
     info = describe(partial)
     assert not info["complete"] and info["tiles_done"] == 2
+
+
+def test_the_python_api_does_not_write_over_a_file_atlas_did_not_write(written, tmp_path):
+    from atlas.errors import OutputInTheWay
+
+    cfg, _ = written
+    foreign = tmp_path / "notes.h5"
+    foreign.write_text("someone's notes")
+    cfg = cfg.model_copy(update={"output": foreign})
+    with pytest.raises(OutputInTheWay, match="notes.h5"):
+        atlas.run(cfg, quiet=True)
+    assert foreign.read_text() == "someone's notes"
+    assert atlas.run(cfg, quiet=True, force=True).attrs["complete"] == 1
