@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import matplotlib
@@ -84,6 +85,53 @@ def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
                 label="separatrices" if i == 0 else None)
 
 
+#: Largest image drawn per axis [pixels]: a figure is 8 in wide at 150 dpi. Larger maps are
+#: coarsened to it first (labels by their mode, never averaged into a k that no orbit reached).
+MAX_PIXELS = 1200
+
+
+def _coarsen(values: np.ndarray, how: str) -> np.ndarray:
+    """Block-reduce ``values`` (rows × columns, NaN = no value) to at most MAX_PIXELS per axis:
+    ``mode`` for labels, ``min`` or ``max`` for continuous maps (keeping their extremes)."""
+    fr, fc = (-(-n // MAX_PIXELS) for n in values.shape)
+    if fr == fc == 1:
+        return values
+    rows, cols = -(-values.shape[0] // fr), -(-values.shape[1] // fc)
+    padded = np.full((rows * fr, cols * fc), np.nan)
+    padded[:values.shape[0], :values.shape[1]] = values
+    blocks = padded.reshape(rows, fr, cols, fc).transpose(0, 2, 1, 3).reshape(rows, cols, -1)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN blocks stay NaN
+        if how == "min":
+            return np.nanmin(blocks, axis=2)
+        if how == "max":
+            return np.nanmax(blocks, axis=2)
+    finite = blocks[np.isfinite(blocks)]
+    if not finite.size:
+        return blocks[..., 0]
+    lo = int(finite.min())
+    counts = np.stack([(blocks == k).sum(axis=2) for k in range(lo, int(finite.max()) + 1)])
+    mode = (lo + counts.argmax(axis=0)).astype(float)
+    return np.where(counts.max(axis=0) > 0, mode, np.nan)
+
+
+def _grid_image(ax, ds: xr.Dataset, values: np.ndarray, how: str, **kwargs):
+    """Draw a map over the grid (rows θ̇0, columns θ0) as an image whose pixels are the grid's
+    cells (centred on the grid points), coarsened to the figure's resolution."""
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    half_t = 0.5 * (th[-1] - th[0]) / max(th.size - 1, 1)
+    half_v = 0.5 * (v[-1] - v[0]) / max(v.size - 1, 1)
+    image = ax.imshow(np.ma.masked_invalid(_coarsen(values, how)), origin="lower",
+                      extent=(th[0] - half_t, th[-1] + half_t, v[0] - half_v, v[-1] + half_v),
+                      aspect="auto", interpolation="nearest", **kwargs)
+    ax.set_xlim(th[0], th[-1])
+    ax.set_ylim(v[0], v[-1])
+    pi_ticks(ax, th[0], th[-1])
+    ax.set_xlabel("θ0 [rad]")
+    ax.set_ylabel("θ̇0 [rad/s]")
+    return image
+
+
 def basin_map(tree: xr.DataTree, ax=None, **index):
     """Draw the basin map of ``tree`` (colour by k) with critical points and separatrices."""
     ds = _single(tree.to_dataset(inherit=False), **index)
@@ -96,18 +144,11 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     levels = np.arange(kmin, kmax + 2) - 0.5
     cmap = ListedColormap(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10)).with_extremes(
         bad="white")
-    th, v = ds["theta0"].values, ds["theta_dot0"].values
-    mesh = ax.pcolormesh(th, v, np.ma.masked_invalid(k), cmap=cmap,
-                         norm=BoundaryNorm(levels, cmap.N), shading="nearest", rasterized=True)
+    mesh = _grid_image(ax, ds, k, "mode", cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=np.arange(kmin, kmax + 1))
     cbar.set_label("attractor k: orbit settles at (2πk, 0)")
     _separatrices(ax, tree, ds)
     _critical(ax, tree)
-    ax.set_xlim(th[0], th[-1])
-    ax.set_ylim(v[0], v[-1])
-    pi_ticks(ax, th[0], th[-1])
-    ax.set_xlabel("θ0 [rad]")
-    ax.set_ylabel("θ̇0 [rad/s]")
     ax.set_title(f"Basins of attraction, α = {_param(ds, 'alpha'):g} s⁻¹, "
                  f"ω0 = {_param(ds, 'omega0'):g} rad/s")
     ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)
@@ -125,14 +166,10 @@ def trap_time_map(tree: xr.DataTree, ax=None, **index):
     hi = max(positive.max() if positive.size else 1.0, lo * 10)
     cmap = plt.get_cmap("magma").with_extremes(under="0.8", bad="white")
     # t_trap = 0 (already inside the trap) is drawn below the scale, in grey
-    mesh = ax.pcolormesh(ds["theta0"].values, ds["theta_dot0"].values,
-                         np.ma.masked_invalid(np.where(t > 0, t, lo / 2)), cmap=cmap,
-                         norm=LogNorm(lo, hi), shading="nearest", rasterized=True)
+    mesh = _grid_image(ax, ds, np.where(t > 0, t, lo / 2), "max", cmap=cmap,
+                       norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label("trapping time t_trap [s]")
     _separatrices(ax, tree, ds)
-    pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
-    ax.set_xlabel("θ0 [rad]")
-    ax.set_ylabel("θ̇0 [rad/s]")
     ax.set_title("Time to certified trapping (grey: trapped at t = 0; white: never)")
     return ax
 
@@ -149,15 +186,10 @@ def boundary_distance_map(tree: xr.DataTree, ax=None, **index):
     lo = max(positive.min() if positive.size else 1e-12, d_cert if d_cert > 0 else 0, 1e-12)
     hi = max(positive.max() if positive.size else 1.0, lo * 10)
     cmap = plt.get_cmap("viridis").with_extremes(under="white", bad="0.5")
-    mesh = ax.pcolormesh(ds["theta0"].values, ds["theta_dot0"].values,
-                         np.ma.masked_invalid(d), cmap=cmap, norm=LogNorm(lo, hi),
-                         shading="nearest", rasterized=True)
+    mesh = _grid_image(ax, ds, d, "min", cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
         "distance to the nearest basin boundary (rad-ish)")
     _separatrices(ax, tree, ds)
-    pi_ticks(ax, ds["theta0"].values[0], ds["theta0"].values[-1])
-    ax.set_xlabel("θ0 [rad]")
-    ax.set_ylabel("θ̇0 [rad/s]")
     cert = f"d_cert = {d_cert:.1e}" if d_cert == d_cert else "d_cert not measured"
     ax.set_title(f"Distance to tipping into another well (white: closer than {cert})")
     return ax

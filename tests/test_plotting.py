@@ -30,9 +30,9 @@ output: {tmp / 's.h5'}
 def test_basin_map_colours_cells_by_k_and_marks_critical_points(sweep_tree):
     tree, _ = sweep_tree
     ax = basin_map(tree)
-    mesh = ax.collections[0]
+    image = ax.images[0]
     k = tree["attractor"].isel(alpha=0).values
-    np.testing.assert_array_equal(np.asarray(mesh.get_array()).reshape(k.shape), k)
+    np.testing.assert_array_equal(np.asarray(image.get_array()), k.reshape(k.shape[-2:]))
     labels = [line.get_label() for line in ax.lines]
     assert "attractors (2πk, 0)" in labels and "saddles ((2j+1)π, 0)" in labels
     saddles = ax.lines[labels.index("saddles ((2j+1)π, 0)")]
@@ -44,8 +44,26 @@ def test_basin_map_colours_cells_by_k_and_marks_critical_points(sweep_tree):
 def test_trap_time_map_uses_a_log_scale(sweep_tree):
     tree, _ = sweep_tree
     ax = trap_time_map(tree)
-    assert isinstance(ax.collections[0].norm, LogNorm)
+    assert isinstance(ax.images[0].norm, LogNorm)
     plt.close("all")
+
+
+def test_big_maps_are_coarsened_by_the_mode_of_their_labels():
+    """A map wider than the figure's pixels is drawn from blocks; a block of labels takes its
+    most frequent label (never an average, which could name a well no orbit reached), and
+    the continuous maps keep their extremes."""
+    from atlas.plotting import MAX_PIXELS, _coarsen
+
+    rows, cols = 3 * MAX_PIXELS, 2 * MAX_PIXELS + 1
+    labels = np.full((rows, cols), 2.0)
+    labels[::3, :] = -2.0  # one row in three: the mean (≈ 0.67) would be no label at all
+    labels[:3, :] = np.nan
+    small = _coarsen(labels, "mode")
+    assert small.shape == (MAX_PIXELS, 801)  # blocks of 3 × 3 cells
+    assert np.all(np.isnan(small[0])) and set(np.unique(small[1:])) == {2.0}
+    distance = np.arange(rows * cols, dtype=float).reshape(rows, cols)
+    assert _coarsen(distance, "min")[1, 1] == distance[3, 3]
+    assert _coarsen(distance, "max")[0, 0] == distance[2, 2]
 
 
 def test_fraction_curves_one_per_basin_with_error_bars(sweep_tree):
