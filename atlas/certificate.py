@@ -82,9 +82,13 @@ class Certifier:
         self.window = ((self.theta0[0], self.theta0[-1]), (self.theta_dot0[0],
                                                            self.theta_dot0[-1]))
         self._indices: dict[float, object] = {}
-        self.areas = basin_areas(pendulum, *self.window)
+        # the left branch at rtol 1e-13 (the search index's) and at 1e-12, each integrated
+        # once: for the exact areas and for the reference's own error
+        fine = self._index(_FIRST_MARGIN).manifold
+        coarse = StableManifold(pendulum, max(abs(v) for v in self.window[1]), RTOL_CHECK)
+        self.areas = basin_areas(pendulum, *self.window, manifolds=(fine, coarse))
         self.shift = float(shift)
-        self.reference_error = self._reference_error()
+        self.reference_error = self._reference_error(fine, coarse)
         self.d_cert = cert_distance(shift, tol, self.reference_error)
         d_theta = np.diff(self.window[0])[0] / (self.theta0.size - 1)
         d_speed = np.diff(self.window[1])[0] / (self.theta_dot0.size - 1)
@@ -98,12 +102,11 @@ class Certifier:
     def __getstate__(self):
         return {**self.__dict__, "_indices": {}}
 
-    def _reference_error(self) -> float:
-        """Largest distance between the reference manifolds at rtol 1e-12 and 1e-13 over the
-        window's θ̇ band: the DOP853 reference's own error, overestimated about tenfold."""
-        speed = max(abs(v) for v in self.window[1])
-        fine = self._index(_FIRST_MARGIN).manifold
-        coarse = StableManifold(self.pendulum, speed, RTOL_CHECK)
+    def _reference_error(self, fine: StableManifold, coarse: StableManifold) -> float:
+        """Largest distance between the reference manifolds at rtol 1e-12 (``coarse``) and
+        1e-13 (``fine``) over the window's θ̇ band: the DOP853 reference's own error,
+        overestimated about tenfold."""
+        speed = coarse.speed
         box = ((coarse.theta.min() - 1.0, math.pi + 1.0), (-speed, speed))
         inside = coarse.theta_dot <= speed  # both integrations end just beyond it
         dist, _ = fine.index(box).nearest(coarse.theta[inside], coarse.theta_dot[inside])

@@ -426,11 +426,9 @@ def _tmpfs_trial(cfg: Path, work: Path, size_kib: int) -> tuple[int, str, bool]:
               f"mount -o remount,size=64m {disk} || exit 91; "
               f"{run} 2> {work}/full-err2.txt && cp {out} {work}/full-copy.h5")
     (work / "full-copy.h5").unlink(missing_ok=True)
-    done = subprocess.run(["unshare", "--user", "--map-root-user", "--mount", "sh", "-c",
-                           script], capture_output=True, env={**os.environ,
-                                                              "PYTHONPATH": _package_root()})
+    recovered = _in_mount_namespace(script)
     code = int((work / "full-code.txt").read_text())
-    return code, (work / "full-err.txt").read_text().strip(), done.returncode == 0
+    return code, (work / "full-err.txt").read_text().strip(), recovered
 
 
 #: Where :func:`_taken_trial` lets another process fill the disk: the function of atlas that
@@ -471,11 +469,18 @@ def _taken_trial(cfg: Path, work: Path, phase: str) -> tuple[int, str, bool]:
              f"echo $? > {work}/taken-code.txt; rm -f {hog}; "
              f"{run} 2> {work}/taken-err2.txt && cp {out} {work}/taken-copy.h5")
     (work / "taken-copy.h5").unlink(missing_ok=True)
-    done = subprocess.run(["unshare", "--user", "--map-root-user", "--mount", "sh", "-c",
-                           shell], capture_output=True, env={**os.environ,
-                                                             "PYTHONPATH": _package_root()})
+    recovered = _in_mount_namespace(shell)
     code = int((work / "taken-code.txt").read_text())
-    return code, (work / "taken-err.txt").read_text().strip(), done.returncode == 0
+    return code, (work / "taken-err.txt").read_text().strip(), recovered
+
+
+def _in_mount_namespace(shell: str) -> bool:
+    """Run ``shell`` (sh) in a private user and mount namespace, with this atlas importable;
+    True if it exited 0."""
+    done = subprocess.run(["unshare", "--user", "--map-root-user", "--mount", "sh", "-c",
+                           shell], capture_output=True,
+                          env={**os.environ, "PYTHONPATH": _package_root()})
+    return done.returncode == 0
 
 
 def _package_root() -> str:

@@ -480,15 +480,19 @@ def _boundary_integrals(manifold: StableManifold, theta_window, theta_dot_window
     return g
 
 
-def basin_areas(pendulum: Pendulum, theta_window, theta_dot_window) -> BasinAreas:
+def basin_areas(pendulum: Pendulum, theta_window, theta_dot_window,
+                manifolds: tuple[StableManifold, StableManifold] | None = None) -> BasinAreas:
     """Exact area fractions of the window θ ∈ ``theta_window`` [rad] × θ̇ ∈
     ``theta_dot_window`` [rad s⁻¹] in each basin: (G_{2k+1} − G_{2k−1}) / area with
-    G_n = ∫ clip(S_n(θ), θ̇min, θ̇max) dθ (module docstring)."""
+    G_n = ∫ clip(S_n(θ), θ̇min, θ̇max) dθ (module docstring). ``manifolds``: the left branch
+    integrated at rtol :data:`RTOL` and :data:`RTOL_CHECK`, each at least as fast as the
+    window's θ̇ (integrated here if not given)."""
     speed = max(abs(x) for x in theta_dot_window)
     width = theta_window[1] - theta_window[0]
     area = width * (theta_dot_window[1] - theta_dot_window[0])
-    fine, coarse = (_boundary_integrals(StableManifold(pendulum, speed, rtol), theta_window,
-                                        theta_dot_window) for rtol in (RTOL, RTOL_CHECK))
+    if manifolds is None:
+        manifolds = tuple(StableManifold(pendulum, speed, rtol) for rtol in (RTOL, RTOL_CHECK))
+    fine, coarse = (_boundary_integrals(m, theta_window, theta_dot_window) for m in manifolds)
     below, above = min(fine), max(fine)
     n = np.arange(min(below, min(coarse)), max(above, max(coarse)) + 1, 2)
 
