@@ -4,7 +4,7 @@ import h5py
 import numpy as np
 import pytest
 
-from tests.conftest import run_cli
+from tests.helpers import run_cli
 from tests.test_config import BAD
 
 

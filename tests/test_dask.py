@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import atlas
-from tests.conftest import REPO, write_config
+from tests.helpers import REPO, write_config
 
 distributed = pytest.importorskip("distributed")
 

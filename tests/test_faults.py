@@ -16,7 +16,7 @@ import pytest
 
 import atlas
 from atlas.store import describe
-from tests.conftest import REPO, lock_is_free, run_cli, write_config
+from tests.helpers import REPO, lock_is_free, run_cli, write_config
 
 SLOW = """\
 grid:

@@ -25,7 +25,7 @@ def _probe(root, env):
 
 
 def test_an_edit_to_an_inlined_kernel_file_recompiles(tmp_path):
-    from tests.conftest import REPO
+    from tests.helpers import REPO
 
     root = tmp_path / "copy"
     shutil.copytree(REPO / "atlas", root / "atlas",

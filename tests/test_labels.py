@@ -10,7 +10,7 @@ from atlas.kernels.rk4 import propagate_straightforward
 from atlas.kernels.trigfree import record_trigfree
 from atlas.labels import ATTRACTOR_FILL, trap_margin
 from atlas.model import Pendulum
-from tests.conftest import boundary_adjacent, dop853_attractor
+from tests.helpers import boundary_adjacent, dop853_attractor
 
 ALPHA, OMEGA0 = 0.1, 1.0
 

@@ -7,7 +7,6 @@ import re
 import numba as nb
 import numpy as np
 import pytest
-from conftest import boundary_adjacent
 
 from atlas.kernels import NONFINITE, TRAPPED, UNRESOLVED
 from atlas.kernels.fastsin import SIN_FASTMATH
@@ -24,6 +23,7 @@ from atlas.kernels.lanes import (
 )
 from atlas.kernels.rk4 import label_straightforward, propagate_straightforward
 from atlas.labels import energy_cap, n_checks_for
+from tests.helpers import boundary_adjacent
 
 ALPHA, OMEGA0, DT, T_MAX = 0.1, 1.0, 0.01, 200.0
 CAP = energy_cap(DT, ALPHA, OMEGA0)

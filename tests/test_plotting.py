@@ -10,7 +10,7 @@ from matplotlib.colors import LogNorm  # noqa: E402
 
 import atlas  # noqa: E402
 from atlas.plotting import basin_map, fraction_curves, plot_atlas, trap_time_map  # noqa: E402
-from tests.conftest import run_cli, write_config  # noqa: E402
+from tests.helpers import run_cli, write_config  # noqa: E402
 
 
 @pytest.fixture(scope="module")

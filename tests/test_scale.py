@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 import atlas
-from tests.conftest import REPO, crash_on_tile, run_cli, write_config
+from tests.helpers import REPO, crash_on_tile, run_cli, write_config
 
 LABELS = ("attractor", "status", "t_trap")
 

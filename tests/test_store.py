@@ -10,12 +10,12 @@ import xarray as xr
 import atlas
 from atlas.kernels import NEAR_BOUNDARY
 from atlas.labels import ATTRACTOR_FILL
-from tests.conftest import crash_on_tile, lock_is_free
+from tests.helpers import crash_on_tile, lock_is_free
 
 
 @pytest.fixture(scope="module")
 def written(tmp_path_factory):
-    from tests.conftest import SMALL
+    from tests.helpers import SMALL
 
     tmp = tmp_path_factory.mktemp("store")
     path = tmp / "c.yaml"

@@ -71,7 +71,7 @@ def test_identity_is_checked_before_anything_is_touched(cfg):
 def test_a_damaged_tile_is_set_aside_and_computed_again(cfg):
     tree = atlas.run(cfg, quiet=True)
     clean = tree["attractor"].values.copy()
-    from tests.conftest import crash_on_tile
+    from tests.helpers import crash_on_tile
 
     mp = pytest.MonkeyPatch()
     crash_on_tile(mp, 4, KeyboardInterrupt())

@@ -20,7 +20,7 @@ from atlas.kernels.lanes import label_trigfree
 from atlas.kernels.trigfree import label_trigfree_straightforward
 from atlas.labels import DEFAULT_METHOD, energy_cap, n_checks_for, resolve_method
 from atlas.model import Pendulum
-from tests.conftest import boundary_adjacent
+from tests.helpers import boundary_adjacent
 from tests.test_certificate import exact_label as _exact_after
 
 PI = math.pi

@@ -6,7 +6,7 @@ import pytest
 import xarray as xr
 
 import atlas
-from tests.conftest import crash_on_tile
+from tests.helpers import crash_on_tile
 
 pytest.importorskip("zarr")
 LABELS = ("attractor", "status", "t_trap", "boundary_distance", "basin_fraction",

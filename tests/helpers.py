@@ -1,0 +1,103 @@
+"""Helpers shared by the test modules: small configs, the CLI in a subprocess, a crash
+injected mid-run, and an independent reference integrator (scipy's DOP853).
+
+Import them with ``from tests.helpers import ...``; fixtures live in ``conftest.py``."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def dop853_attractor(theta0, theta_dot0, alpha, omega0, t_end=200.0):
+    """Independent reference label: integrate eq. (1) with scipy's DOP853 (rtol 1e-11) until
+    the orbit is deep inside a well (E_k below half the saddle energy, far from any trap
+    margin question) or t_end; None if it has not got there."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(_, y):
+        return [y[1], -omega0**2 * np.sin(y[0]) - 2 * alpha * y[1]]
+
+    def low_energy(_, y):  # E_k < ω0² for the nearest well k
+        k = np.round(y[0] / (2 * np.pi))
+        return 0.5 * y[1] ** 2 + omega0**2 * (1 - np.cos(y[0] - 2 * np.pi * k)) - omega0**2
+
+    low_energy.terminal = True
+    if low_energy(0.0, (theta0, theta_dot0)) < 0:
+        return round(theta0 / (2 * np.pi))
+    sol = solve_ivp(rhs, (0.0, t_end), [theta0, theta_dot0], method="DOP853", rtol=1e-11,
+                    atol=1e-12, events=low_energy)
+    theta, theta_dot = sol.y[:, -1]
+    if sol.status != 1:
+        return None
+    return round(theta / (2 * np.pi))
+
+
+def boundary_adjacent(labels: np.ndarray) -> np.ndarray:
+    """Cells with a 4-neighbour of a different label (or a neighbour without a label)."""
+    adj = np.zeros(labels.shape, bool)
+    for axis in (0, 1):
+        diff = np.diff(labels, axis=axis) != 0
+        lo = [slice(None)] * 2
+        hi = [slice(None)] * 2
+        lo[axis] = slice(None, -1)
+        hi[axis] = slice(1, None)
+        adj[tuple(lo)] |= diff
+        adj[tuple(hi)] |= diff
+    return adj
+
+
+def write_config(path: Path, body: str) -> Path:
+    path.write_text(textwrap.dedent(body))
+    return path
+
+
+SMALL = """\
+name: small
+pendulum: {{alpha: 0.1, omega0: 1.0}}
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 24}}
+  theta_dot0: {{start: -4, stop: 4, num: 16}}
+integrator: {{dt: 0.01, t_max: 200}}
+separatrices: {{enabled: {sep}}}
+execution: {{tile_orbits: 100}}
+output: {output}
+"""
+
+
+def run_cli(*args, cwd=None, env=None, timeout=300):
+    """Run the real ``atlas`` CLI in a subprocess."""
+    return subprocess.run([sys.executable, "-m", "atlas.cli", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, env=env, timeout=timeout)
+
+
+def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
+    """Make the sweep's ``call``-th tile computation raise ``error`` (a crash mid-run)."""
+    from atlas import sweep
+
+    real, calls = sweep.compute_tile, []
+
+    def crashing(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == call:
+            raise error
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(sweep, "compute_tile", crashing)
+
+
+def lock_is_free(output: Path) -> bool:
+    """True if no process holds ``output``'s lock (the lock file itself stays in place)."""
+    from atlas.lock import OutputLocked, output_lock
+
+    try:
+        with output_lock(Path(output)):
+            return True
+    except OutputLocked:
+        return False
