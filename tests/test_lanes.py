@@ -158,8 +158,25 @@ def test_anti_damping_falls_back_to_reference_path():
         np.testing.assert_array_equal(x, y)
 
 
+def _packed_fma_host() -> str | None:
+    """Why the x86 assembly check cannot run on this host, or None if it can: it greps
+    x86-64 FMA mnemonics on ymm/zmm registers, which only an x86-64 CPU with FMA emits."""
+    import platform
+
+    from llvmlite.binding import get_host_cpu_features
+
+    machine = platform.machine()
+    if machine.lower() not in ("x86_64", "amd64"):
+        return f"greps x86-64 assembly; this machine is {machine or 'unknown'}"
+    if not get_host_cpu_features().get("fma"):
+        return "this x86-64 CPU has no FMA, so no packed vfmadd instructions to find"
+    return None
+
+
 @pytest.mark.parametrize("propagate", [propagate_lanes, propagate_trigfree])
 def test_lane_loop_is_vectorised(propagate):
+    if reason := _packed_fma_host():
+        pytest.skip(reason)
     # the cached dispatcher cannot be inspected: compile an uncached copy of the same code
     fresh = nb.njit(parallel=True, fastmath=SIN_FASTMATH)(propagate.py_func)
     th = np.zeros(LANES)
