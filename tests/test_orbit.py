@@ -8,6 +8,7 @@ import pytest
 
 import atlas
 from atlas.cli import main
+from atlas.labels import energy_cap
 from atlas.orbit import integrate
 
 
@@ -39,11 +40,17 @@ def test_integrate_gives_the_kernels_labels():
         np.testing.assert_array_equal([o.k for o in orbits], ref.attractor)
         t = np.array([o.t_trap for o in orbits])
         assert np.mean(np.isclose(t, ref.t_trap)) > 0.98
+        saddle_energy = omega0**2 * (1 - np.cos(np.pi))  # E at (π, 0): the top of each well
         for o in orbits:  # the trap really holds where it is reported, and the curve is whole
             i = o.trap_index
-            phi = o.theta[i] - 2 * np.pi * o.k
-            energy = 0.5 * o.theta_dot[i] ** 2 + omega0**2 * (1 - np.cos(phi))
-            assert abs(phi) <= np.pi and energy < o.cap == 2 * omega0**2 * (1 - o.margin)
+            phi = o.theta[i:] - 2 * np.pi * o.k
+            energy = 0.5 * o.theta_dot[i:] ** 2 + omega0**2 * (1 - np.cos(phi))
+            # the kernels' trap level, below the saddle energy, and the orbit is under it
+            assert energy[0] < o.cap == energy_cap(dt, alpha, omega0) < saddle_energy
+            # from the trap on, the orbit stays in well k below the saddle energy, and it
+            # settles at (2πk, 0)
+            assert np.all(np.abs(phi) < np.pi) and np.all(energy < saddle_energy)
+            assert energy[-1] < 1e-3 * saddle_energy
             assert o.t[i] == pytest.approx(o.t_trap) and o.t.size == o.theta.size
 
 
