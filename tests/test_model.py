@@ -78,6 +78,6 @@ def test_field_and_its_derivative_along_the_flow():
     behind = p.field(theta - eps * f0, theta_dot - eps * f1)
     np.testing.assert_allclose(g0, (ahead[0] - behind[0]) / (2 * eps), rtol=0, atol=1e-8)
     np.testing.assert_allclose(g1, (ahead[1] - behind[1]) / (2 * eps), rtol=0, atol=1e-8)
-    (s0, s1), (s2, s3) = p.field_jet(1.0, 0.5)  # scalars stay scalars
-    assert all(np.ndim(x) == 0 for x in (s0, s1, s2, s3))
-    assert s3 == pytest.approx(-1.5**2 * math.cos(1.0) * 0.5 - 0.6 * s1, rel=1e-15)
+    (s0, s1), (s2, s3) = p.field_jet(float(theta[0]), float(theta_dot[0]))  # floats stay
+    assert all(np.ndim(x) == 0 for x in (s0, s1, s2, s3))  # scalars, the values checked above
+    np.testing.assert_array_equal([s0, s1, s2, s3], [j0[0], j1[0], g0[0], g1[0]])
