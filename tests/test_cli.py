@@ -116,6 +116,24 @@ def test_figures_and_bench_refuse_an_output_folder_they_cannot_make(tmp_path):
     _one_clean_line(run_cli("bench", "--quick", "--output", blocker / "b.json"), "cannot create")
 
 
+def test_python_dash_m_atlas_and_the_bench_modules():
+    """``python -m atlas`` is the CLI; the GPU benchmark does not import the CPU one (the CPU
+    benchmark calls the GPU rows, never the other way round)."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "atlas", "bench", "--help"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("usage: atlas bench") and "--quick" in proc.stdout
+    probe = ("import sys, atlas.bench_gpu; "
+             "print(sorted(m for m in sys.modules if m.startswith('atlas.bench')))")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["['atlas.bench_gpu']"]
+
+
 def test_plot_and_open_refuse_a_partial_file(small_config, tmp_path):
     import atlas
     from atlas import store

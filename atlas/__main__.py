@@ -1,0 +1,7 @@
+"""``python -m atlas``: the ``atlas`` command line (:mod:`atlas.cli`)."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())
