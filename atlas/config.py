@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import itertools
 import json
 import math
 import operator
@@ -30,6 +31,7 @@ from pydantic import (
 
 from . import defaults
 from .errors import ConfigError
+from .layout import PARAMETERS
 from .limits import MAX_RATE, MIN_RATE
 
 __all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash"]
@@ -118,10 +120,12 @@ class _Strict(BaseModel):
 
 
 class PendulumConfig(_Strict):
-    """α [s⁻¹] and ω0 [rad s⁻¹]; a list for either makes a parameter atlas (leading dims)."""
+    """α [s⁻¹], ω0 [rad s⁻¹] and the constant torque τ [rad s⁻²]; a list for any of them
+    makes it a dim of a parameter atlas (the others stay scalar coordinates)."""
 
     alpha: Numbers = defaults.ALPHA
     omega0: Numbers = defaults.OMEGA0
+    torque: Numbers = 0.0
 
     @staticmethod
     def _each(value, check) -> None:
@@ -165,24 +169,52 @@ class PendulumConfig(_Strict):
         cls._each(value, check)
         return value
 
-    @field_validator("alpha", "omega0")
+    @field_validator("torque")
+    @classmethod
+    def _torque(cls, value):
+        def check(t):
+            if not abs(t) <= MAX_RATE**2:
+                raise ValueError(f"must be between {-MAX_RATE**2:g} and {MAX_RATE**2:g} "
+                                 f"rad/s^2, got {t:g}")
+
+        cls._each(value, check)
+        return value
+
+    @field_validator("alpha", "omega0", "torque")
     @classmethod
     def _nonempty(cls, value):
         if isinstance(value, list) and not value:
             raise ValueError("an empty list sweeps nothing")
         return value
 
+    def values(self, name: str) -> list[float]:
+        """The values of parameter ``name`` (one unless it is swept)."""
+        value = getattr(self, name)
+        return value if isinstance(value, list) else [value]
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The parameters given as lists: the dims of a parameter atlas."""
+        return tuple(name for name in PARAMETERS if isinstance(getattr(self, name), list))
+
     @property
     def alphas(self) -> list[float]:
-        return self.alpha if isinstance(self.alpha, list) else [self.alpha]
+        return self.values("alpha")
 
     @property
     def omega0s(self) -> list[float]:
-        return self.omega0 if isinstance(self.omega0, list) else [self.omega0]
+        return self.values("omega0")
 
     @property
-    def is_sweep(self) -> bool:
-        return isinstance(self.alpha, list) or isinstance(self.omega0, list)
+    def torques(self) -> list[float]:
+        return self.values("torque")
+
+    @property
+    def points(self) -> list[dict[str, float]]:
+        """Every parameter point, in C order over the swept dims."""
+        names = list(PARAMETERS)
+        return [dict(zip(names, combo))
+                for combo in itertools.product(*(self.values(n) for n in names))]
 
 
 class Axis(_Strict):

@@ -7,34 +7,30 @@ from pathlib import Path
 import xarray as xr
 
 from . import store
+from .layout import at_point, point_group, point_label, points
 
 
 def summary_lines(tree: xr.DataTree) -> list[str]:
-    """Grid, parameters, exact basin fractions, grid fractions with their error, d_cert and
-    the certified share, unresolved count, run time, and the separatrices' summary."""
+    """Grid, then for every parameter point its parameters, exact basin fractions, grid
+    fractions with their error, d_cert and the certified share, and its separatrices'
+    summary; then the unresolved count and the run time."""
     ds = tree.to_dataset(inherit=False)
     n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+    every = points(ds)
     lines = [f"grid      {ds.sizes['theta0']} x {ds.sizes['theta_dot0']} (theta0 x theta_dot0)"
-             f" = {n_orbits:,} orbits"]
-    if "alpha" in ds.dims:
-        lines.append(f"sweep     alpha: {ds.sizes['alpha']} values, omega0: "
-                     f"{ds.sizes['omega0']} values; basin fractions per point:")
-        for a in ds["alpha"].values:
-            for w in ds["omega0"].values:
-                point = ds.sel(alpha=a, omega0=w)
-                lines.append(f"  alpha = {a:g}, omega0 = {w:g}:")
-                lines += ["    " + line for line in _basin_lines(point)]
-        unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
-    else:
-        lines.append(f"pendulum  alpha = {ds.attrs['alpha']:g} 1/s, omega0 = "
-                     f"{ds.attrs['omega0']:g} rad/s, dt = {ds.attrs['dt']:g} s")
-        lines += _basin_lines(ds)
-        unresolved = int(round(float(ds["unresolved_fraction"]) * n_orbits))
+             f" = {n_orbits:,} orbits per parameter point, {len(every)} parameter point"
+             f"{'s' if len(every) != 1 else ''} (alpha [1/s], omega0 [rad/s], "
+             "torque [rad/s^2])"]
+    for point in every:
+        lines.append(f"pendulum  {point_label(point)}")
+        lines += ["  " + line for line in _basin_lines(at_point(ds, point))]
+        sep = point_group(tree, "separatrices", point)
+        if sep is not None:
+            lines += ["  " + line for line in _separatrix_lines(sep)]
+    unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
     lines.append(f"unresolved {unresolved} orbits")
     if "run_time_s" in ds.attrs:
         lines.append(f"time      {float(ds.attrs['run_time_s']):.2f} s")
-    if "separatrices" in tree.children:
-        lines += _separatrix_lines(tree["separatrices"].to_dataset(inherit=False))
     return lines
 
 
@@ -71,14 +67,7 @@ def _basin_lines(ds: xr.Dataset) -> list[str]:
 def _separatrix_lines(sep: xr.Dataset) -> list[str]:
     from .separatrices import summary
 
-    if "point_alpha" not in sep.coords:
-        return summary(sep)
-    n = len({(a, w) for a, w in zip(sep["point_alpha"].values, sep["point_omega0"].values)})
-    bound = float(sep.attrs["discrepancy_bound"])
-    disc = float(sep.attrs["discrepancy"])
-    return [f"separatrices: {n} parameter points, {sep.sizes['point']} points in all; max "
-            f"distance to the DOP853 stable manifold {disc:.1e} "
-            f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e})"]
+    return summary(sep)
 
 
 def info_lines(path: str | Path) -> list[str]:

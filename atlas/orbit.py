@@ -22,6 +22,7 @@ from . import defaults
 from .errors import AtlasError, InputFileError
 from .kernels import NONFINITE, TRAPPED, UNRESOLVED
 from .labels import CHECK_EVERY, check_integration, n_checks_for, trap_margin
+from .layout import point_group
 
 __all__ = ["Orbit", "integrate", "report", "plot_orbit", "parse_number"]
 
@@ -135,34 +136,31 @@ def parse_number(text: str, name: str) -> float:
 
 def _point(tree, path: Path, alpha: float | None, omega0: float | None):
     """The basin map of the parameter point (α, ω0) asked for (the only one when not asked),
-    with its indices for :func:`atlas.plotting.basin_map`."""
-    from .view import parameter_points, point_params
+    its parameters, and its indices along the swept dims for :func:`atlas.plotting.basin_map`."""
+    from .layout import at_point, points
 
     ds = tree.to_dataset(inherit=False)
-    points = parameter_points(ds)
-    params = [point_params(p) for p in points]
+    every = points(ds)
+    listed = ", ".join(f"({p['alpha']:g}, {p['omega0']:g})" for p in every[:12]) \
+        + (", …" if len(every) > 12 else "")
     if alpha is None and omega0 is None:
-        if len(points) > 1:
-            listed = ", ".join(f"({a:g}, {w:g})" for a, w in params[:12])
-            raise AtlasError(f"{path}: a parameter atlas of {len(points)} points; choose one "
-                             f"with --alpha and --omega0 (alpha, omega0 = {listed}"
-                             f"{', …' if len(points) > 12 else ''})")
-        chosen = 0
+        if len(every) > 1:
+            raise AtlasError(f"{path}: a parameter atlas of {len(every)} points; choose one "
+                             f"with --alpha and --omega0 (alpha, omega0 = {listed})")
+        fits = every
     else:
-        fits = [i for i, (a, w) in enumerate(params)
-                if (alpha is None or math.isclose(a, alpha, rel_tol=1e-9))
-                and (omega0 is None or math.isclose(w, omega0, rel_tol=1e-9))]
+        fits = [p for p in every
+                if (alpha is None or math.isclose(p["alpha"], alpha, rel_tol=1e-9))
+                and (omega0 is None or math.isclose(p["omega0"], omega0, rel_tol=1e-9))]
         if len(fits) != 1:
-            listed = ", ".join(f"({a:g}, {w:g})" for a, w in params[:12])
             raise AtlasError(f"{path}: no single parameter point with"
                              f"{'' if alpha is None else f' alpha = {alpha:g}'}"
                              f"{'' if omega0 is None else f' omega0 = {omega0:g}'} "
-                             f"(alpha, omega0 = {listed}{', …' if len(points) > 12 else ''})")
-        chosen = fits[0]
-    index = {}
-    if "alpha" in ds.dims:
-        index = dict(zip(("alpha", "omega0"), divmod(chosen, ds.sizes["omega0"])))
-    return points[chosen], params[chosen], index
+                             f"(alpha, omega0 = {listed})")
+    chosen = fits[0]
+    index = {name: int(np.flatnonzero(ds[name].values == chosen[name])[0])
+             for name in chosen if name in ds.dims}
+    return at_point(ds, chosen), chosen, index
 
 
 def _nearest(point, theta0: float, theta_dot0: float) -> dict:
@@ -211,7 +209,8 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
         path = Path(file)
         tree = open_atlas(path)
         ds = tree.to_dataset(inherit=False)
-        point, (alpha, omega0), index = _point(tree, path, alpha, omega0)
+        point, params, index = _point(tree, path, alpha, omega0)
+        alpha, omega0 = params["alpha"], params["omega0"]
         file_dt, file_t_max = float(ds.attrs["dt"]), float(ds.attrs["t_max"])
         for name, given, stored in (("dt", dt, file_dt), ("t_max", t_max, file_t_max)):
             if given is not None and not math.isclose(given, stored, rel_tol=1e-12):
@@ -221,8 +220,9 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
         nearest = _nearest(point, theta0, theta_dot0)
         if "boundary_shift" in point:
             shift = float(point["boundary_shift"])
-        if "separatrices" in tree.children:
-            tol = float(tree["separatrices"].attrs.get("tol", math.nan))
+        sep = point_group(tree, "separatrices", params)
+        if sep is not None:
+            tol = float(sep.attrs.get("tol", math.nan))
     elif alpha is None or omega0 is None:
         raise AtlasError("give --alpha and --omega0, or an atlas file: "
                          "atlas orbit [FILE] THETA0 THETA_DOT0")

@@ -24,6 +24,7 @@ import xarray as xr  # noqa: E402
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
 
 from .kernels import NEAR_BOUNDARY, TRAPPED  # noqa: E402
+from .layout import PARAMETERS, first_point, point_group, point_label, point_of  # noqa: E402
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curves",
            "plot_atlas", "pi_ticks", "critical_point_markers", "STYLE"]
@@ -43,15 +44,16 @@ def pi_ticks(ax, lo: float, hi: float) -> None:
 
 
 def _single(ds: xr.Dataset, **index) -> xr.Dataset:
-    """The basin map of one parameter point (first point of a sweep unless indexed)."""
-    if "alpha" in ds.dims:
-        ds = ds.isel(alpha=index.get("alpha", 0), omega0=index.get("omega0", 0))
-    return ds
+    """The basin map of one parameter point (the first along each swept dim unless
+    indexed)."""
+    return first_point(ds, **index)
 
 
-def _param(ds: xr.Dataset, name: str) -> float:
-    """α or ω0 of a single-point map: a coordinate in a sweep, an attribute otherwise."""
-    return float(ds[name]) if name in ds.coords else float(ds.attrs[name])
+def point_title(point: dict[str, float]) -> str:
+    """"α = 0.1 s⁻¹, ω0 = 1 rad/s" (and τ where the pendulum has a torque)."""
+    text = f"α = {point['alpha']:g} s⁻¹, ω0 = {point['omega0']:g} rad/s"
+    torque = point.get("torque", 0.0)
+    return text + (f", τ = {torque:g} rad/s²" if torque else "")
 
 
 def critical_point_markers(ax, theta, is_saddle) -> None:
@@ -64,22 +66,22 @@ def critical_point_markers(ax, theta, is_saddle) -> None:
             mec=SEPARATRIX_COLOR, mew=1.5, ms=7, label="saddles ((2j+1)π, 0)", zorder=5)
 
 
-def _critical(ax, tree: xr.DataTree) -> None:
-    """The ``/critical_points`` group of ``tree``, if any, as :func:`critical_point_markers`."""
-    if "critical_points" not in tree.children:
+def _critical(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
+    """The critical points of the parameter point that ``ds`` shows, if stored, as
+    :func:`critical_point_markers`."""
+    cp = point_group(tree, "critical_points", point_of(ds))
+    if cp is None:
         return
-    cp = tree["critical_points"].to_dataset(inherit=False)
     critical_point_markers(ax, cp["theta"].values, cp["n"].values % 2 != 0)  # odd n: saddles
 
 
 def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
     """The separatrices of the parameter point that ``ds`` shows, in red."""
-    if "separatrices" not in tree.children:
-        return
-    from .separatrices import branches, select_parameter_point
+    from .separatrices import branches
 
-    sep = select_parameter_point(tree["separatrices"].to_dataset(inherit=False),
-                                 _param(ds, "alpha"), _param(ds, "omega0"))
+    sep = point_group(tree, "separatrices", point_of(ds))
+    if sep is None:
+        return
     for i, (_, _, theta, theta_dot) in enumerate(branches(sep)):
         ax.plot(theta, theta_dot, color=SEPARATRIX_COLOR, lw=1.2,
                 label="separatrices" if i == 0 else None)
@@ -148,9 +150,8 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=np.arange(kmin, kmax + 1))
     cbar.set_label("attractor k: orbit settles at (2πk, 0)")
     _separatrices(ax, tree, ds)
-    _critical(ax, tree)
-    ax.set_title(f"Basins of attraction, α = {_param(ds, 'alpha'):g} s⁻¹, "
-                 f"ω0 = {_param(ds, 'omega0'):g} rad/s")
+    _critical(ax, tree, ds)
+    ax.set_title(f"Basins of attraction, {point_title(point_of(ds))}")
     ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)
     return ax
 
@@ -195,16 +196,21 @@ def boundary_distance_map(tree: xr.DataTree, ax=None, **index):
     return ax
 
 
+#: Axis labels of the parameters.
+PARAMETER_AXES = {"alpha": "damping α [1/s]", "omega0": "natural frequency ω0 [rad/s]",
+                  "torque": "torque τ [rad/s²]"}
+
+
 def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7):
     """Exact basin fraction of each k against the swept parameter ``dim`` (lines), with the
-    grid counts and their error bounds (markers with error bars).
+    grid counts and their error bounds (markers with error bars); any other swept parameter
+    is held at its first value (named in the title).
 
     The ``max_curves`` largest basins get a curve each; the rest are summed into one
     "other k" curve. A dashed line marks critical damping α = ω0 when α is swept.
     """
-    ds = tree.to_dataset(inherit=False)
-    other_dim = "omega0" if dim == "alpha" else "alpha"
-    ds = ds.isel({other_dim: 0})
+    full = tree.to_dataset(inherit=False)
+    ds = full.isel({d: 0 for d in full["basin_fraction_exact"].dims if d not in (dim, "k")})
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4.5))
     x = ds[dim].values
@@ -221,12 +227,14 @@ def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: 
     for e, g, b, label, color in curves:
         line, = ax.plot(x, e, "-", color=color, label=label)
         ax.errorbar(x, g, yerr=b, fmt="o", ms=3, capsize=2, color=line.get_color())
-    if dim == "alpha":
+    if dim == "alpha" and ds["omega0"].ndim == 0:
         ax.axvline(float(ds["omega0"]), color="0.3", ls=":", lw=1, label="α = ω0 (critical)")
     ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
-    ax.set_xlabel("damping α [1/s]" if dim == "alpha" else "ω0 [rad/s]")
+    ax.set_xlabel(PARAMETER_AXES[dim])
     ax.set_ylabel("basin fraction of the window")
-    ax.set_title("Basin fractions: exact areas (lines), grid counts with error bounds (dots)")
+    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and n in full.dims}
+    ax.set_title("Basin fractions: exact areas (lines), grid counts with error bounds (dots)"
+                 + (f"\nat {point_label(held)}" if held else ""))
     ax.legend(ncol=2)
     return ax
 
@@ -240,10 +248,9 @@ def plot_atlas(tree: xr.DataTree, path: Path) -> list[Path]:
         jobs = [(path.with_suffix(".png"), basin_map),
                 (path.with_name(path.stem + "_t_trap.png"), trap_time_map),
                 (path.with_name(path.stem + "_boundary_distance.png"), boundary_distance_map)]
-        if "alpha" in ds.dims:
-            swept = "alpha" if ds.sizes["alpha"] > 1 else "omega0"
-            jobs.append((path.with_name(path.stem + "_fractions.png"),
-                         lambda t: fraction_curves(t, dim=swept)))
+        for dim in (name for name in PARAMETERS if name in ds.dims):
+            jobs.append((path.with_name(f"{path.stem}_fractions_{dim}.png"),
+                         lambda t, dim=dim: fraction_curves(t, dim=dim)))
         for out, draw in jobs:
             ax = draw(tree)
             ax.figure.tight_layout()

@@ -124,8 +124,6 @@ __all__ = [
     "BRANCHES",
     "DISCREPANCY_BOUND",
     "SYMMETRY_BOUND",
-    "merge_parameter_points",
-    "select_parameter_point",
 ]
 
 #: Branch names, in the order of the ``branch`` flag values 0, 1.
@@ -851,36 +849,3 @@ def summary(ds: xr.Dataset) -> list[str]:
                  "* outside the window)")
     lines += [f"warning: {w}" for w in warnings(ds)]
     return lines
-
-
-def merge_parameter_points(traced: list[tuple[float, float, xr.Dataset]]) -> xr.Dataset:
-    """One group for a parameter atlas: the (α, ω0, :func:`trace`) of every point, curves
-    and crossings concatenated, tagged by ``point_alpha``/``point_omega0`` and
-    ``crossing_alpha``/``crossing_omega0``; the check's figures are the worst over all."""
-    parts = {"point": [], "crossing": []}
-    for a, w, ds in traced:
-        for dim in parts:
-            names = [n for n in ds.variables if ds[n].dims == (dim,)]
-            part = ds[names].assign_coords({f"{dim}_alpha": (dim, np.full(ds.sizes[dim], a)),
-                                            f"{dim}_omega0": (dim, np.full(ds.sizes[dim], w))})
-            parts[dim].append(part.drop_attrs())
-    merged = xr.merge([xr.concat(parts[dim], dim=dim) for dim in parts])
-    attrs = [ds.attrs for *_, ds in traced]
-    merged.attrs = {k: v for k, v in attrs[0].items() if k not in ("alpha", "omega0")}
-    for key, combine in [("discrepancy", max), ("polyline_error", max), ("n_orbits", sum),
-                         ("n_unresolved", sum), ("n_boundaries", max),
-                         ("symmetry_error", np.fmax.reduce)]:
-        merged.attrs[key] = combine([a[key] for a in attrs])
-    merged.attrs["warnings"] = "\n".join(a["warnings"] for a in attrs if a.get("warnings"))
-    return merged
-
-
-def select_parameter_point(sep: xr.Dataset, alpha: float, omega0: float) -> xr.Dataset:
-    """The separatrices of one (α, ω0) of a parameter atlas (the group itself otherwise)."""
-    if "point_alpha" not in sep.coords:
-        return sep
-    picks = {}
-    for dim in ("point", "crossing"):
-        picks[dim] = np.flatnonzero((sep[f"{dim}_alpha"].values == alpha)
-                                    & (sep[f"{dim}_omega0"].values == omega0))
-    return sep.isel(picks)

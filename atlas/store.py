@@ -38,17 +38,17 @@ import xarray as xr
 
 from .errors import InputFileError
 from .kernels import ATTRACTOR_FILL
+from .layout import Layout
 from .tiles import (
     DEFLATE_LEVEL,
     MANIFEST,
-    Layout,
     PartialStoreError,
     TileStore,
     fsync,
     partial_path,
 )
 
-__all__ = ["Layout", "finalize", "open_atlas", "partial_path", "describe", "FILLS",
+__all__ = ["finalize", "open_atlas", "partial_path", "describe", "FILLS",
            "DamagedTile", "summary_dataset"]
 
 STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3], np.int8),
@@ -102,21 +102,9 @@ class DamagedTile(Exception):
         self.index = index
 
 
-def coords_of(layout: Layout) -> dict[str, tuple]:
-    """The basin map's coordinates: name → (values, units, long_name)."""
-    coords = {"theta_dot0": (layout.theta_dot0, "rad s-1", "initial angular velocity"),
-              "theta0": (layout.theta0, "rad", "initial angle")}
-    if layout.alpha is not None:
-        coords = {"alpha": (layout.alpha, "s-1", "damping constant"),
-                  "omega0": (layout.omega0, "rad s-1", "natural angular frequency"),
-                  **coords}
-    return coords
-
-
 def chunks_of(layout: Layout) -> tuple[int, ...]:
     """One chunk per tile."""
-    lead = (1, 1) if layout.alpha is not None else ()
-    return (*lead, layout.chunk_rows, layout.theta0.size)
+    return (*(1 for _ in layout.swept), layout.chunk_rows, layout.theta0.size)
 
 
 #: Per-basin summary variables (dims: the parameter dims, then ``k``), and their attributes.
@@ -164,8 +152,7 @@ def summary_dataset(layout: Layout, points: list[dict]) -> xr.Dataset:
     per-basin variables over ``k`` (the union of every point's basins, 0 where a basin is
     absent) and per-point scalars, both with the parameter dims leading."""
     ks = sorted({int(k) for p in points for k in p["k"]}) or [0]
-    lead = () if layout.alpha is None else (layout.alpha.size, layout.omega0.size)
-    lead_dims = layout.dims[:-2]
+    lead, lead_dims = layout.parameter_shape, layout.swept
     data = {}
     for name, attrs in BASIN_VARIABLES.items():
         table = np.zeros((len(points), len(ks)))
@@ -180,17 +167,27 @@ def summary_dataset(layout: Layout, points: list[dict]) -> xr.Dataset:
 
 
 def _create_map(f: h5netcdf.File, layout: Layout) -> None:
-    """Coordinates and the empty, chunked basin-map variables (one chunk per tile)."""
-    coords = coords_of(layout)
-    f.dimensions = {name: values[0].size for name, values in coords.items()}
-    for name, (values, units, long_name) in coords.items():
-        var = f.create_variable(name, (name,), np.float64, data=values)
-        var.attrs.update(units=units, long_name=long_name)
+    """Coordinates and the empty, chunked basin-map variables (one chunk per tile). The
+    parameters that are not swept are scalar coordinates, named in each variable's CF
+    ``coordinates`` attribute."""
+    coords = layout.coords()
+    f.dimensions = {dims[0]: np.size(values) for dims, values, _ in coords.values() if dims}
+    for name, (dims, values, attrs) in coords.items():
+        var = f.create_variable(name, dims, np.float64, data=values)
+        var.attrs.update(attrs)
     chunks = chunks_of(layout)
     for name, (dtype, fill, var_attrs) in _SPECS.items():
         var = f.create_variable(name, layout.dims, dtype, fillvalue=fill, chunks=chunks,
                                 **_COMPRESSION)
         var.attrs.update(var_attrs)
+        _name_scalar_coords(var, layout)
+
+
+def _name_scalar_coords(var, layout: Layout) -> None:
+    """CF: list the scalar coordinates (the parameters not swept) on a root variable."""
+    scalars = [name for name, (dims, _, _) in layout.coords().items() if not dims]
+    if scalars:
+        var.attrs["coordinates"] = " ".join(scalars)
 
 
 def _copy_tiles(f: h5netcdf.File, tiles: TileStore) -> None:
@@ -208,7 +205,7 @@ def _copy_tiles(f: h5netcdf.File, tiles: TileStore) -> None:
             dset.id.write_direct_chunk(offset, tile.chunks[name], 0)
 
 
-def _write_root_vars(f: h5netcdf.File, ds: xr.Dataset) -> None:
+def _write_root_vars(f: h5netcdf.File, ds: xr.Dataset, layout: Layout) -> None:
     """Further root variables (on the file's dims, or new ones), with their attributes."""
     for name, size in ds.sizes.items():
         if name not in f.dimensions:
@@ -220,22 +217,32 @@ def _write_root_vars(f: h5netcdf.File, ds: xr.Dataset) -> None:
         fill = attrs.pop("_FillValue", var.encoding.get("_FillValue"))
         new = f.create_variable(name, var.dims, var.dtype, data=var.values, fillvalue=fill)
         new.attrs.update(attrs)
+        if name in ds.data_vars:
+            _name_scalar_coords(new, layout)
 
 
-def _write_summary(path: Path, groups: dict[str, xr.Dataset], root_vars: xr.Dataset,
-                   attrs: dict) -> None:
+def _write_summary(path: Path, layout: Layout, groups: dict[str, xr.Dataset],
+                   root_vars: xr.Dataset, attrs: dict) -> None:
     """Everything a finished file has beyond the basin map, in one place: the root variables
     of the summary, the groups, the attributes; ``complete`` last. Written by a forked child
     (:func:`_in_child`)."""
     def write():
         with _netcdf(path, "a") as f:
-            _write_root_vars(f, root_vars)
+            _write_root_vars(f, root_vars, layout)
             f.attrs.update({key: value for key, value in attrs.items() if value is not None})
-            for name, ds in groups.items():  # xarray's encoding, into this guarded handle
-                ds.dump_to_store(xr.backends.H5NetCDFStore(f.create_group(name), mode="a"))
+            for path_in_file, ds in groups.items():  # xarray's encoding, into this handle
+                ds.dump_to_store(xr.backends.H5NetCDFStore(_group(f, path_in_file), mode="a"))
             f.attrs["complete"] = np.int8(1)
 
     _in_child(write)
+
+
+def _group(f: h5netcdf.File, path: str):
+    """The group at ``path`` ("a/b"), made with its parents where missing."""
+    group = f
+    for part in path.split("/"):
+        group = group.groups[part] if part in group.groups else group.create_group(part)
+    return group
 
 
 def _in_child(work) -> None:
@@ -296,7 +303,7 @@ def finalize(tiles: TileStore, output: Path, groups: dict[str, xr.Dataset],
         f.attrs["atlas_schema"] = SCHEMA
         f.attrs["complete"] = np.int8(0)
         _copy_tiles(f, tiles)
-    _write_summary(path, groups, root_vars, attrs)
+    _write_summary(path, layout, groups, root_vars, attrs)
     fsync(path)
     os.replace(path, output)
     fsync(output.parent)

@@ -35,6 +35,7 @@ from .certificate import Certifier, add_tallies
 from .config import Config, config_hash
 from .errors import AtlasError, InputFileError, StorageError
 from .labels import CHECK_EVERY, label, trap_margin
+from .layout import PARAMETERS, Layout, node_name, point_label
 from .lock import output_lock
 from .model import Pendulum, critical_points
 from .tiles import IdentityMismatch, PartialStoreError, TileStore, discard, partial_path
@@ -49,16 +50,16 @@ log = logging.getLogger(__name__)
 BYTES_PER_ORBIT = 7
 
 
-def layout_of(cfg: Config) -> store.Layout:
+def layout_of(cfg: Config) -> Layout:
     """The grid axes, parameter axes and tiling of a config."""
     g = cfg.grid
     theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
     theta_dot0 = np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num)
-    sweep = cfg.pendulum.is_sweep
-    return store.Layout(
+    return Layout(
         theta0=theta0, theta_dot0=theta_dot0,
-        alpha=np.array(cfg.pendulum.alphas) if sweep else None,
-        omega0=np.array(cfg.pendulum.omega0s) if sweep else None,
+        parameters={name: np.array(cfg.pendulum.values(name), np.float64)
+                    for name in PARAMETERS},
+        swept=cfg.pendulum.swept,
         rows_per_tile=max(1, min(g.theta_dot0.num, cfg.execution.tile_orbits // g.theta0.num)),
     )
 
@@ -85,11 +86,9 @@ def identity_hash(identity: dict) -> str:
     return hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()[:16]
 
 
-def _pendulum(cfg: Config, params: tuple[int, ...]) -> Pendulum:
-    if not params:
-        return Pendulum(cfg.pendulum.alphas[0], cfg.pendulum.omega0s[0])
-    ia, iw = params
-    return Pendulum(cfg.pendulum.alphas[ia], cfg.pendulum.omega0s[iw])
+def _pendulums(layout: Layout) -> list[Pendulum]:
+    """The pendulum of every parameter point, in the layout's order."""
+    return [Pendulum(**layout.point(p)) for p in range(layout.n_params)]
 
 
 def compute_tile(certifier: Certifier, rows: slice, dt, t_max, backend="cpu",
@@ -113,7 +112,7 @@ def compute_tile(certifier: Certifier, rows: slice, dt, t_max, backend="cpu",
             "boundary_distance": distance}, tally
 
 
-def _tile_args(cfg: Config, layout: store.Layout, certifiers: list, index: int) -> tuple:
+def _tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
     return (certifiers[index // layout.bands], layout.tile(index)[1], cfg.integrator.dt,
             cfg.integrator.t_max)
 
@@ -155,77 +154,65 @@ def _dask_results(cfg, tiles: TileStore, certifiers, todo) -> Iterator[tuple[int
     yield from dask_results(cfg, todo, args_of, task, tiles.manifest["attrs"]["run_identity"])
 
 
-def critical_points_dataset(cfg: Config, layout: store.Layout) -> xr.Dataset:
-    """The ``/critical_points`` group: θ, n, kind and both eigenvalues of every rest state in
-    the θ0 window. In a parameter atlas the kinds and eigenvalues depend on (α, ω0) and carry
-    those leading dims; θ and n are the same for all."""
-    lo, hi = float(layout.theta0[0]), float(layout.theta0[-1])
-    per_param = [critical_points(Pendulum(a, w), lo, hi)
-                 for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
-    points = per_param[0]
-    sweep = layout.alpha is not None
-    lead_dims = ("alpha", "omega0") if sweep else ()
-    lead_shape = (layout.alpha.size, layout.omega0.size) if sweep else ()
-    eig = np.array([[p.eigenvalues for p in pts] for pts in per_param], np.complex128)
-    eig = eig.reshape(*lead_shape, len(points), 2)
-    kind = np.array([[p.kind for p in pts] for pts in per_param]).reshape(*lead_shape,
-                                                                           len(points))
-    dims = (*lead_dims, "point", "eigen")
+def critical_points_dataset(p: Pendulum, lo: float, hi: float) -> xr.Dataset:
+    """One parameter point's node of ``/critical_points``: θ, n, kind and both eigenvalues
+    of every critical point with θ in [``lo``, ``hi``] [rad]."""
+    found = critical_points(p, lo, hi)
+    eig = np.array([c.eigenvalues for c in found], np.complex128).reshape(len(found), 2)
+    dims = ("point", "eigen")
     return xr.Dataset(
         {
             "eigenvalue_real": (dims, eig.real, {"units": "s-1",
                                                  "long_name": "real part of the eigenvalue"}),
             "eigenvalue_imag": (dims, eig.imag, {"units": "s-1",
                                                  "long_name": "imaginary part of the eigenvalue"}),
-            "kind": ((*lead_dims, "point"), kind,
+            "kind": ("point", np.array([c.kind for c in found], dtype=str),
                      {"long_name": "attractor focus/node/critical node, or saddle"}),
         },
         coords={
-            "theta": ("point", np.array([p.theta for p in points]),
-                      {"units": "rad", "long_name": "angle of the rest state (n*pi, 0)"}),
-            "n": ("point", np.array([p.n for p in points], np.int32),
-                  {"units": "1", "long_name": "theta = n*pi"}),
+            "theta": ("point", np.array([c.theta for c in found], np.float64),
+                      {"units": "rad", "long_name": "angle of the critical point (theta, 0)"}),
+            "n": ("point", np.array([c.n for c in found], np.int32),
+                  {"units": "1", "long_name": "index n: the critical point near n*pi (even: "
+                                              "rest state, odd: saddle)"}),
         },
-        attrs={"description": "critical points (n*pi, 0) of eq. (1) in the theta0 window and "
+        attrs={"description": "critical points of the pendulum in the theta0 window and "
                               "their linearisation eigenvalues (essay section 3, eqs. 22-24)"},
     )
 
 
-def _trace_separatrices(cfg: Config) -> list[xr.Dataset | None]:
+def _trace_separatrices(cfg: Config, pendulums: list[Pendulum]) -> list[xr.Dataset | None]:
     """The traced separatrices of every parameter point (None each when disabled)."""
-    points = [Pendulum(a, w) for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
     if not cfg.separatrices.enabled:
-        return [None] * len(points)
+        return [None] * len(pendulums)
     from . import separatrices
 
     g = cfg.grid
     window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
     return [separatrices.trace(p, *window, tol=cfg.separatrices.tol,
                                max_spacing=cfg.separatrices.max_spacing, dt=cfg.integrator.dt)
-            for p in points]
+            for p in pendulums]
 
 
-def _separatrices_group(cfg: Config, traced: list[xr.Dataset | None]) -> xr.Dataset | None:
-    """The ``/separatrices`` group; for a parameter atlas, every (α, ω0)'s curves and
-    crossings concatenated, tagged by ``point_alpha``/``point_omega0`` and
-    ``crossing_alpha``/``crossing_omega0``."""
-    if traced[0] is None:
-        return None
-    if not cfg.pendulum.is_sweep:
-        return traced[0]
-    from . import separatrices
+def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
+               ) -> dict[str, xr.Dataset]:
+    """The nodes of a per-point group: one per parameter point, each with the point's
+    parameters as attributes (the group itself for an atlas of one point; see
+    :mod:`atlas.layout`)."""
+    out = {}
+    for p, ds in enumerate(datasets):
+        if ds is None:
+            continue
+        path = "/".join(filter(None, (group, node_name(layout, p))))
+        out[path] = ds.assign_attrs(layout.point(p))
+    return out
 
-    params = [(a, w) for a in cfg.pendulum.alphas for w in cfg.pendulum.omega0s]
-    return separatrices.merge_parameter_points(
-        [(a, w, ds) for (a, w), ds in zip(params, traced)])
 
-
-def _certifiers(cfg: Config, layout: store.Layout, traced: list) -> list[Certifier]:
+def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list) -> list[Certifier]:
     """One :class:`Certifier` per parameter point, with the boundary shift its separatrices
     measured (NaN without them: then no label is certified for the exact equation)."""
     out = []
-    for p_index, sep in enumerate(traced):
-        p = _pendulum(cfg, layout.tile(p_index * layout.bands)[0])
+    for p, sep in zip(pendulums, traced):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
         out.append(Certifier(p, layout.theta0, layout.theta_dot0, shift, tol))
@@ -242,14 +229,14 @@ def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.D
         except Exception as exc:  # a damaged record: OSError, ValueError, BadZipFile
             raise store.DamagedTile(index, exc.__class__.__name__) from None
     points = []
-    for cert, point in zip(certifiers, tallies):
+    for p, (cert, point) in enumerate(zip(certifiers, tallies)):
         summary = cert.summary(add_tallies(point))
-        p = cert.pendulum
-        summary["trap_margin"] = trap_margin(cfg.integrator.dt, p.alpha, p.omega0)
+        pendulum = cert.pendulum
+        summary["trap_margin"] = trap_margin(cfg.integrator.dt, pendulum.alpha, pendulum.omega0)
         if summary["side_mismatches"]:
-            log.warning("alpha = %g, omega0 = %g: %d labels farther than d_cert from every "
-                        "boundary disagree with the exact side; they are flagged "
-                        "near_boundary", p.alpha, p.omega0, summary["side_mismatches"])
+            log.warning("%s: %d labels farther than d_cert from every boundary disagree with "
+                        "the exact side; they are flagged near_boundary",
+                        point_label(layout.point(p)), summary["side_mismatches"])
         points.append(summary)
     return store.summary_dataset(layout, points)
 
@@ -282,12 +269,10 @@ def _attrs(cfg: Config, identity: dict) -> dict:
         "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         **_versions(),
     }
-    if not cfg.pendulum.is_sweep:
-        attrs.update(alpha=cfg.pendulum.alphas[0], omega0=cfg.pendulum.omega0s[0])
     return attrs
 
 
-def _check_output_path(cfg: Config, layout: store.Layout) -> None:
+def _check_output_path(cfg: Config, layout: Layout) -> None:
     """Refuse an output that cannot be written or would not fit, before anything is made."""
     out = cfg.output
     if out.is_dir() and not (zarrstore.is_zarr(out) and (out / "zarr.json").exists()):
@@ -347,7 +332,7 @@ def _check_partial(partial: Path, identity: dict) -> None:
         _refuse_another(partial, identity, lambda path, ident: TileStore.read(path).check(ident))
 
 
-def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool) -> TileStore:
+def _open_tiles(cfg: Config, layout: Layout, identity: dict, restart: bool) -> TileStore:
     """The partial run to write into: the one at the output if it has this identity (said in
     one line), a new one otherwise. One of another identity is refused, unless ``restart``."""
     partial = partial_path(cfg.output)
@@ -364,7 +349,7 @@ def _open_tiles(cfg: Config, layout: store.Layout, identity: dict, restart: bool
     return tiles
 
 
-def _orbits(layout: store.Layout, tiles) -> int:
+def _orbits(layout: Layout, tiles) -> int:
     return sum((layout.tile(i)[1].stop - layout.tile(i)[1].start) for i in tiles) \
         * layout.theta0.size
 
@@ -387,12 +372,12 @@ def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], ba
             log.debug("tile %d of %d written", index + 1, layout.n_tiles)
 
 
-def _groups(cfg: Config, layout: store.Layout, traced: list) -> dict[str, xr.Dataset]:
-    groups = {"critical_points": critical_points_dataset(cfg, layout)}
-    separatrices = _separatrices_group(cfg, traced)
-    if separatrices is not None:
-        groups["separatrices"] = separatrices
-    return groups
+def _groups(layout: Layout, pendulums: list[Pendulum], traced: list) -> dict[str, xr.Dataset]:
+    """The per-point groups (path → dataset): ``/critical_points`` and ``/separatrices``."""
+    lo, hi = float(layout.theta0[0]), float(layout.theta0[-1])
+    return {**_per_point(layout, "critical_points",
+                         [critical_points_dataset(p, lo, hi) for p in pendulums]),
+            **_per_point(layout, "separatrices", traced)}
 
 
 def _process_age() -> float | None:
@@ -422,10 +407,11 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     and certify what is missing, then assemble the file. A tile file found damaged is set
     aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``)."""
     phase = _Phases()
-    traced = _trace_separatrices(cfg)
+    pendulums = _pendulums(tiles.layout)
+    traced = _trace_separatrices(cfg, pendulums)
     phase.done("separatrices")
-    certifiers = _certifiers(cfg, tiles.layout, traced)
-    groups = _groups(cfg, tiles.layout, traced)
+    certifiers = _certifiers(tiles.layout, pendulums, traced)
+    groups = _groups(tiles.layout, pendulums, traced)
     phase.done("exact boundaries and areas")
     for _ in range(3):
         _compute_into(tiles, cfg, certifiers, backend, quiet)

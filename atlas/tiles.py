@@ -34,12 +34,14 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Layout", "TileStore", "Tile", "partial_path", "encode_chunk", "discard",
+from .layout import Layout
+
+__all__ = ["TileStore", "Tile", "partial_path", "encode_chunk", "discard",
            "DEFLATE_LEVEL", "MANIFEST", "PartialStoreError", "IdentityMismatch", "VARIABLES",
            "fsync"]
 
 MANIFEST = "manifest.json"
-SCHEMA = "atlas-partial/2"
+SCHEMA = "atlas-partial/3"
 #: zlib level of the chunks (the HDF5 variables' gzip level, :mod:`atlas.store`).
 DEFLATE_LEVEL = 4
 #: The per-orbit variables of a tile, in file order.
@@ -61,65 +63,6 @@ class IdentityMismatch(PartialStoreError):
 def partial_path(output: Path) -> Path:
     """Where an unfinished run keeps its tiles: next to the output, never at it."""
     return output.with_name(output.name + ".partial")
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Shape of a basin atlas: parameter values, grid axes and the row-band tiling.
-
-    ``alpha``/``omega0`` are None for a single-parameter atlas (no leading dims).
-    A tile is one row band ``rows`` of one parameter point ``(ia, iw)``.
-    """
-
-    theta0: np.ndarray
-    theta_dot0: np.ndarray
-    alpha: np.ndarray | None
-    omega0: np.ndarray | None
-    rows_per_tile: int
-
-    @property
-    def n_params(self) -> int:
-        return 1 if self.alpha is None else self.alpha.size * self.omega0.size
-
-    @property
-    def bands(self) -> int:
-        return -(-self.theta_dot0.size // self.rows_per_tile)
-
-    @property
-    def n_tiles(self) -> int:
-        return self.n_params * self.bands
-
-    @property
-    def dims(self) -> tuple[str, ...]:
-        lead = () if self.alpha is None else ("alpha", "omega0")
-        return (*lead, "theta_dot0", "theta0")
-
-    @property
-    def chunk_rows(self) -> int:
-        return min(self.rows_per_tile, self.theta_dot0.size)
-
-    def tile(self, index: int) -> tuple[tuple[int, ...], slice]:
-        """(parameter index tuple, row slice) of tile ``index``; () for no sweep."""
-        p, band = divmod(index, self.bands)
-        rows = slice(band * self.rows_per_tile,
-                     min((band + 1) * self.rows_per_tile, self.theta_dot0.size))
-        if self.alpha is None:
-            return (), rows
-        return divmod(p, self.omega0.size), rows
-
-    def to_json(self) -> dict:
-        return {"theta0": self.theta0.tolist(), "theta_dot0": self.theta_dot0.tolist(),
-                "alpha": None if self.alpha is None else self.alpha.tolist(),
-                "omega0": None if self.omega0 is None else self.omega0.tolist(),
-                "rows_per_tile": self.rows_per_tile}
-
-    @classmethod
-    def from_json(cls, data: dict) -> Layout:
-        def axis(name):
-            return None if data[name] is None else np.array(data[name], np.float64)
-
-        return cls(theta0=axis("theta0"), theta_dot0=axis("theta_dot0"), alpha=axis("alpha"),
-                   omega0=axis("omega0"), rows_per_tile=int(data["rows_per_tile"]))
 
 
 def encode_chunk(values: np.ndarray, chunk_rows: int, fill) -> bytes:

@@ -5,21 +5,24 @@ file and runs :func:`check_tree` before any view uses it. A file that fails is r
 :class:`~atlas.errors.InputFileError` line naming the file and what is wrong (exit status 2 in
 the CLI). What is checked, from the metadata only (the arrays are not read):
 
-* ``format_version`` (root attribute): an integer no newer than :data:`FORMAT_VERSION`; a file
-  without it is format 1 (written by atlas before the attribute existed) and is accepted if it
-  passes the rest of the check, its layout being the same;
+* ``format_version`` (root attribute): the integer :data:`FORMAT_VERSION`. Older files (a
+  file without the attribute is format 1) kept α and ω0 as attributes of a single atlas and
+  merged a parameter atlas's separatrices into one table; they are refused with one line
+  naming their version (run the config again to rewrite them);
 * the basin map: ``attractor`` int16, ``status`` int8, ``t_trap`` float32 and
   ``boundary_distance`` float32, each on the map's dims (``theta_dot0``, ``theta0``, with
-  ``alpha``, ``omega0`` leading for a parameter atlas);
+  the swept parameters leading, :mod:`atlas.layout`);
 * the coordinates ``theta0`` and ``theta_dot0``: float64, 1-D, finite, strictly increasing;
-  ``alpha`` and ``omega0`` (a parameter atlas): float64, 1-D, finite;
+  every parameter (``alpha`` > 0, ``omega0`` > 0, ``torque``): a float64 coordinate, scalar
+  or 1-D (swept), finite;
 * ``status``'s CF flags: ``flag_values`` and ``flag_meanings`` pair up and each value means
   what atlas means by it (0 trapped, 1 unresolved, 2 nonfinite, 3 near_boundary);
 * the summary ``atlas info`` prints: the per-basin variables over ``k`` and the per-point
   figures, floating point, on the parameter dims;
-* the attributes the readers use: ``dt`` and ``t_max`` (finite, > 0), ``alpha`` and ``omega0``
-  of a single-point atlas (finite, α ≥ 0, ω0 > 0), ``check_every`` (a positive integer), and
-  ``config``, which must be a JSON object (:func:`parse_config`).
+* the attributes the readers use: ``dt`` and ``t_max`` (finite, > 0), ``check_every`` (a
+  positive integer), and ``config``, which must be a JSON object (:func:`parse_config`);
+* the per-point groups (``/critical_points``, ``/separatrices``): each node names its
+  parameter point in its attributes, and holds the vectors the readers draw from.
 """
 
 from __future__ import annotations
@@ -31,12 +34,14 @@ import numbers
 import numpy as np
 
 from .errors import InputFileError
+from .layout import PARAMETERS, point_nodes
 
 __all__ = ["FORMAT_VERSION", "check_tree", "check_dataset", "parse_config", "MAP_VARIABLES"]
 
 #: Version of the atlas file layout written by this atlas (root attribute ``format_version``).
-#: 1: files without the attribute (same layout); 2: the attribute is written.
-FORMAT_VERSION = 2
+#: 1: files without the attribute; 2: the attribute is written; 3: every parameter (α, ω0,
+#: τ) is a coordinate, and the per-point groups hold one node per parameter point.
+FORMAT_VERSION = 3
 #: The basin map's variables and their stored dtypes.
 MAP_VARIABLES = {"attractor": np.int16, "status": np.int8, "t_trap": np.float32,
                  "boundary_distance": np.float32}
@@ -67,6 +72,9 @@ def format_version(attrs: dict, path) -> int:
                 f"{FORMAT_VERSION}); upgrade atlas to read it")
     if value < 1:
         _refuse(path, f"format_version {value} is not a version atlas ever wrote")
+    if value < FORMAT_VERSION:
+        _refuse(path, f"format_version {value}, an older layout than this atlas reads "
+                f"({FORMAT_VERSION}); run its config again to rewrite it")
     return value
 
 
@@ -123,6 +131,19 @@ def _axis(ds, name: str, path, increasing: bool) -> None:
         _refuse(path, f"coordinate {name} is not strictly increasing")
 
 
+def _parameter(ds, name: str, path) -> None:
+    """A physical parameter: a finite float64 coordinate, scalar or its own 1-D dim."""
+    if name not in ds.coords:
+        _refuse(path, f"no {name} coordinate")
+    if name in ds.dims:
+        _axis(ds, name, path, increasing=False)
+    elif ds.coords[name].dims != () or ds.coords[name].dtype != np.float64:
+        _refuse(path, f"coordinate {name} is not a float64 scalar or a dim of its own")
+    values = ds.coords[name].values
+    if not np.all(np.isfinite(values)) or (name != "torque" and not np.all(values > 0)):
+        _refuse(path, f"coordinate {name} is out of range")
+
+
 def _flags(attrs: dict, path) -> None:
     values, meanings = attrs.get("flag_values"), attrs.get("flag_meanings")
     if values is None or not isinstance(meanings, str):
@@ -142,13 +163,12 @@ def check_dataset(ds, path) -> None:
     ``mask_and_scale=False``) of the atlas file at ``path``; InputFileError if it fails."""
     attrs = ds.attrs
     format_version(attrs, path)
-    sweep = "alpha" in ds.dims or "omega0" in ds.dims
-    lead = ("alpha", "omega0") if sweep else ()
+    lead = tuple(name for name in PARAMETERS if name in ds.dims)
     dims = (*lead, "theta_dot0", "theta0")
     for name in ("theta0", "theta_dot0"):
         _axis(ds, name, path, increasing=True)
-    for name in lead:
-        _axis(ds, name, path, increasing=False)
+    for name in PARAMETERS:
+        _parameter(ds, name, path)
     for name, dtype in MAP_VARIABLES.items():
         if name not in ds.data_vars:
             _refuse(path, f"no {name} variable")
@@ -169,9 +189,6 @@ def check_dataset(ds, path) -> None:
                         f"{ds[name].dtype}, not numbers on {want}")
     _number(attrs, "dt", path, positive=True)
     _number(attrs, "t_max", path, positive=True)
-    if not sweep:
-        _number(attrs, "alpha", path, nonnegative=True)
-        _number(attrs, "omega0", path, positive=True)
     if "check_every" in attrs:
         every = _number(attrs, "check_every", path, positive=True)
         if every != int(every):
@@ -184,12 +201,19 @@ def check_tree(tree, path) -> None:
     (:func:`check_dataset`), then the groups the readers draw from (their small arrays are
     read: the separatrices' branch codes index a table)."""
     check_dataset(tree.to_dataset(inherit=False), path)
-    if "critical_points" in tree.children:
-        cp = tree["critical_points"].to_dataset(inherit=False)
-        _vector(cp, "critical_points", "theta", "f", path, dim="point")
-        _vector(cp, "critical_points", "n", "iu", path, dim="point")
-    if "separatrices" in tree.children:
-        _check_separatrices(tree["separatrices"].to_dataset(inherit=False), path)
+    for node in point_nodes(tree, "critical_points"):
+        cp = node.to_dataset(inherit=False)
+        _point_attrs(node, path)
+        _vector(cp, node.path, "theta", "f", path, dim="point")
+        _vector(cp, node.path, "n", "iu", path, dim="point")
+    for node in point_nodes(tree, "separatrices"):
+        _point_attrs(node, path)
+        _check_separatrices(node.to_dataset(inherit=False), node.path, path)
+
+
+def _point_attrs(node, path) -> None:
+    for name in PARAMETERS:
+        _number(node.attrs, name, path, where=f"{node.path} ")
 
 
 def _vector(ds, group: str, name: str, kinds: str, path, dim: str):
@@ -202,23 +226,19 @@ def _vector(ds, group: str, name: str, kinds: str, path, dim: str):
     return var.values
 
 
-def _check_separatrices(sep, path) -> None:
-    group = "separatrices"
+def _check_separatrices(sep, group: str, path) -> None:
     branch = _vector(sep, group, "branch", "iu", path, "point")
     for name in ("saddle_n", "vertex"):
         _vector(sep, group, name, "iu", path, "point")
     for name in ("theta", "theta_dot"):
         _vector(sep, group, name, "f", path, "point")
     if branch.size and not np.isin(branch, (0, 1)).all():
-        _refuse(path, "separatrices/branch holds codes other than 0 (left) and 1 (right)")
-    if "point_alpha" in sep.coords:
-        for name in ("point_alpha", "point_omega0"):
-            _vector(sep, group, name, "f", path, "point")
+        _refuse(path, f"{group}/branch holds codes other than 0 (left) and 1 (right)")
     for name in ("tol", "max_spacing", "discrepancy_bound"):
-        _number(sep.attrs, name, path, positive=True, where="separatrices ")
+        _number(sep.attrs, name, path, positive=True, where=f"{group} ")
     if "discrepancy" not in sep.attrs:
-        _refuse(path, "no separatrices attribute discrepancy")
-    _number(sep.attrs, "discrepancy", path, finite=False, where="separatrices ")
+        _refuse(path, f"no {group} attribute discrepancy")
+    _number(sep.attrs, "discrepancy", path, finite=False, where=f"{group} ")
 
 
 def check_output_target(output, config=None, *, force: bool = False) -> None:

@@ -36,9 +36,10 @@ import xarray as xr
 from .errors import AtlasError, InputFileError
 from .kernels import NEAR_BOUNDARY, NONFINITE, TRAPPED, UNRESOLVED
 from .labels import CHECK_EVERY, trap_margin
+from .layout import at_point, point_group
+from .layout import points as parameter_points
 
-__all__ = ["write_view", "build_page", "parameter_points", "point_params",
-           "pack_distance", "unpack_distance", "safe_json", "DIST_STEPS"]
+__all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json", "DIST_STEPS"]
 
 #: Steps per octave of the log2-quantised boundary distance.
 DIST_STEPS = 256
@@ -49,24 +50,6 @@ STATUS_NAMES = {TRAPPED: "trapped", UNRESOLVED: "unresolved", NONFINITE: "nonfin
 #: matplotlib's tab10, the colour of well k being TAB10[k mod 10] as in atlas.plotting.
 TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
          "#7f7f7f", "#bcbd22", "#17becf"]
-
-
-def point_params(ds: xr.Dataset) -> tuple[float, float]:
-    """(α, ω0) of one parameter point: coordinates where present (a selected point of a
-    parameter atlas, or a file that stores them as scalar coordinates), attributes otherwise."""
-    def one(name):
-        if name in ds.coords or name in ds.variables:
-            return float(ds[name])
-        return float(ds.attrs[name])
-    return one("alpha"), one("omega0")
-
-
-def parameter_points(ds: xr.Dataset) -> list[xr.Dataset]:
-    """The basin map of every parameter point, α-major; the map itself for a single atlas."""
-    if "alpha" in ds.dims or "omega0" in ds.dims:
-        return [ds.isel(alpha=i, omega0=j) for i in range(ds.sizes.get("alpha", 1))
-                for j in range(ds.sizes.get("omega0", 1))]
-    return [ds]
 
 
 def pack_distance(d: np.ndarray) -> np.ndarray:
@@ -113,23 +96,21 @@ def _map_png(attractor: np.ndarray, status: np.ndarray) -> str:
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode()
 
 
-def _curves(tree: xr.DataTree, alpha: float, omega0: float) -> list[list[list[float]]]:
+def _curves(tree: xr.DataTree, point: dict[str, float]) -> list[list[list[float]]]:
     """Separatrix polylines of one parameter point as [[θ…], [θ̇…]], rounded to 1e-4."""
-    if "separatrices" not in tree.children:
-        return []
-    from .separatrices import branches, select_parameter_point
+    from .separatrices import branches
 
-    sep = select_parameter_point(tree["separatrices"].to_dataset(inherit=False), alpha, omega0)
-    if sep.sizes.get("point", 0) == 0:
+    sep = point_group(tree, "separatrices", point)
+    if sep is None or sep.sizes.get("point", 0) == 0:
         return []
     return [[np.round(theta, 4).tolist(), np.round(theta_dot, 4).tolist()]
             for _, _, theta, theta_dot in branches(sep) if len(theta) > 1]
 
 
-def _critical(tree: xr.DataTree) -> dict[str, list[float]]:
-    if "critical_points" not in tree.children:
+def _critical(tree: xr.DataTree, point: dict[str, float]) -> dict[str, list[float]]:
+    cp = point_group(tree, "critical_points", point)
+    if cp is None:
         return {"attractors": [], "saddles": []}
-    cp = tree["critical_points"].to_dataset(inherit=False)
     theta, n = cp["theta"].values, cp["n"].values
     return {"attractors": theta[n % 2 == 0].tolist(), "saddles": theta[n % 2 != 0].tolist()}
 
@@ -151,8 +132,9 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
     dt, t_max = float(ds.attrs["dt"]), float(ds.attrs["t_max"])
     check_every = int(ds.attrs.get("check_every", CHECK_EVERY))
     points = []
-    for point in parameter_points(ds):
-        alpha, omega0 = point_params(point)
+    for params in parameter_points(ds):
+        point = at_point(ds, params)
+        alpha, omega0 = params["alpha"], params["omega0"]
         attractor = point["attractor"].values.astype("<i2")
         status = point["status"].values.astype("<i1")
         t_trap = point["t_trap"].values.astype(np.float64)
@@ -167,7 +149,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
             "png": _map_png(attractor, status),
             "attractor": _blob(attractor), "status": _blob(status),
             "t_trap": _blob(n_check), "distance": _blob(pack_distance(distance)),
-            "curves": _curves(tree, alpha, omega0),
+            "curves": _curves(tree, params), **_critical(tree, params),
         })
     return {
         "name": _name(ds), "file": Path(path).name, "title": _text(ds.attrs.get("title", "")),
@@ -178,7 +160,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
         "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
         "status_names": {str(k): v for k, v in STATUS_NAMES.items()},
-        "colors": TAB10, "points": points, **_critical(tree),
+        "colors": TAB10, "points": points,
     }
 
 

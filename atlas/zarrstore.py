@@ -52,18 +52,16 @@ def create(path: Path, layout) -> None:
     _zarr()
     import dask.array as da
 
-    from .store import _SPECS, chunks_of, coords_of
+    from .store import _SPECS, chunks_of
 
     chunks = chunks_of(layout)
-    shape = (*(() if layout.alpha is None else (layout.alpha.size, layout.omega0.size)),
-             layout.theta_dot0.size, layout.theta0.size)
+    shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
     data, encoding = {}, {}
     for name, (dtype, fill, attrs) in _SPECS.items():
         empty = da.zeros(shape, dtype=dtype, chunks=chunks)
         data[name] = (layout.dims, empty, attrs)
         encoding[name] = {"chunks": chunks, "_FillValue": fill}
-    coords = {name: (name, values, {"units": units, "long_name": long_name})
-              for name, (values, units, long_name) in coords_of(layout).items()}
+    coords = layout.coords()
     xr.Dataset(data, coords=coords).to_zarr(path, mode="w", compute=False, encoding=encoding,
                                             zarr_format=3, consolidated=False)
 
@@ -104,7 +102,7 @@ def finalize(tiles, output: Path, groups: dict[str, xr.Dataset],
     path = tiles.path / DATA
     for leftover in path.rglob("*.partial"):  # a chunk write cut short (zarr's temp name)
         leftover.unlink()
-    root_vars.drop_vars([n for n in root_vars.coords if n in layout.dims]).to_zarr(
+    root_vars.drop_vars([n for n in root_vars.coords if n in layout.coords()]).to_zarr(
         path, mode="a", consolidated=False)
     for name, ds in groups.items():
         _vlen_strings(ds).to_zarr(path, group=name, mode="w", consolidated=False)

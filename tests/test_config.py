@@ -143,9 +143,21 @@ def test_parameter_lists_make_a_sweep(tmp_path):
     path = tmp_path / "s.yaml"
     path.write_text("pendulum: {alpha: [0.1, 0.5, 2pi/4], omega0: 1}")
     cfg = load_config(path)
-    assert cfg.pendulum.is_sweep
+    assert cfg.pendulum.swept == ("alpha",)  # only the lists are dims
     assert cfg.pendulum.alphas == pytest.approx([0.1, 0.5, math.pi / 2])
-    assert cfg.pendulum.omega0s == [1.0]
+    assert cfg.pendulum.omega0s == [1.0] and cfg.pendulum.torques == [0.0]
+    assert [p["alpha"] for p in cfg.pendulum.points] == pytest.approx([0.1, 0.5, math.pi / 2])
+    path.write_text("pendulum: {omega0: [1, 2], torque: [0, 0.25, 0.5]}")
+    pendulum = load_config(path).pendulum
+    assert pendulum.swept == ("omega0", "torque")
+    assert [(p["omega0"], p["torque"]) for p in pendulum.points] == \
+        [(1, 0), (1, 0.25), (1, 0.5), (2, 0), (2, 0.25), (2, 0.5)]  # C order over the dims
+
+
+def test_a_single_point_config_sweeps_nothing():
+    cfg = Config()
+    assert cfg.pendulum.swept == () and len(cfg.pendulum.points) == 1
+    assert cfg.pendulum.points[0] == {"alpha": 0.1, "omega0": 1.0, "torque": 0.0}
 
 
 def test_output_override(tmp_path):

@@ -164,14 +164,19 @@ def test_every_reader_refuses_a_file_that_fails_the_check(good, tmp_path, what, 
     assert bad.read_bytes() == before
 
 
-def test_a_file_without_format_version_is_format_1_and_read(good, tmp_path):
-    """Files written before ``format_version`` existed have the same layout: accepted."""
-    path = _h5(_attr("format_version", None))(good, tmp_path)
+@pytest.mark.parametrize("version", [None, 2])
+def test_an_older_format_is_refused_naming_its_version(good, tmp_path, version):
+    """Files of an older layout (format 1: no ``format_version``; 2: α and ω0 as attributes)
+    are refused with one line naming their version, for every reader."""
+    path = _h5(_attr("format_version", None if version is None else np.int64(version)))(
+        good, tmp_path)
     with h5py.File(path, "r") as f:
-        assert "format_version" not in f.attrs
+        assert ("format_version" in f.attrs) == (version is not None)
     code, out, err = cli("info", path)
-    assert code == 0 and "complete" in out and "basins" in out, err
-    atlas.open(path).close()
+    assert code == 2 and f"format_version {version or 1}, an older layout" in err, err
+    assert len(err.strip().splitlines()) == 1
+    with pytest.raises(atlas.InputFileError, match="run its config again"):
+        atlas.open(path)
 
 
 def test_info_shows_untrusted_attributes_on_one_line(good, tmp_path):

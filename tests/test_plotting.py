@@ -17,7 +17,7 @@ from tests.helpers import run_cli, write_config  # noqa: E402
 def sweep_tree(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("plot")
     cfg = write_config(tmp / "s.yaml", f"""\
-pendulum: {{alpha: [0.1, 0.5, 2.0], omega0: 1.0}}
+pendulum: {{alpha: [0.1, 0.5, 2.0], omega0: [1.0, 1.5]}}
 grid:
   theta0: {{start: -3pi, stop: 3pi, num: 30}}
   theta_dot0: {{start: -4, stop: 4, num: 20}}
@@ -31,7 +31,7 @@ def test_basin_map_colours_cells_by_k_and_marks_critical_points(sweep_tree):
     tree, _ = sweep_tree
     ax = basin_map(tree)
     image = ax.images[0]
-    k = tree["attractor"].isel(alpha=0).values
+    k = tree["attractor"].isel(alpha=0, omega0=0).values
     np.testing.assert_array_equal(np.asarray(image.get_array()), k.reshape(k.shape[-2:]))
     labels = [line.get_label() for line in ax.lines]
     assert "attractors (2πk, 0)" in labels and "saddles ((2j+1)π, 0)" in labels
@@ -82,11 +82,25 @@ def test_fraction_curves_one_per_basin_with_error_bars(sweep_tree):
     plt.close("all")
 
 
+def test_fraction_curves_along_each_swept_parameter_hold_the_others(sweep_tree):
+    """A sweep over α and ω0 together: curves against ω0 at the first α, said in the title,
+    read from the same variables as the single-point views."""
+    tree, _ = sweep_tree
+    ax = fraction_curves(tree, dim="omega0")
+    k0 = next(line for line in ax.lines if line.get_label() == "k = +0")
+    np.testing.assert_array_equal(k0.get_xdata(), [1.0, 1.5])
+    np.testing.assert_array_equal(
+        k0.get_ydata(), tree["basin_fraction_exact"].sel(k=0).isel(alpha=0).values)
+    assert "alpha = 0.1" in ax.get_title()
+    plt.close("all")
+
+
 def test_plot_atlas_writes_the_figures(sweep_tree):
     tree, path = sweep_tree
     written = plot_atlas(tree, path)
+    swept = [d for d in ("alpha", "omega0", "torque") if d in tree.dims]
     assert [p.name for p in written] == ["s.png", "s_t_trap.png", "s_boundary_distance.png",
-                                         "s_fractions.png"]
+                                         *(f"s_fractions_{d}.png" for d in swept)]
     assert all(p.stat().st_size > 10_000 for p in written)
 
 

@@ -155,12 +155,16 @@ output: {output}
     assert ds["basin_fraction"].dims == ("alpha", "omega0", "k")
     total = ds["basin_fraction"].sum("k") + ds["unresolved_fraction"]
     np.testing.assert_allclose(total, 1.0, atol=1e-12)
-    cp = tree["critical_points"]
-    assert cp["eigenvalue_real"].dims == ("alpha", "omega0", "point", "eigen")
-    # α = 0.05, 0.5 underdamped for both ω0; α = 2 overdamped for both: the kinds follow α
-    attractor_kinds = cp["kind"].isel(point=cp["n"].values % 2 == 0).values
-    assert set(attractor_kinds[:2].ravel()) == {"attractor focus"}
-    assert set(attractor_kinds[2].ravel()) == {"attractor node"}
+    # one /critical_points node per parameter point, found by its parameters; α = 0.05, 0.5
+    # are underdamped for both ω0, α = 2 overdamped for both: the kinds follow α
+    from atlas.layout import point_group, points
+
+    assert len(points(ds)) == 6 and len(tree["critical_points"].children) == 6
+    for point in points(ds):
+        cp = point_group(tree, "critical_points", point)
+        assert cp["eigenvalue_real"].dims == ("point", "eigen")
+        kinds = set(cp["kind"].values[cp["n"].values % 2 == 0])
+        assert kinds == {"attractor focus" if point["alpha"] < 1 else "attractor node"}
     for ia, a in enumerate([0.05, 0.5, 2.0]):
         for iw, w in enumerate([1.0, 1.5]):
             single = write_config(tmp_path / "one.yaml", grid.format(
@@ -222,7 +226,8 @@ def test_large_outputs_open_lazily(tmp_path, small_config):
 
 
 def test_parameter_sweep_stores_each_points_separatrices(tmp_path):
-    from atlas.separatrices import select_parameter_point, trace
+    from atlas.layout import point_group
+    from atlas.separatrices import trace
 
     cfg = write_config(tmp_path / "s.yaml", f"""\
 pendulum: {{alpha: [0.2, 1.0], omega0: 1.0}}
@@ -233,12 +238,13 @@ output: {tmp_path / 's.h5'}
 """)
     proc = run_cli("run", cfg)
     assert proc.returncode == 0, proc.stderr
-    assert "separatrices: 2 parameter points" in proc.stdout
+    assert "2 parameter points" in proc.stdout
     for alpha in ("0.2", "1"):
-        assert f"alpha = {alpha}, omega0 = 1:" in proc.stdout
-    sep = atlas.open(tmp_path / "s.h5")["separatrices"].to_dataset(inherit=False)
+        assert f"alpha = {alpha}, omega0 = 1, torque = 0" in proc.stdout
+    tree = atlas.open(tmp_path / "s.h5")
+    assert sorted(tree["separatrices"].children) == ["alpha0", "alpha1"]
     for alpha in (0.2, 1.0):
-        one = select_parameter_point(sep, alpha, 1.0)
+        one = point_group(tree, "separatrices", {"alpha": alpha, "omega0": 1.0, "torque": 0.0})
         ref = trace(atlas.Pendulum(alpha, 1.0), (-1.5 * np.pi, 1.5 * np.pi), (-3.0, 3.0))
         np.testing.assert_array_equal(one["theta"].values, ref["theta"].values)
         np.testing.assert_array_equal(one["crossing_theta_dot"].values,

@@ -42,9 +42,14 @@ def test_root_schema_with_plain_xarray(written):
                  "basin_fraction_grid_error_bound", "basin_fraction_grid_error", "d_cert",
                  "certified_fraction", "trap_margin"):
         assert "long_name" in ds[name].attrs and "units" in ds[name].attrs
+    # every parameter is a scalar coordinate of a single atlas, and of each variable
+    assert {n: float(ds[n]) for n in ("alpha", "omega0", "torque")} == \
+        {"alpha": 0.1, "omega0": 1.0, "torque": 0.0}
+    assert all(ds[n].dims == () for n in ("alpha", "omega0", "torque"))
+    assert float(ds["d_cert"]["alpha"]) == 0.1 and float(ds["attractor"]["torque"]) == 0.0
     attrs = ds.attrs
-    assert (attrs["alpha"], attrs["omega0"], attrs["dt"], attrs["t_max"]) == (0.1, 1.0, 0.01,
-                                                                              200.0)
+    assert "alpha" not in attrs and attrs["format_version"] == 3
+    assert (attrs["dt"], attrs["t_max"]) == (0.01, 200.0)
     assert attrs["method"] == "rk4" and attrs["atlas_version"] == atlas.__version__
     datetime.fromisoformat(attrs["created"])
     assert json.loads(attrs["config"]) == json.loads(cfg.to_json())
@@ -60,6 +65,7 @@ def test_open_keeps_dtypes_and_groups(written):
     assert root["attractor"].dtype == np.int16 and root["status"].dtype == np.int8
     assert root["attractor"].attrs["_FillValue"] == ATTRACTOR_FILL
     cp = xr.open_datatree(cfg.output, engine="h5netcdf")["critical_points"]
+    assert (cp.attrs["alpha"], cp.attrs["omega0"], cp.attrs["torque"]) == (0.1, 1.0, 0.0)
     assert list(cp["n"].values) == [-3, -2, -1, 0, 1, 2, 3]
     assert list(cp["kind"].values[1::2]) == ["attractor focus"] * 3
     assert list(cp["kind"].values[::2]) == ["saddle"] * 4

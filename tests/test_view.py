@@ -215,14 +215,14 @@ def test_parameter_slider(files, browser):
     assert browser.evaluate("document.getElementById('point').max") == "1"
     th, v = ds["theta0"].values, ds["theta_dot0"].values
     # a grid point whose stored well differs between α = 0.1 and 0.5, inside a uniform patch
-    k = ds["attractor"].values
-    same = np.ones(k.shape[2:], bool)
+    k = ds["attractor"].values  # dims (alpha, theta_dot0, theta0): only α is swept
+    assert ds["attractor"].dims == ("alpha", "theta_dot0", "theta0")
+    same = np.ones(k.shape[1:], bool)
     for a in range(2):
         for dj in (-1, 0, 1):
             for di in (-1, 0, 1):
-                same &= np.roll(k[a, 0], (dj, di), axis=(0, 1)) == k[a, 0]
-    j, i = np.argwhere(same & (k[0, 0] != k[1, 0]) & (ds["status"].values[:, 0] != 1).all(0)
-                       )[0]
+                same &= np.roll(k[a], (dj, di), axis=(0, 1)) == k[a]
+    j, i = np.argwhere(same & (k[0] != k[1]) & (ds["status"].values != 1).all(0))[0]
     for a in range(2):
         browser.evaluate(f"atlasView.select({a})")
         label = browser.evaluate("document.getElementById('point-label').textContent")
@@ -230,7 +230,7 @@ def test_parameter_slider(files, browser):
         xy = browser.evaluate(f"atlasView.clientXY({float(th[i])!r}, {float(v[j])!r})")
         browser.click(xy["x"], xy["y"])
         r = _readout(browser)
-        assert r["point"] == str(a) and int(r["orbitK"]) == int(k[a, 0, j, i]) == int(r["gridK"])
+        assert r["point"] == str(a) and int(r["orbitK"]) == int(k[a, j, i]) == int(r["gridK"])
 
 
 @needs_browser

@@ -151,9 +151,9 @@
       c.stroke();
     }
     c.fillStyle = "#000";
-    for (const t of D.attractors) { c.beginPath(); c.arc(xOf(t), yOf(0), 3.5, 0, TWO_PI); c.fill(); }
+    for (const t of P.attractors) { c.beginPath(); c.arc(xOf(t), yOf(0), 3.5, 0, TWO_PI); c.fill(); }
     c.strokeStyle = "red"; c.lineWidth = 1.8;
-    for (const t of D.saddles) { c.beginPath(); c.arc(xOf(t), yOf(0), 5, 0, TWO_PI); c.stroke(); }
+    for (const t of P.saddles) { c.beginPath(); c.arc(xOf(t), yOf(0), 5, 0, TWO_PI); c.stroke(); }
     if (current) drawPath(c, current);
     c.restore();
     // axes
