@@ -1,10 +1,25 @@
-"""The damped pendulum θ̈ = −ω0² sin θ − 2αθ̇ (essay eq. 1): parameters, energy, critical points.
+"""The damped pendulum with constant torque θ̈ = −ω0² sin θ − 2αθ̇ + τ: parameters, energy,
+critical points.
 
-Units throughout: θ [rad], θ̇ [rad s⁻¹], t [s], α [s⁻¹], ω0 [rad s⁻¹].
+With τ = 0 this is the essay's eq. (1); with τ ≠ 0 it is the damped driven pendulum of
+Josephson junctions and the single-machine swing equation of power grids (issue 15).
+
+Units throughout: θ [rad], θ̇ [rad s⁻¹], t [s], α [s⁻¹], ω0 [rad s⁻¹], τ [rad s⁻²].
+
+Tilted wells. For 0 ≤ |τ| < ω0² let θ* = arcsin(τ/ω0²) ∈ (−π/2, π/2). The rest states are
+(θ* + 2πk, 0), the saddles (π − θ* + 2πk, 0); well k is the strip between its two saddles,
+−π − θ* + 2πk ≤ θ ≤ π − θ* + 2πk (so k = round((θ + θ*)/2π)), whose rest state is
+θ* + 2πk. The linearisation of −ω0² sin θ about a point θc is −ω0² cos θc·(θ − θc); with
+κ = ω0² cos θ* = √(ω0⁴ − τ²) ≥ 0 the characteristic equations are r² + 2αr + κ = 0 at a rest
+state and r² + 2αr − κ = 0 at a saddle (cos(π − θ*) = −cos θ*). For |τ| ≥ ω0² there is no
+critical point (|τ| = ω0² exactly is the saddle-node where rest state and saddle merge, a
+degenerate point with a zero eigenvalue: atlas treats it as none, since no orbit can be
+certified to settle there).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -15,82 +30,173 @@ __all__ = ["Pendulum", "CriticalPoint", "critical_points", "rk4_stable"]
 
 @dataclass(frozen=True)
 class Pendulum:
-    """Parameters of θ̈ = −ω0² sin θ − 2αθ̇ (essay eq. 1).
+    """Parameters of θ̈ = −ω0² sin θ − 2αθ̇ + τ (essay eq. 1 when τ = 0).
 
     alpha:  damping constant α ≥ 0 [s⁻¹] (the essay's a/m = 2α).
     omega0: natural angular frequency ω0 > 0 [rad s⁻¹] (ω0² = g/l).
+    torque: constant torque per unit moment of inertia τ [rad s⁻²], finite, default 0.
     """
 
     alpha: float
     omega0: float
+    torque: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.alpha) and self.alpha >= 0.0):
             raise ValueError(f"alpha must be a finite number >= 0, got {self.alpha!r}")
         if not (math.isfinite(self.omega0) and self.omega0 > 0.0):
             raise ValueError(f"omega0 must be a finite number > 0, got {self.omega0!r}")
+        if not math.isfinite(self.torque):
+            raise ValueError(f"torque must be a finite number, got {self.torque!r}")
+
+    # ----------------------------------------------------------------- the tilt
+    @property
+    def has_rest_states(self) -> bool:
+        """Whether there are critical points: |τ| < ω0² (the saddle-node |τ| = ω0² counts
+        as none, see the module docstring)."""
+        return abs(self.torque) < self.omega0**2
+
+    @property
+    def rest_angle(self) -> float:
+        """θ* = arcsin(τ/ω0²) [rad], the rest state of well 0 (0 when τ = 0). Raises
+        ValueError when |τ| ≥ ω0² (no rest state)."""
+        self._require_rest_states()
+        if self.torque == 0.0:
+            return 0.0
+        return math.asin(self.torque / self.omega0**2)
+
+    @property
+    def saddle_angle(self) -> float:
+        """π − θ* [rad], the right saddle of well 0 (π when τ = 0); well k's saddles are at
+        ±π − θ* + 2πk."""
+        return math.pi - self.rest_angle
+
+    @property
+    def stiffness(self) -> float:
+        """κ = ω0² cos θ* = √(ω0⁴ − τ²) [s⁻²]: the linearised restoring rate at the rest states
+        (and, with the opposite sign, at the saddles). ω0² when τ = 0."""
+        self._require_rest_states()
+        w2 = self.omega0**2
+        if self.torque == 0.0:
+            return w2
+        t = abs(self.torque)
+        return math.sqrt((w2 - t) * (w2 + t))
+
+    def _require_rest_states(self) -> None:
+        if not self.has_rest_states:
+            raise ValueError(f"|torque| = {abs(self.torque):g} >= omega0² = "
+                             f"{self.omega0**2:g}: no rest state or saddle exists")
+
+    def well(self, theta):
+        """Index k of the well (the strip between two saddles) holding θ:
+        k = round((θ + θ*)/2π) (int array or int)."""
+        k = np.floor((np.asarray(theta) + self.rest_angle) / (2.0 * np.pi) + 0.5)
+        return k.astype(np.int64) if np.ndim(k) else int(k)
 
     @property
     def regime(self) -> str:
-        """'undamped', 'underdamped', 'critically damped' or 'overdamped' (essay §2)."""
+        """'undamped', 'underdamped', 'critically damped' or 'overdamped' (essay §2): α
+        against √κ, the rest states' natural frequency (ω0 when τ = 0)."""
         if self.alpha == 0.0:
             return "undamped"
-        if self.alpha < self.omega0:
+        omega = self.omega0 if self.torque == 0.0 else math.sqrt(self.stiffness)
+        if self.alpha < omega:
             return "underdamped"
-        if self.alpha == self.omega0:
+        if self.alpha == omega:
             return "critically damped"
         return "overdamped"
 
+    # ----------------------------------------------------------------- energies
+    @property
+    def saddle_energies(self) -> tuple[float, float]:
+        """(E_left, E_right) [rad² s⁻²]: the energies of the two saddles bounding a well,
+        relative to its rest state (:meth:`energy`; the same for every well k):
+        E_left = 2κ + τ(π + 2θ*), E_right = 2κ − τ(π − 2θ*). Both 2ω0² when τ = 0."""
+        if self.torque == 0.0:
+            e = 2.0 * self.omega0**2
+            return e, e
+        s, kappa, tau = self.rest_angle, self.stiffness, self.torque
+        return 2.0 * kappa + tau * (math.pi + 2.0 * s), 2.0 * kappa - tau * (math.pi - 2.0 * s)
+
     @property
     def saddle_energy(self) -> float:
-        """E at the saddles ((2j+1)π, 0): 2ω0² [rad² s⁻²], the top of every potential well."""
-        return 2.0 * self.omega0**2
+        """The trap level of every well: the lower of the two :attr:`saddle_energies`
+        [rad² s⁻²] (2ω0², the top of every potential well, when τ = 0; the saddle on the side
+        the torque pushes towards is the lower one). An orbit in well k with
+        :meth:`energy` below it never leaves the well."""
+        return min(self.saddle_energies)
 
     def acceleration(self, theta, theta_dot):
-        """θ̈ [rad s⁻²] from eq. (1)."""
-        return -self.omega0**2 * np.sin(theta) - 2.0 * self.alpha * theta_dot
+        """θ̈ [rad s⁻²] = −ω0² sin θ − 2αθ̇ + τ."""
+        acc = -self.omega0**2 * np.sin(theta) - 2.0 * self.alpha * theta_dot
+        return acc + self.torque if self.torque != 0.0 else acc
 
     def field(self, theta, theta_dot):
-        """The vector field f = (θ̇, θ̈) of eq. (1) [rad s⁻¹, rad s⁻²] (scalars or arrays)."""
+        """The vector field f = (θ̇, θ̈) [rad s⁻¹, rad s⁻²] (scalars or arrays)."""
         return theta_dot, self.acceleration(theta, theta_dot)
 
     def field_jet(self, theta, theta_dot):
         """f and its derivative along the flow, df/dt = J·f (J the Jacobian of f):
         ((θ̇, θ̈), (θ̈, d³θ/dt³)). The velocity and acceleration of an orbit, for its curvature
-        κ = |f × J·f| / |f|³; in reversed time the velocity is −f and the acceleration J·f."""
+        κ = |f × J·f| / |f|³; in reversed time the velocity is −f and the acceleration J·f.
+        (τ is constant, so d³θ/dt³ = −ω0² cos θ·θ̇ − 2αθ̈ with or without it.)"""
         f0, f1 = self.field(theta, theta_dot)
         return (f0, f1), (f1, -self.omega0**2 * np.cos(theta) * f0 - 2.0 * self.alpha * f1)
 
     def energy(self, theta, theta_dot, k=0):
-        """E_k = ½θ̇² + ω0²(1 − cos(θ − 2πk)) [rad² s⁻²] per unit ml²: the energy above the
-        bottom of well k. dE/dt = −2αθ̇² ≤ 0, so E is a Lyapunov function."""
+        """E_k [rad² s⁻²] per unit ml²: the energy above the rest state (θ* + 2πk, 0) of
+        well k, E_k = ½θ̇² + ω0²(cos θ* − cos φ) − τ(φ − θ*) with φ = θ − 2πk. It differs
+        from :meth:`total_energy` by a constant for each k, so dE_k/dt = −2αθ̇² ≤ 0: a
+        Lyapunov function. When τ = 0 it is ½θ̇² + ω0²(1 − cos φ), evaluated as
+        ½θ̇² + 2ω0² sin²(φ/2) (no cancellation near the bottom); with τ ≠ 0 the same form
+        ½θ̇² + 2ω0² sin²(φ/2) − ω0²(1 − cos θ*) − τ(φ − θ*). When |τ| ≥ ω0² (no rest state) θ*
+        is taken as sign(τ)·π/2, the angle where the two would merge."""
         phi = np.asarray(theta) - 2.0 * np.pi * np.asarray(k)
-        return 0.5 * np.asarray(theta_dot) ** 2 + 2.0 * self.omega0**2 * np.sin(0.5 * phi) ** 2
+        base = 0.5 * np.asarray(theta_dot) ** 2 + 2.0 * self.omega0**2 * np.sin(0.5 * phi) ** 2
+        if self.torque == 0.0:
+            return base
+        s = (self.rest_angle if self.has_rest_states
+             else math.copysign(0.5 * math.pi, self.torque))
+        vers = 2.0 * math.sin(0.5 * s) ** 2
+        return base - self.omega0**2 * vers - self.torque * (phi - s)
 
+    def total_energy(self, theta, theta_dot):
+        """E = ½θ̇² − ω0² cos θ − τθ [rad² s⁻²]: dE/dt = −2αθ̇² along every orbit."""
+        return (0.5 * np.asarray(theta_dot) ** 2 - self.omega0**2 * np.cos(theta)
+                - self.torque * np.asarray(theta))
+
+    # ----------------------------------------------------------------- linearisation
     def attractor_eigenvalues(self) -> tuple[complex, complex]:
-        """Roots of r² + 2αr + ω0² = 0 at (2πk, 0) (essay eqs. 3–5, 22–23): r1, r2.
+        """Roots of r² + 2αr + κ = 0 at the rest states (θ* + 2πk, 0) (essay eqs. 3–5,
+        22–23, with κ = ω0² when τ = 0): r1, r2. Raises ValueError when |τ| ≥ ω0².
 
-        Written to avoid cancellation: r2 = −α − √(α² − ω0²) is computed directly and
-        r1 = ω0²/r2 (Vieta), so r1 stays accurate for α ≫ ω0.
+        Written to avoid cancellation: r2 = −α − √(α² − κ) is computed directly and
+        r1 = κ/r2 (Vieta), so r1 stays accurate for α ≫ √κ.
         """
-        disc = complex(self.alpha**2 - self.omega0**2)
+        kappa = self.stiffness
+        disc = complex(self.alpha**2 - kappa)
         root = np.sqrt(disc)
         r2 = -self.alpha - root
-        r1 = self.omega0**2 / r2 if r2 != 0 else complex(0.0)
+        r1 = kappa / r2 if r2 != 0 else complex(0.0)
         return complex(r1), complex(r2)
 
     def saddle_eigenvalues(self) -> tuple[float, float]:
-        """Roots of r² + 2αr − ω0² = 0 at ((2j+1)π, 0) (essay eq. 24): (u1, −u2), u1 > 0 > −u2.
+        """Roots of r² + 2αr − κ = 0 at the saddles (π − θ* + 2πk, 0) (essay eq. 24 when
+        τ = 0): (u1, −u2), u1 > 0 > −u2. Raises ValueError when |τ| ≥ ω0².
 
-        u1 = −α + √(α² + ω0²) is evaluated as ω0²/(α + √(α² + ω0²)) to avoid cancellation.
+        u1 = −α + √(α² + κ) is evaluated as κ/(α + √(α² + κ)) to avoid cancellation.
         """
-        s = math.hypot(self.alpha, self.omega0)
-        return self.omega0**2 / (self.alpha + s), -(self.alpha + s)
+        kappa = self.stiffness
+        if self.torque == 0.0:
+            s = math.hypot(self.alpha, self.omega0)
+        else:
+            s = math.hypot(self.alpha, math.sqrt(kappa))
+        return kappa / (self.alpha + s), -(self.alpha + s)
 
     def saddle_stable_direction(self) -> tuple[float, float]:
         """Unit vector (dθ, dθ̇) of the saddle's stable eigenvector, eigenvalue −u2 < 0.
 
-        For the linearisation θ̈ = ω0²φ − 2αθ̇ about a saddle, an eigenvector of eigenvalue λ is
+        For the linearisation θ̈ = κφ − 2αθ̇ about a saddle, an eigenvector of eigenvalue λ is
         (1, λ); normalised so that dθ > 0.
         """
         lam = self.saddle_eigenvalues()[1]
@@ -100,16 +206,23 @@ class Pendulum:
 
 @dataclass(frozen=True)
 class CriticalPoint:
-    """A rest state (nπ, 0) of eq. (1) with its linearisation (essay §3, eqs. 22–24)."""
+    """A critical point (nπ + offset, 0) with its linearisation (essay §3, eqs. 22–24).
+
+    n: even n = the rest state of well n/2 (near nπ), odd n = a saddle (near nπ).
+    offset: θ − nπ [rad]: +θ* for a rest state, −θ* for a saddle (0 when τ = 0).
+    """
 
     n: int
     kind: str
     eigenvalues: tuple[complex, complex]
+    offset: float = 0.0
 
     @property
     def theta(self) -> float:
-        """θ = nπ [rad]."""
-        return self.n * math.pi
+        """θ = nπ + offset [rad] (nπ when τ = 0)."""
+        if self.offset == 0.0:
+            return self.n * math.pi
+        return self.n * math.pi + self.offset
 
     @property
     def is_saddle(self) -> bool:
@@ -125,30 +238,46 @@ _ATTRACTOR_KIND = {
 
 
 def critical_points(pendulum: Pendulum, theta_min: float, theta_max: float) -> list[CriticalPoint]:
-    """All critical points (nπ, 0) with θ_min ≤ nπ ≤ θ_max, ordered by θ.
+    """All critical points with θ_min ≤ θ ≤ θ_max (to 1e-12·π), ordered by θ.
 
-    Even n: attractors (2πk, 0) with k = n/2, kind from the damping regime (focus, critical
-    node, node; a center when α = 0). Odd n: saddles with real eigenvalues u1 > 0 > −u2.
+    Even n: rest states (2πk + θ*, 0) with k = n/2, kind from the damping regime (focus,
+    critical node, node; a center when α = 0). Odd n: saddles (nπ − θ*, 0) with real
+    eigenvalues u1 > 0 > −u2. θ* = arcsin(τ/ω0²) (0 when τ = 0: the points (nπ, 0)).
+    Empty when |τ| ≥ ω0² (no critical point; the saddle-node |τ| = ω0² counts as none).
     """
+    if not pendulum.has_rest_states:
+        return []
     attractor = pendulum.attractor_eigenvalues()
     u1, minus_u2 = pendulum.saddle_eigenvalues()
     saddle = (complex(u1), complex(minus_u2))
-    n_lo = math.ceil(theta_min / math.pi - 1e-12)
-    n_hi = math.floor(theta_max / math.pi + 1e-12)
+    shift = pendulum.rest_angle
+    lo = theta_min / math.pi - 1e-12
+    hi = theta_max / math.pi + 1e-12
     points = []
-    for n in range(n_lo, n_hi + 1):
+    for n in range(math.ceil(lo) - 1, math.floor(hi) + 2):
+        offset = 0.0 - shift if n % 2 else shift  # 0.0, not −0.0, when τ = 0
+        if not lo <= n + offset / math.pi <= hi:
+            continue
         if n % 2:
-            points.append(CriticalPoint(n, "saddle", saddle))
+            points.append(CriticalPoint(n, "saddle", saddle, offset))
         else:
-            points.append(CriticalPoint(n, _ATTRACTOR_KIND[pendulum.regime], attractor))
+            points.append(CriticalPoint(n, _ATTRACTOR_KIND[pendulum.regime], attractor, offset))
     return points
 
 
 def rk4_stable(pendulum: Pendulum, dt: float) -> bool:
     """Whether RK4 with step ``dt`` [s] is linearly stable at every critical point's decaying
-    modes: |R(dt·λ)| ≤ 1 with R(z) = 1 + z + z²/2 + z³/6 + z⁴/24 (Hairer & Wanner, *Solving
-    ODEs II*, §IV.2) for the attractor roots r1, r2 and the saddle's stable root −u2.
-    Beyond it the integrator itself amplifies what the physics damps."""
+    modes of the *untilted* pendulum: |R(dt·λ)| ≤ 1 with R(z) = 1 + z + z²/2 + z³/6 + z⁴/24
+    (Hairer & Wanner, *Solving ODEs II*, §IV.2) for the attractor roots r1, r2 and the
+    saddle's stable root −u2 of (α, ω0, τ = 0). Beyond it the integrator itself amplifies
+    what the physics damps.
+
+    The torque is ignored on purpose: along any orbit the frozen Jacobian has
+    −ω0² cos θ with cos θ ∈ [−1, 1], whose extremes are the untilted saddle (the most negative
+    real rate −α − √(α² + ω0²), which bounds every tilted point's) and the untilted attractor,
+    so the untilted check covers the tilted critical points and the running orbits alike."""
+    if pendulum.torque != 0.0:
+        pendulum = dataclasses.replace(pendulum, torque=0.0)
     r1, r2 = pendulum.attractor_eigenvalues()
     stable_saddle = complex(pendulum.saddle_eigenvalues()[1])
     for lam in (r1, r2, stable_saddle):

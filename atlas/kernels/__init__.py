@@ -3,24 +3,45 @@
 Every labelling kernel follows one contract, so backends are interchangeable:
 
     kernel(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
-           attractor, status, n_trap) -> None
+           attractor, status, n_trap,
+           torque=0.0, running_theta0=0.0, running_g=None, running_top=inf) -> None
+
+for θ̈ = −ω0² sin θ − 2αθ̇ + τ (τ = ``torque`` [rad s⁻²]).
 
 * ``theta0``, ``theta_dot0``: float64 1-D arrays of equal length N [rad, rad s⁻¹].
 * each orbit is integrated with classical RK4 at step ``dt`` [s]; at steps
-  n = 0, c, 2c, …, n_checks·c (c = ``check_every``) the energy trap is tested:
-  k = round(θ / 2π), φ = θ − 2πk ∈ [−π, π], E_k = ½θ̇² + 2ω0² sin²(φ/2);
-  the orbit is *trapped* in well k when E_k < ``energy_cap`` (= 2ω0²(1 − m), see
-  :mod:`atlas.labels`) and integration of that orbit stops.
+  n = 0, c, 2c, …, n_checks·c (c = ``check_every``) the certificates are tested:
+
+  - the *energy trap*: with θ* = arcsin(τ/ω0²) (0 when τ = 0), k = round((θ + θ*)/2π) is
+    the well whose strip between its two saddles, −π − θ* ≤ φ < π − θ* (φ = θ − 2πk), holds
+    θ, and E_k = ½θ̇² + 2ω0² sin²(φ/2) − ω0²(1 − cos θ*) − τ(φ − θ*) its energy above the
+    rest state (θ* + 2πk, 0) (for τ = 0: k = round(θ/2π), E_k = ½θ̇² + 2ω0² sin²(φ/2)).
+    The orbit is *trapped* in well k when E_k < ``energy_cap``, the lower saddle's energy
+    relative to the well lowered by the safety margin (2ω0²(1 − m) for τ = 0; see
+    :func:`atlas.labels.energy_cap`; −inf when |τ| ≥ ω0²: there is no well);
+  - the *running certificate* (only when ``running_g`` is non-empty): with σ = sign(τ)
+    (+1 for τ = 0), u = σθ and w = σθ̇, the orbit is *running* when w ≤ ``running_top`` and
+    w ≥ ĝ(u), where ĝ is the linear interpolation of the M + 1 samples ``running_g`` on the
+    uniform grid u − ``running_theta0`` ∈ [0, 2π] (u reduced mod 2π; ``running_g[M]`` ≥
+    ``running_g[0]``). The barrier is thus always given for positive rotation (the τ > 0
+    frame, as built for |τ|): the kernel mirrors it (θ → −θ, θ̇ → −θ̇) for τ < 0. That the
+    region is forward-invariant, holds the running limit cycle and no rest state, and has
+    the margins the numerical orbit needs is the builder's business (``atlas.running``).
+
+  The energy trap is tested first; the orbit's integration stops at the first check where
+  either certificate holds.
 * outputs (preallocated, length N): ``attractor`` int32 (k, untouched unless trapped),
-  ``status`` int8 (0 trapped, 1 unresolved, 2 nonfinite), ``n_trap`` int32 (the step
-  count n at trapping, −1 otherwise).
+  ``status`` int8 (0 trapped, 1 unresolved, 2 nonfinite, 4 running), ``n_trap`` int32 (the
+  step count n at trapping or at certified running, −1 otherwise).
+* τ = 0 without a running barrier runs the kernels of earlier versions, unchanged (the
+  tilted kernels are separate specialisations, compiled only when used): labels at τ = 0
+  are bit-identical to theirs.
 * the return value is not part of the contract (the lane kernels return how many orbits each
   of their paths took, for logging).
 
-Methods (the discretisation, :data:`METHODS`): ``"rk4-trigfree"`` (default on the CPU,
-classical RK4 on (θ, θ̇, cos θ, sin θ), :mod:`atlas.kernels.trigfree`) and ``"rk4"``
-(classical RK4 on (θ, θ̇) with a sin per stage, :mod:`atlas.kernels.rk4`; the CUDA kernels'
-method). Both are of order 4; their trajectories differ by O(dt⁴), so labels differ only on
+Methods (the discretisation, :data:`METHODS`): ``"rk4"`` (the default; classical RK4 on
+(θ, θ̇) with a sin per stage, :mod:`atlas.kernels.rk4`; the CUDA kernels' method) and
+``"rk4-trigfree"`` (classical RK4 on (θ, θ̇, cos θ, sin θ), :mod:`atlas.kernels.trigfree`). Both are of order 4; their trajectories differ by O(dt⁴), so labels differ only on
 basin-boundary cells.
 
 Checks before any step and after a non-finite state are part of the contract: an initial
@@ -45,6 +66,10 @@ TRAPPED, UNRESOLVED, NONFINITE = 0, 1, 2
 #: Status set after labelling (never by a kernel): trapped, but not certified for the exact
 #: equation (closer than d_cert to a basin boundary; see :mod:`atlas.certificate`).
 NEAR_BOUNDARY = 3
+#: Certified to converge to the running limit cycle (τ ≠ 0): the orbit entered the running
+#: certificate's forward-invariant region (contract above). ``attractor`` stays at its fill
+#: value; the direction of rotation is sign(τ) (:class:`atlas.labels.LabelResult`).
+RUNNING = 4
 #: Attractor index where status ≠ trapped in a label result (int16; also the file's
 #: _FillValue), the counterpart of the status codes above.
 ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
@@ -54,6 +79,11 @@ ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
 #: 6.4e-10 at the default settings, so d_cert grows alike), and the atlas page integrates
 #: clicked orbits with classical RK4 to match the file.
 METHODS = ("rk4", "rk4-trigfree")
+
+
+def uses_torque(torque, running_g) -> bool:
+    """Whether a kernel call needs the tilted specialisation: τ ≠ 0 or a running barrier."""
+    return torque != 0.0 or (running_g is not None and len(running_g) > 0)
 
 
 def source_hash() -> str:

@@ -23,6 +23,12 @@ kernel of method "rk4" exactly except for orbits whose fate is decided by roundi
 the polynomial sin and FMA contraction each round differently from the CPU's libm sin.
 ``tests/test_cuda.py`` checks equality on a grid and hand-picked orbits.
 
+Torque. :func:`kernels` compiles the τ = 0 kernels of earlier versions, unchanged;
+:func:`torque_kernels` (compiled on first use) the tilted one, built the same way from the
+τ ≠ 0 factories of :mod:`atlas.kernels.rk4` (tilted trap and running certificate, contract
+in :mod:`atlas.kernels`). In the "fast" variant θ is wrapped by the tilted well index
+k = round((θ + θ*)/2π), which the running test does not mind (it reduces θ mod 2π itself).
+
 This module holds the device side (availability, device functions, compiled kernels); the
 host orchestration — chunks, streams, pinned staging, :func:`label_cuda` on host arrays — is
 :mod:`atlas.kernels.cuda_host`. numba.cuda is imported only when a function here is called:
@@ -40,11 +46,18 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import BackendUnavailable
-from . import NONFINITE, TRAPPED, UNRESOLVED
+from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED
 from .fastsin import INV_PI, PI_1, PI_2, PI_3, sin_poly
-from .rk4 import INV_TWO_PI, make_rk4_step, make_well_energy
+from .rk4 import (
+    INV_TWO_PI,
+    make_rk4_step,
+    make_rk4_step_torque,
+    make_running_test,
+    make_well_energy,
+    make_well_energy_torque,
+)
 
-__all__ = ["VARIANTS", "cuda_status", "kernels", "require_cuda"]
+__all__ = ["VARIANTS", "cuda_status", "kernels", "torque_kernels", "require_cuda"]
 
 #: Kernel variants: name -> (sin implementation, keep θ wrapped near [−π, π]).
 VARIANTS = ("fast", "straightforward")
@@ -176,6 +189,45 @@ def _device_functions(cuda, variant: str):
     return device(make_rk4_step(sin_near, reduce=identity)), device(make_well_energy(sin))
 
 
+def _device_functions_torque(cuda, variant: str):
+    """The variant's (step, well_energy, running) for τ ≠ 0 as CUDA device functions, built
+    like :func:`_device_functions` from the τ ≠ 0 factories."""
+
+    def device(jitted):
+        return cuda.jit(device=True)(getattr(jitted, "py_func", jitted))
+
+    if variant == "straightforward":
+
+        @cuda.jit(device=True)
+        def sin(x):
+            return math.sin(x)
+
+    else:
+        poly = device(sin_poly)
+
+        @cuda.jit(device=True)
+        def sin(x):
+            q = (x * INV_PI + _ROUND_MAGIC) - _ROUND_MAGIC
+            r = ((x - q * PI_1) - q * PI_2) - q * PI_3
+            parity = math.fabs(q - 2.0 * ((0.5 * q + _ROUND_MAGIC) - _ROUND_MAGIC))
+            return (1.0 - 2.0 * parity) * poly(r)
+
+    @cuda.jit(device=True)
+    def sin_near(theta, delta):
+        return sin(theta + delta)
+
+    @cuda.jit(device=True)
+    def identity(theta):
+        return theta
+
+    @cuda.jit(device=True)
+    def floor(x):  # a float floor (numba-cuda lowers math.floor, not np.floor)
+        return float(math.floor(x))
+
+    return (device(make_rk4_step_torque(sin_near, reduce=identity)),
+            device(make_well_energy_torque(sin)), device(make_running_test(floor)))
+
+
 def _block_size(cuda, kernel) -> int:
     """Threads per block maximising resident threads per SM given the kernel's registers
     (CUDA occupancy rules: registers allocated per warp in units of 256); ties go to the
@@ -269,3 +321,68 @@ def _compile(variant: str) -> Kernels:
         theta_dot[i] = v
 
     return Kernels(label, propagate, _block_size(cuda, label), _block_size(cuda, propagate))
+
+
+class TorqueKernel(NamedTuple):
+    """The compiled τ ≠ 0 labelling kernel of one variant and its block size."""
+
+    label: object
+    label_block: int
+
+
+@functools.cache
+def torque_kernels(variant: str = "fast") -> TorqueKernel:
+    """Compile (once) the τ ≠ 0 labelling kernel of ``variant``:
+    ``label(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap, torque,
+    shift, vers_shift, sign, running_theta0, running_g, running_top, attractor, status,
+    n_trap)`` on device arrays (``running_g`` a device array, empty for none; shift, vers_shift
+    and sign as in :func:`atlas.kernels.rk4.torque_model`)."""
+    if variant not in VARIANTS:
+        raise ValueError(f"CUDA variant must be one of {VARIANTS}, got {variant!r}")
+    require_cuda()
+    with _row_stack_alias():
+        return _compile_torque(variant)
+
+
+def _compile_torque(variant: str) -> TorqueKernel:
+    step, well_energy, running = _device_functions_torque(cuda, variant)
+    wrap = variant == "fast"
+    f8, i8, i4, i1 = "float64", "int64", "int32", "int8"
+    sig = (f"void({f8}[::1], {f8}[::1], {f8}, {f8}, {f8}, {i8}, {i8}, {f8}, {f8}, {f8}, {f8}, "
+           f"{f8}, {f8}, {f8}[::1], {f8}, {i4}[::1], {i1}[::1], {i4}[::1])")
+
+    @cuda.jit(sig)
+    def label(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap, torque,
+              shift, vers_shift, sign, running_theta0, running_g, running_top, attractor,
+              status, n_trap):
+        i = cuda.grid(1)
+        if i >= theta0.size:
+            return
+        theta = theta0[i]
+        theta_dot = theta_dot0[i]
+        winding = 0
+        status[i] = UNRESOLVED
+        n_trap[i] = -1
+        for j in range(n_checks + 1):
+            if not (math.isfinite(theta) and math.isfinite(theta_dot)):
+                status[i] = NONFINITE
+                return
+            k, energy = well_energy(theta, theta_dot, omega0, torque, shift, vers_shift)
+            if energy < energy_cap:
+                attractor[i] = winding + k
+                status[i] = TRAPPED
+                n_trap[i] = j * check_every
+                return
+            if running(theta, theta_dot, sign, running_theta0, running_g, running_top):
+                status[i] = RUNNING
+                n_trap[i] = j * check_every
+                return
+            if j == n_checks:
+                return
+            if wrap:
+                theta = ((theta - k * (2.0 * PI_1)) - k * (2.0 * PI_2)) - k * (2.0 * PI_3)
+                winding += k
+            for _ in range(check_every):
+                theta, theta_dot = step(theta, theta_dot, alpha, omega0, dt, torque)
+
+    return TorqueKernel(label, _block_size(cuda, label))

@@ -8,7 +8,13 @@ in :mod:`atlas.kernels.cuda`.
 
 from __future__ import annotations
 
-from .cuda import _import_cuda, kernels
+import math
+
+import numpy as np
+
+from . import uses_torque
+from .cuda import _import_cuda, kernels, torque_kernels
+from .rk4 import torque_model
 
 __all__ = ["label_cuda", "propagate_cuda", "CHUNK_CAP", "MEMORY_FRACTION"]
 
@@ -16,6 +22,9 @@ __all__ = ["label_cuda", "propagate_cuda", "CHUNK_CAP", "MEMORY_FRACTION"]
 CHUNK_CAP = 1 << 22
 #: Fraction of the free device memory the two in-flight chunks may take.
 MEMORY_FRACTION = 0.5
+#: The running barrier passed when there is none: one sample (the kernels test the barrier
+#: only with ≥ 2 samples; a device array is kept non-empty).
+_NO_BARRIER = np.zeros(1)
 
 
 def _chunk_size(cuda, bytes_per_item: int, block: int, cap: int | None) -> int:
@@ -77,13 +86,19 @@ def _run_chunked(cuda, kernel, block, args, modes, chunk):
 
 
 def label_cuda(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
-               attractor, status, n_trap, *, variant: str = "fast", chunk: int | None = None):
+               attractor, status, n_trap, torque=0.0, running_theta0=0.0, running_g=None,
+               running_top=math.inf, *, variant: str = "fast", chunk: int | None = None):
     """Label orbits on the GPU; the contract of :mod:`atlas.kernels` on host numpy arrays.
 
     ``variant`` picks the kernel (module doc); ``chunk`` caps the orbits per chunk (default:
     by free device memory, at most CHUNK_CAP). Raises BackendUnavailable (one line) when CUDA
-    cannot be used.
+    cannot be used. τ = 0 without a running barrier runs the kernels of earlier versions.
     """
+    if uses_torque(torque, running_g):
+        _label_cuda_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                           energy_cap, attractor, status, n_trap, torque, running_theta0,
+                           running_g, running_top, variant, chunk)
+        return
     k = kernels(variant)
     if theta0.size == 0:
         return
@@ -92,6 +107,25 @@ def label_cuda(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, ene
     # attractor is "inout": the contract leaves it untouched where nothing is trapped.
     modes = ("in", "in", None, None, None, None, None, None, "inout", "out", "out")
     _run_chunked(_import_cuda(), k.label, k.label_block, args, modes, chunk)
+
+
+def _label_cuda_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                       energy_cap, attractor, status, n_trap, torque, running_theta0,
+                       running_g, running_top, variant, chunk):
+    k = torque_kernels(variant)
+    if theta0.size == 0:
+        return
+    tq, shift, vers, sign, r_theta0, g, r_top, _ = torque_model(
+        omega0, torque, running_theta0, running_g, running_top)
+    cuda = _import_cuda()
+    # the barrier goes to the device once, whole (not chunked: it is not per orbit); a
+    # 1-sample placeholder keeps the kernel's array argument non-empty, g.size < 2 = none
+    g_dev = cuda.to_device(g if g.size else _NO_BARRIER)
+    args = (theta0, theta_dot0, float(alpha), float(omega0), float(dt), int(n_checks),
+            int(check_every), float(energy_cap), tq, shift, vers, sign, r_theta0, g_dev, r_top,
+            attractor, status, n_trap)
+    modes = ("in", "in") + (None,) * 13 + ("inout", "out", "out")
+    _run_chunked(cuda, k.label, k.label_block, args, modes, chunk)
 
 
 def propagate_cuda(theta, theta_dot, alpha, omega0, dt, n_steps, *, variant: str = "fast",

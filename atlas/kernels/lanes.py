@@ -87,15 +87,28 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit
+from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
 from .fastsin import EXACT_RANGE, POLY_RANGE, SIN_FASTMATH, fast_sin, reduce_pi, sin_near
-from .rk4 import label_orbit, make_rk4_step, make_well_energy, rk4_step
+from .rk4 import (
+    label_orbit,
+    label_orbit_torque,
+    make_rk4_step,
+    make_rk4_step_torque,
+    make_well_energy,
+    make_well_energy_torque,
+    rk4_step,
+    running_test,
+    torque_model,
+)
 from .trigfree import (
     SYNC_EVERY,
     label_orbit_trigfree,
+    label_orbit_trigfree_torque,
     sync_libm,
     sync_poly,
+    sync_poly_torque,
     trigfree_step,
+    trigfree_step_torque,
 )
 
 log = logging.getLogger(__name__)
@@ -133,10 +146,11 @@ _well_energy = make_well_energy(fast_sin)
 
 
 def _lane_step(rk4):
-    """The rk4 step in the lane signature (θ, θ̇, c, s) → (θ, θ̇, c, s), c and s unused."""
+    """The rk4 step in the lane signature (θ, θ̇, c, s, …, model) → (θ, θ̇, c, s), c, s and
+    model unused."""
 
     @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-    def step(th, v, c, s, alpha, omega0, dt):
+    def step(th, v, c, s, alpha, omega0, dt, model):
         th, v = rk4(th, v, alpha, omega0, dt)
         return th, v, c, s
 
@@ -144,9 +158,24 @@ def _lane_step(rk4):
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _rk4_sync(th, v, omega0):
+def _rk4_sync(th, v, omega0, model):
     k, energy = _well_energy(th, v, omega0)
     return 0.0, 0.0, k, energy
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _rk4_classify(theta, theta_dot, alpha, omega0, dt, model):
+    return _rk4_path(theta, theta_dot, alpha, omega0, dt)
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _rk4_scalar(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap, model):
+    return label_orbit(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap)
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _never_running(th, v, model):
+    return False
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
@@ -174,24 +203,118 @@ def _trigfree_path(theta, theta_dot, alpha, omega0, dt):
     return SCALAR
 
 
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_step(th, v, c, s, alpha, omega0, dt, model):
+    return trigfree_step(th, v, c, s, alpha, omega0, dt)
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_sync(th, v, omega0, model):
+    return sync_poly(th, v, omega0)
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_classify(theta, theta_dot, alpha, omega0, dt, model):
+    return _trigfree_path(theta, theta_dot, alpha, omega0, dt)
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_scalar(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap,
+                     model):
+    return label_orbit_trigfree(theta, theta_dot, alpha, omega0, dt, n_checks, check_every,
+                                energy_cap)
+
+
+# ------------------------------------------------------------------------- torque τ ≠ 0
+# The tilted kernels' callables read τ and the running barrier from ``model``
+# (:func:`atlas.kernels.rk4.torque_model`: τ, θ*, 1 − cos θ*, sign, barrier θ0, g, top, span).
+_shared_step_torque = make_rk4_step_torque(sin_near, reduce_pi)
+_full_step_torque = make_rk4_step_torque(fast_sin)
+_well_energy_torque = make_well_energy_torque(fast_sin)
+
+
+def _lane_step_torque(rk4):
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def step(th, v, c, s, alpha, omega0, dt, model):
+        th, v = rk4(th, v, alpha, omega0, dt, model[0])
+        return th, v, c, s
+
+    return step
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _rk4_sync_torque(th, v, omega0, model):
+    k, energy = _well_energy_torque(th, v, omega0, model[0], model[1], model[2])
+    return 0.0, 0.0, k, energy
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _in_range_torque(theta, theta_dot, alpha, omega0, model):
+    """Whether the lanes may take the orbit: finite input, α > 0 and |θ| within half of
+    fast_sin's EXACT_RANGE for the whole run. With τ the speed stays in the band
+    |θ̇| ≤ B = max(|θ̇0|, (ω0² + |τ|)/2α) (above it |θ̈| points back into the band), so
+    |θ| ≤ |θ0| + B·span; returns (ok, B)."""
+    band = (omega0 * omega0 + abs(model[0])) / (2.0 * alpha) if alpha > 0.0 else math.inf
+    speed = max(abs(theta_dot), band)
+    ok = (alpha > 0.0 and math.isfinite(theta_dot)
+          and abs(theta) + speed * model[7] <= 0.5 * EXACT_RANGE)
+    return ok, speed
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _rk4_classify_torque(theta, theta_dot, alpha, omega0, dt, model):
+    """As :func:`_rk4_path` with the speed bound B of :func:`_in_range_torque`; a stage
+    velocity exceeds it by at most ½dt(ω0² + |τ| + 2αB) per stage."""
+    ok, speed = _in_range_torque(theta, theta_dot, alpha, omega0, model)
+    if not ok:
+        return SCALAR
+    offset = dt * (speed * (1.0 + 2.0 * alpha * dt) + dt * (omega0 * omega0 + abs(model[0])))
+    return SHARED if offset <= MAX_STAGE_OFFSET else FULL
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_classify_torque(theta, theta_dot, alpha, omega0, dt, model):
+    ok, _ = _in_range_torque(theta, theta_dot, alpha, omega0, model)
+    return SHARED if ok else SCALAR
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_step_torque(th, v, c, s, alpha, omega0, dt, model):
+    return trigfree_step_torque(th, v, c, s, alpha, omega0, dt, model[0])
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _trigfree_sync_torque(th, v, omega0, model):
+    return sync_poly_torque(th, v, omega0, model[0], model[1], model[2])
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _running(th, v, model):
+    return running_test(th, v, model[3], model[4], model[5], model[6])
+
+
 # ------------------------------------------------------------------ the lane machinery
-def make_label_chunk(step, sync, path, classify, scalar_label, first_pass):
-    """Return ``chunk(first, stride, <contract args>, counts)``: label, with one lane block of
-    ``step`` and refill, the orbits of tiles first, first + stride, … that ``classify`` sends
-    to ``path``. The ``first_pass`` also labels the SCALAR orbits by ``scalar_label`` and
-    counts every orbit's path into ``counts``."""
+def make_label_chunk(step, sync, path, classify, scalar_label, first_pass,
+                     running=_never_running):
+    """Return ``chunk(first, stride, <contract args>, model, counts)``: label, with one lane
+    block of ``step`` and refill, the orbits of tiles first, first + stride, … that
+    ``classify`` sends to ``path``. The ``first_pass`` also labels the SCALAR orbits by
+    ``scalar_label`` and counts every orbit's path into ``counts``. Every callable takes
+    ``model`` last (() for τ = 0, :func:`atlas.kernels.rk4.torque_model` otherwise);
+    ``running(θ, θ̇, model)`` is the running certificate, tested after the trap (the default
+    is never true, and compiles to nothing)."""
 
     @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-    def advance(th, v, c, s, alpha, omega0, dt, n_steps):
+    def advance(th, v, c, s, alpha, omega0, dt, n_steps, model):
         # n_steps steps of every lane; the lane loop is the one LLVM vectorises
         for _ in range(n_steps):
             for lane in range(LANES):
                 th[lane], v[lane], c[lane], s[lane] = step(th[lane], v[lane], c[lane],
-                                                           s[lane], alpha, omega0, dt)
+                                                           s[lane], alpha, omega0, dt, model)
 
     @nb.njit(nogil=True, fastmath=SIN_FASTMATH)
     def chunk(first, stride, theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
-              energy_cap, attractor, status, n_trap, counts):
+              energy_cap, model, attractor, status, n_trap, counts):
         n = theta0.size
         th = np.zeros(LANES)
         v = np.zeros(LANES)
@@ -204,7 +327,8 @@ def make_label_chunk(step, sync, path, classify, scalar_label, first_pass):
         nxt = first * TILE
         while True:
             for lane in range(LANES):
-                c[lane], s[lane], well[lane], energy[lane] = sync(th[lane], v[lane], omega0)
+                c[lane], s[lane], well[lane], energy[lane] = sync(th[lane], v[lane], omega0,
+                                                                  model)
             active = 0
             for lane in range(LANES):
                 while True:
@@ -216,6 +340,9 @@ def make_label_chunk(step, sync, path, classify, scalar_label, first_pass):
                         elif energy[lane] < energy_cap:
                             attractor[i] = np.int32(well[lane])
                             status[i] = TRAPPED
+                            n_trap[i] = check[lane] * check_every
+                        elif running(th[lane], v[lane], model):
+                            status[i] = RUNNING
                             n_trap[i] = check[lane] * check_every
                         elif check[lane] == n_checks:
                             status[i] = UNRESOLVED
@@ -234,13 +361,14 @@ def make_label_chunk(step, sync, path, classify, scalar_label, first_pass):
                     nxt += 1
                     if nxt % TILE == 0:  # end of a tile: jump to this chunk's next tile
                         nxt += (stride - 1) * TILE
-                    kind = classify(theta0[i], theta_dot0[i], alpha, omega0, dt)
+                    kind = classify(theta0[i], theta_dot0[i], alpha, omega0, dt, model)
                     if first_pass:
                         counts[kind] += 1
                     if kind != path:
                         if first_pass and kind == SCALAR:
                             st, k, nt = scalar_label(theta0[i], theta_dot0[i], alpha, omega0,
-                                                     dt, n_checks, check_every, energy_cap)
+                                                     dt, n_checks, check_every, energy_cap,
+                                                     model)
                             status[i] = st
                             n_trap[i] = nt
                             if st == TRAPPED:
@@ -251,22 +379,31 @@ def make_label_chunk(step, sync, path, classify, scalar_label, first_pass):
                     th[lane] = theta0[i]
                     v[lane] = theta_dot0[i]
                     c[lane], s[lane], well[lane], energy[lane] = sync(th[lane], v[lane],
-                                                                      omega0)
+                                                                      omega0, model)
             if active == 0:
                 return
-            advance(th, v, c, s, alpha, omega0, dt, check_every)
+            advance(th, v, c, s, alpha, omega0, dt, check_every, model)
             for lane in range(LANES):
                 check[lane] += 1
 
     return chunk
 
 
-_rk4_shared_chunk = make_label_chunk(_lane_step(_shared_step), _rk4_sync, SHARED, _rk4_path,
-                                     label_orbit, True)
-_rk4_full_chunk = make_label_chunk(_lane_step(_full_step), _rk4_sync, FULL, _rk4_path,
-                                   label_orbit, False)
-_trigfree_chunk = make_label_chunk(trigfree_step, sync_poly, SHARED, _trigfree_path,
-                                   label_orbit_trigfree, True)
+_rk4_shared_chunk = make_label_chunk(_lane_step(_shared_step), _rk4_sync, SHARED,
+                                     _rk4_classify, _rk4_scalar, True)
+_rk4_full_chunk = make_label_chunk(_lane_step(_full_step), _rk4_sync, FULL, _rk4_classify,
+                                   _rk4_scalar, False)
+_trigfree_chunk = make_label_chunk(_trigfree_step, _trigfree_sync, SHARED, _trigfree_classify,
+                                   _trigfree_scalar, True)
+_rk4_shared_chunk_torque = make_label_chunk(_lane_step_torque(_shared_step_torque),
+                                            _rk4_sync_torque, SHARED, _rk4_classify_torque,
+                                            label_orbit_torque, True, _running)
+_rk4_full_chunk_torque = make_label_chunk(_lane_step_torque(_full_step_torque),
+                                          _rk4_sync_torque, FULL, _rk4_classify_torque,
+                                          label_orbit_torque, False, _running)
+_trigfree_chunk_torque = make_label_chunk(_trigfree_step_torque, _trigfree_sync_torque, SHARED,
+                                          _trigfree_classify_torque,
+                                          label_orbit_trigfree_torque, True, _running)
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
@@ -277,12 +414,27 @@ def _label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, e
         # int64 chunk index: the parfor would otherwise type the call twice (int64 and uint64)
         # and compile the chunk twice
         _rk4_shared_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
-                          n_checks, check_every, energy_cap, attractor, status, n_trap,
+                          n_checks, check_every, energy_cap, (), attractor, status, n_trap,
                           counts[b])
         if counts[b, FULL] > 0:
             _rk4_full_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
-                            n_checks, check_every, energy_cap, attractor, status, n_trap,
+                            n_checks, check_every, energy_cap, (), attractor, status, n_trap,
                             counts[b])
+    return counts
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def _label_lanes_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                        energy_cap, model, attractor, status, n_trap, n_chunks):
+    counts = np.zeros((n_chunks, 3), np.int64)
+    for b in nb.prange(n_chunks):
+        _rk4_shared_chunk_torque(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
+                                 n_checks, check_every, energy_cap, model, attractor, status,
+                                 n_trap, counts[b])
+        if counts[b, FULL] > 0:
+            _rk4_full_chunk_torque(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0,
+                                   dt, n_checks, check_every, energy_cap, model, attractor,
+                                   status, n_trap, counts[b])
     return counts
 
 
@@ -292,8 +444,19 @@ def _label_trigfree(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every
     counts = np.zeros((n_chunks, 3), np.int64)
     for b in nb.prange(n_chunks):
         _trigfree_chunk(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
-                        n_checks, check_every, energy_cap, attractor, status, n_trap,
+                        n_checks, check_every, energy_cap, (), attractor, status, n_trap,
                         counts[b])
+    return counts
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def _label_trigfree_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                           energy_cap, model, attractor, status, n_trap, n_chunks):
+    counts = np.zeros((n_chunks, 3), np.int64)
+    for b in nb.prange(n_chunks):
+        _trigfree_chunk_torque(np.int64(b), n_chunks, theta0, theta_dot0, alpha, omega0, dt,
+                               n_checks, check_every, energy_cap, model, attractor, status,
+                               n_trap, counts[b])
     return counts
 
 
@@ -304,27 +467,45 @@ def _log_paths(kernel_name: str, counts) -> None:
 
 
 def label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
-                attractor, status, n_trap):
+                attractor, status, n_trap, torque=0.0, running_theta0=0.0, running_g=None,
+                running_top=math.inf):
     """Label orbits with lane-blocked SIMD RK4 (method "rk4") and the energy trap (kernel
     contract in :mod:`atlas.kernels`; design, accuracy and differences from the
     straightforward kernel in the module docstring). Returns the orbits each path took
-    (int64 [SHARED, FULL, SCALAR]), also logged at debug level."""
-    counts = _label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
-                          energy_cap, attractor, status, n_trap,
-                          n_chunks(theta0.size)).sum(axis=0)
+    (int64 [SHARED, FULL, SCALAR]), also logged at debug level. τ = 0 without a running
+    barrier runs the τ = 0 specialisation (bit-identical to earlier versions)."""
+    if not uses_torque(torque, running_g):
+        counts = _label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                              energy_cap, attractor, status, n_trap, n_chunks(theta0.size))
+    else:
+        model = torque_model(omega0, torque, running_theta0, running_g, running_top,
+                             n_checks * check_every * dt)
+        counts = _label_lanes_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                     check_every, energy_cap, model, attractor, status, n_trap,
+                                     n_chunks(theta0.size))
+    counts = counts.sum(axis=0)
     _log_paths("label_lanes", counts)
     return counts
 
 
 def label_trigfree(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
-                   attractor, status, n_trap):
+                   attractor, status, n_trap, torque=0.0, running_theta0=0.0, running_g=None,
+                   running_top=math.inf):
     """Label orbits with lane-blocked trig-free RK4 (method "rk4-trigfree",
     :mod:`atlas.kernels.trigfree`) and the energy trap (kernel contract in
-    :mod:`atlas.kernels`): the default CPU kernel. Returns the orbits each path took (int64
-    [SHARED, FULL, SCALAR]; FULL is always 0), also logged at debug level."""
-    counts = _label_trigfree(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
-                             energy_cap, attractor, status, n_trap,
-                             n_chunks(theta0.size)).sum(axis=0)
+    :mod:`atlas.kernels`). Returns the orbits each path took (int64 [SHARED, FULL, SCALAR];
+    FULL is always 0), also logged at debug level. τ = 0 without a running barrier runs the
+    τ = 0 specialisation (bit-identical to earlier versions)."""
+    if not uses_torque(torque, running_g):
+        counts = _label_trigfree(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                                 energy_cap, attractor, status, n_trap, n_chunks(theta0.size))
+    else:
+        model = torque_model(omega0, torque, running_theta0, running_g, running_top,
+                             n_checks * check_every * dt)
+        counts = _label_trigfree_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                        check_every, energy_cap, model, attractor, status,
+                                        n_trap, n_chunks(theta0.size))
+    counts = counts.sum(axis=0)
     _log_paths("label_trigfree", counts)
     return counts
 

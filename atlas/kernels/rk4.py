@@ -15,7 +15,7 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit
+from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
 
 # Fast-math flags that keep NaN/inf semantics honest (no 'nnan'/'ninf'): the kernels must
 # see a non-finite state to report status NONFINITE.
@@ -97,6 +97,121 @@ rk4_step = make_rk4_step(_libm_sin)
 well_energy = make_well_energy(_libm_sin)
 
 
+# ------------------------------------------------------------------------- torque τ ≠ 0
+# The τ ≠ 0 kernels are separate specialisations built by their own factories, so that the
+# τ = 0 kernels above stay exactly the code of earlier versions (adding 0.0 to the
+# acceleration under fast-math may be reassociated and change the last bit of a trajectory).
+
+
+def make_rk4_step_torque(sin, reduce=None):
+    """Return a jitted ``step(theta, theta_dot, alpha, omega0, dt, torque) -> (θ, θ̇)``: one
+    classical RK4 step of θ' = θ̇, θ̇' = −ω0² sin θ − 2αθ̇ + τ (``sin`` and ``reduce`` as in
+    :func:`make_rk4_step`)."""
+    if reduce is None:
+        reduce = _identity
+
+        @nb.njit(inline="always", fastmath=FASTMATH)
+        def sin_near(theta, delta):
+            return sin(theta + delta)
+
+    else:
+        sin_near = sin
+
+    @nb.njit(inline="always", fastmath=FASTMATH)
+    def step(theta, theta_dot, alpha, omega0, dt, torque):
+        w2 = omega0 * omega0
+        a2 = 2.0 * alpha
+        h2 = 0.5 * dt
+        p = reduce(theta)
+        k1t = theta_dot
+        k1v = torque - w2 * sin_near(p, 0.0) - a2 * theta_dot
+        k2t = theta_dot + h2 * k1v
+        k2v = torque - w2 * sin_near(p, h2 * k1t) - a2 * k2t
+        k3t = theta_dot + h2 * k2v
+        k3v = torque - w2 * sin_near(p, h2 * k2t) - a2 * k3t
+        k4t = theta_dot + dt * k3v
+        k4v = torque - w2 * sin_near(p, dt * k3t) - a2 * k4t
+        h6 = dt / 6.0
+        return (
+            theta + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
+            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
+        )
+
+    return step
+
+
+def make_well_energy_torque(sin):
+    """Return a jitted ``well_energy(theta, theta_dot, omega0, torque, shift, vers_shift)
+    -> (k, E_k)`` for the tilted wells (kernel contract, :mod:`atlas.kernels`).
+
+    ``shift`` = θ* = arcsin(τ/ω0²), ``vers_shift`` = 1 − cos θ*. k = round((θ + θ*)/2π) is the
+    well whose strip −π − θ* ≤ φ < π − θ* (φ = θ − 2πk, between its two saddles) holds θ,
+    and E_k = ½θ̇² + 2ω0² sin²(φ/2) − ω0²(1 − cos θ*) − τ(φ − θ*) its energy above the rest
+    state (θ*, 0) (:meth:`atlas.model.Pendulum.energy`)."""
+
+    @nb.njit(inline="always", fastmath=FASTMATH)
+    def well_energy(theta, theta_dot, omega0, torque, shift, vers_shift):
+        k = math.floor((theta + shift) * INV_TWO_PI + 0.5)
+        phi = theta - TWO_PI * k
+        s = sin(0.5 * phi)
+        w2 = omega0 * omega0
+        return k, (0.5 * theta_dot * theta_dot + w2 * (2.0 * (s * s) - vers_shift)
+                   - torque * (phi - shift))
+
+    return well_energy
+
+
+def make_running_test(floor):
+    """Return a jitted ``running(theta, theta_dot, sign, theta0, g, top) -> bool``: whether
+    the state lies in the running certificate's region (kernel contract, :mod:`atlas.kernels`):
+    with u = sign·θ, w = sign·θ̇ (sign = −1 mirrors a barrier given for τ > 0 onto τ < 0),
+    w ≤ top and w ≥ ĝ(u), ĝ the linear interpolation of the M + 1 samples g over
+    u − theta0 ∈ [0, 2π] (u reduced mod 2π). Never true when g is empty. ``floor`` is a
+    float floor (np.floor on the CPU)."""
+
+    @nb.njit(inline="always", fastmath=FASTMATH)
+    def running(theta, theta_dot, sign, theta0, g, top):
+        m = g.size - 1
+        if m < 1:
+            return False
+        w = sign * theta_dot
+        if not w <= top:
+            return False
+        x = sign * theta - theta0
+        x = x - TWO_PI * floor(x * INV_TWO_PI)
+        t = x * (m * INV_TWO_PI)
+        i = min(max(floor(t), 0.0), m - 1.0)
+        j = int(i)
+        return w >= g[j] + (t - i) * (g[j + 1] - g[j])
+
+    return running
+
+
+well_energy_torque = make_well_energy_torque(_libm_sin)
+rk4_step_torque = make_rk4_step_torque(_libm_sin)
+running_test = make_running_test(np.floor)
+
+NO_BARRIER = np.zeros(0)
+
+
+def torque_model(omega0, torque, running_theta0=0.0, running_g=None, running_top=math.inf,
+                 span=0.0):
+    """The tuple ``model`` the τ ≠ 0 kernels take: (τ, θ*, 1 − cos θ*, sign, running_theta0,
+    running_g, running_top, span). θ* = arcsin(τ/ω0²), clamped to ±π/2 when |τ| ≥ ω0² (then
+    there is no well and the caller passes an energy cap that no state reaches); sign = −1.0
+    for τ < 0 (the running barrier is mirrored), +1.0 otherwise; running_g float64 (empty:
+    no running certificate); span = the longest run [s], for the lane kernels' choice of path
+    (:mod:`atlas.kernels.lanes`)."""
+    torque = float(torque)
+    shift = math.asin(min(1.0, max(-1.0, torque / (omega0 * omega0))))
+    vers = 2.0 * math.sin(0.5 * shift) ** 2
+    g = NO_BARRIER if running_g is None else np.ascontiguousarray(running_g, dtype=np.float64)
+    if g.ndim != 1:
+        raise ValueError("running_g must be one-dimensional")
+    return (torque, shift, vers, -1.0 if torque < 0.0 else 1.0, float(running_theta0), g,
+            float(running_top), float(span))
+
+
 @nb.njit(nogil=True, fastmath=FASTMATH)
 def label_orbit(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap):
     """Label one orbit (kernel contract in :mod:`atlas.kernels`) with ``math.sin``; returns
@@ -115,13 +230,12 @@ def label_orbit(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, ener
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)
-def label_straightforward(
+def _label_straightforward(
     theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
     attractor, status, n_trap,
 ):
-    """Label orbits one per ``prange`` iteration with ``math.sin`` (kernel contract in
-    :mod:`atlas.kernels`). The plain implementation that the fast kernels are measured and
-    checked against."""
+    """The τ = 0 specialisation of :func:`label_straightforward` (the kernel of earlier
+    versions, unchanged: its labels are bit-identical to theirs)."""
     for i in nb.prange(theta0.size):
         st, k, nt = label_orbit(theta0[i], theta_dot0[i], alpha, omega0, dt, n_checks,
                                 check_every, energy_cap)
@@ -129,6 +243,57 @@ def label_straightforward(
         n_trap[i] = nt
         if st == TRAPPED:
             attractor[i] = np.int32(k)
+
+
+@nb.njit(nogil=True, fastmath=FASTMATH)
+def label_orbit_torque(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap,
+                       model):
+    """Label one orbit of the tilted pendulum with ``math.sin`` (kernel contract in
+    :mod:`atlas.kernels`; ``model`` from :func:`torque_model`): the energy trap of the tilted
+    wells, then the running certificate, at every check. Returns (status, k, n_trap), k
+    meaningful only when trapped."""
+    torque, shift, vers, sign, r_theta0, r_g, r_top, _ = model
+    for j in range(n_checks + 1):
+        if not (math.isfinite(theta) and math.isfinite(theta_dot)):
+            return NONFINITE, 0, -1
+        k, energy = well_energy_torque(theta, theta_dot, omega0, torque, shift, vers)
+        if energy < energy_cap:
+            return TRAPPED, k, j * check_every
+        if running_test(theta, theta_dot, sign, r_theta0, r_g, r_top):
+            return RUNNING, 0, j * check_every
+        if j == n_checks:
+            break
+        for _ in range(check_every):
+            theta, theta_dot = rk4_step_torque(theta, theta_dot, alpha, omega0, dt, torque)
+    return UNRESOLVED, 0, -1
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)
+def _label_straightforward_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                  check_every, energy_cap, model, attractor, status, n_trap):
+    for i in nb.prange(theta0.size):
+        st, k, nt = label_orbit_torque(theta0[i], theta_dot0[i], alpha, omega0, dt, n_checks,
+                                       check_every, energy_cap, model)
+        status[i] = st
+        n_trap[i] = nt
+        if st == TRAPPED:
+            attractor[i] = np.int32(k)
+
+
+def label_straightforward(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                          energy_cap, attractor, status, n_trap, torque=0.0,
+                          running_theta0=0.0, running_g=None, running_top=math.inf):
+    """Label orbits one per ``prange`` iteration with ``math.sin`` (kernel contract in
+    :mod:`atlas.kernels`). The plain implementation that the fast kernels are measured and
+    checked against. With τ = 0 and no running barrier it runs the τ = 0 specialisation
+    (the kernel of earlier versions), else the tilted one."""
+    if not uses_torque(torque, running_g):
+        _label_straightforward(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
+                               energy_cap, attractor, status, n_trap)
+        return
+    model = torque_model(omega0, torque, running_theta0, running_g, running_top)
+    _label_straightforward_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                  check_every, energy_cap, model, attractor, status, n_trap)
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)
@@ -154,4 +319,17 @@ def record_straightforward(theta, theta_dot, alpha, omega0, dt, every, out):
         for i in range(1, out.shape[1]):
             for _ in range(every):
                 th, v = rk4_step(th, v, alpha, omega0, dt)
+            out[0, i, j], out[1, i, j] = th, v
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)
+def record_torque(theta, theta_dot, alpha, omega0, torque, dt, every, out):
+    """:func:`record_straightforward` for θ̈ = −ω0² sin θ − 2αθ̇ + τ (the τ ≠ 0 labelling
+    kernels' step): ``out[:, i, j]`` = (θ, θ̇) of orbit j after i·``every`` RK4 steps."""
+    for j in nb.prange(theta.size):
+        th, v = theta[j], theta_dot[j]
+        out[0, 0, j], out[1, 0, j] = th, v
+        for i in range(1, out.shape[1]):
+            for _ in range(every):
+                th, v = rk4_step_torque(th, v, alpha, omega0, dt, torque)
             out[0, i, j], out[1, i, j] = th, v

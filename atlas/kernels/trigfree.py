@@ -34,9 +34,9 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit
+from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
 from .fastsin import SIN_FASTMATH, sin_cos_vers
-from .rk4 import INV_TWO_PI
+from .rk4 import INV_TWO_PI, TWO_PI, running_test, torque_model
 
 #: Steps between two re-synchronisations of (c, s) in the fixed-steps kernels (the labelling
 #: kernels re-synchronise at every trap test instead, the default ``check_every`` = 16).
@@ -109,6 +109,74 @@ sync_poly = make_sync(sin_cos_vers)
 sync_libm = make_sync(_libm_sin_cos_vers)
 
 
+# ------------------------------------------------------------------------- torque τ ≠ 0
+# Separate specialisations (as in :mod:`atlas.kernels.rk4`): the τ = 0 code above is that of
+# earlier versions, unchanged.
+
+
+def make_trigfree_step_torque():
+    """Return a jitted ``step(theta, theta_dot, c, s, alpha, omega0, dt, torque)``: one RK4
+    step of the extended system with θ̇' = −ω0² s − 2αθ̇ + τ."""
+
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def step(theta, theta_dot, c, s, alpha, omega0, dt, torque):
+        w2 = omega0 * omega0
+        a2 = 2.0 * alpha
+        h2 = 0.5 * dt
+        k1v = torque - w2 * s - a2 * theta_dot
+        k1c = -s * theta_dot
+        k1s = c * theta_dot
+        v2 = theta_dot + h2 * k1v
+        c2 = c + h2 * k1c
+        s2 = s + h2 * k1s
+        k2v = torque - w2 * s2 - a2 * v2
+        k2c = -s2 * v2
+        k2s = c2 * v2
+        v3 = theta_dot + h2 * k2v
+        c3 = c + h2 * k2c
+        s3 = s + h2 * k2s
+        k3v = torque - w2 * s3 - a2 * v3
+        k3c = -s3 * v3
+        k3s = c3 * v3
+        v4 = theta_dot + dt * k3v
+        c4 = c + dt * k3c
+        s4 = s + dt * k3s
+        k4v = torque - w2 * s4 - a2 * v4
+        k4c = -s4 * v4
+        k4s = c4 * v4
+        h6 = dt / 6.0
+        return (
+            theta + h6 * (theta_dot + 2.0 * (v2 + v3) + v4),
+            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
+            c + h6 * (k1c + 2.0 * (k2c + k3c) + k4c),
+            s + h6 * (k1s + 2.0 * (k2s + k3s) + k4s),
+        )
+
+    return step
+
+
+def make_sync_torque(sin_cos_vers_impl):
+    """Return a jitted ``sync(theta, theta_dot, omega0, torque, shift, vers_shift)
+    -> (c, s, k, E_k)``: the re-synchronised c = cos θ, s = sin θ, the tilted well
+    k = round((θ + θ*)/2π) and its energy E_k = ½θ̇² + ω0²((1 − cos θ) − (1 − cos θ*))
+    − τ(φ − θ*) (contract of :mod:`atlas.kernels`; ``shift`` = θ*, ``vers_shift`` = 1 − cos θ*)."""
+
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def sync(theta, theta_dot, omega0, torque, shift, vers_shift):
+        k = math.floor((theta + shift) * INV_TWO_PI + 0.5)
+        s, c, vers = sin_cos_vers_impl(theta)
+        phi = theta - TWO_PI * k
+        return c, s, k, (0.5 * theta_dot * theta_dot + omega0 * omega0 * (vers - vers_shift)
+                         - torque * (phi - shift))
+
+    return sync
+
+
+trigfree_step_torque = make_trigfree_step_torque()
+sync_poly_torque = make_sync_torque(sin_cos_vers)
+sync_libm_torque = make_sync_torque(_libm_sin_cos_vers)
+
+
 @nb.njit(nogil=True, fastmath=SIN_FASTMATH)
 def label_orbit_trigfree(theta, theta_dot, alpha, omega0, dt, n_checks, check_every,
                          energy_cap):
@@ -127,14 +195,36 @@ def label_orbit_trigfree(theta, theta_dot, alpha, omega0, dt, n_checks, check_ev
     return UNRESOLVED, 0, -1
 
 
+@nb.njit(nogil=True, fastmath=SIN_FASTMATH)
+def label_orbit_trigfree_torque(theta, theta_dot, alpha, omega0, dt, n_checks, check_every,
+                                energy_cap, model):
+    """Label one orbit of the tilted pendulum with the trig-free method, libm sin/cos at the
+    re-synchronisation (kernel contract in :mod:`atlas.kernels`; ``model`` from
+    :func:`atlas.kernels.rk4.torque_model`); returns (status, k, n_trap)."""
+    torque, shift, vers, sign, r_theta0, r_g, r_top, _ = model
+    for j in range(n_checks + 1):
+        if not (math.isfinite(theta) and math.isfinite(theta_dot)):
+            return NONFINITE, 0, -1
+        c, s, k, energy = sync_libm_torque(theta, theta_dot, omega0, torque, shift, vers)
+        if energy < energy_cap:
+            return TRAPPED, k, j * check_every
+        if running_test(theta, theta_dot, sign, r_theta0, r_g, r_top):
+            return RUNNING, 0, j * check_every
+        if j == n_checks:
+            break
+        for _ in range(check_every):
+            theta, theta_dot, c, s = trigfree_step_torque(theta, theta_dot, c, s, alpha,
+                                                          omega0, dt, torque)
+    return UNRESOLVED, 0, -1
+
+
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
-def label_trigfree_straightforward(
+def _label_trigfree_straightforward(
     theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap,
     attractor, status, n_trap,
 ):
-    """The trig-free method one orbit per ``prange`` iteration, libm at the
-    re-synchronisation (kernel contract in :mod:`atlas.kernels`): the plain form of the
-    method, against which its lane kernel is checked."""
+    """The τ = 0 specialisation of :func:`label_trigfree_straightforward` (the kernel of
+    earlier versions, unchanged)."""
     for i in nb.prange(theta0.size):
         st, k, nt = label_orbit_trigfree(theta0[i], theta_dot0[i], alpha, omega0, dt,
                                          n_checks, check_every, energy_cap)
@@ -142,6 +232,37 @@ def label_trigfree_straightforward(
         n_trap[i] = nt
         if st == TRAPPED:
             attractor[i] = np.int32(k)
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def _label_trigfree_straightforward_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                           check_every, energy_cap, model, attractor, status,
+                                           n_trap):
+    for i in nb.prange(theta0.size):
+        st, k, nt = label_orbit_trigfree_torque(theta0[i], theta_dot0[i], alpha, omega0, dt,
+                                                n_checks, check_every, energy_cap, model)
+        status[i] = st
+        n_trap[i] = nt
+        if st == TRAPPED:
+            attractor[i] = np.int32(k)
+
+
+def label_trigfree_straightforward(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                   check_every, energy_cap, attractor, status, n_trap,
+                                   torque=0.0, running_theta0=0.0, running_g=None,
+                                   running_top=math.inf):
+    """The trig-free method one orbit per ``prange`` iteration, libm at the
+    re-synchronisation (kernel contract in :mod:`atlas.kernels`): the plain form of the
+    method, against which its lane kernel is checked. τ = 0 without a running barrier runs
+    the τ = 0 specialisation (the kernel of earlier versions), else the tilted one."""
+    if not uses_torque(torque, running_g):
+        _label_trigfree_straightforward(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                        check_every, energy_cap, attractor, status, n_trap)
+        return
+    model = torque_model(omega0, torque, running_theta0, running_g, running_top)
+    _label_trigfree_straightforward_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks,
+                                           check_every, energy_cap, model, attractor, status,
+                                           n_trap)
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
@@ -159,4 +280,22 @@ def record_trigfree(theta, theta_dot, alpha, omega0, dt, every, out):
                 n += 1
                 if n % SYNC_EVERY == 0:
                     c, s, _, _ = sync_libm(th, v, omega0)
+            out[0, i, j], out[1, i, j] = th, v
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def record_trigfree_torque(theta, theta_dot, alpha, omega0, torque, dt, every, out):
+    """:func:`record_trigfree` for θ̈ = −ω0² sin θ − 2αθ̇ + τ (libm re-synchronisation every
+    ``SYNC_EVERY`` steps): ``out[:, i, j]`` = (θ, θ̇) of orbit j after i·``every`` steps."""
+    for j in nb.prange(theta.size):
+        th, v = theta[j], theta_dot[j]
+        c, s = math.cos(th), math.sin(th)
+        out[0, 0, j], out[1, 0, j] = th, v
+        n = 0
+        for i in range(1, out.shape[1]):
+            for _ in range(every):
+                th, v, c, s = trigfree_step_torque(th, v, c, s, alpha, omega0, dt, torque)
+                n += 1
+                if n % SYNC_EVERY == 0:
+                    c, s = math.cos(th), math.sin(th)
             out[0, i, j], out[1, i, j] = th, v
