@@ -41,32 +41,38 @@ of the bracket depends on the regime:
 P(v) − v = 0 is solved by Brent's method; P is scipy's DOP853 (Hairer, Nørsett & Wanner,
 *Solving ODEs I*, §II.5) in time with a terminal event at θ = θs + 2π.
 
-**The certificate** (:func:`running_barrier`, :func:`check_barrier`): a forward-invariant
-region that contains the cycle and no rest state, whose every orbit converges to the cycle;
-the argument is in :func:`check_barrier`'s docstring.
+**The certificate** (:func:`running_barrier`): a forward-invariant region that contains the
+cycle and no rest state, so that every orbit entering it converges to the cycle (the
+argument is in :func:`check_barrier`'s docstring, which verifies a region from its stored
+numbers alone). Given the kernels' RK4 step dt it is invariant under that step too, with
+margins from :func:`rk4_allowance`. It comes as a :class:`RunningCertificate`, an
+:class:`atlas.labels.RunningBarrier` (what :func:`atlas.label` takes as ``running`` and the
+kernels test) that also records ε, the verified margin and dt; :func:`contains` tests
+membership with numpy.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
+from .labels import RunningBarrier
 from .manifold import START_DISTANCE
 
-__all__ = ["LimitCycle", "RunningBarrier", "BarrierCheck", "limit_cycle",
+__all__ = ["LimitCycle", "RunningCertificate", "BarrierCheck", "limit_cycle",
            "homoclinic_threshold", "running_barrier", "check_barrier", "contains",
-           "CYCLE_SAMPLES", "BARRIER_SAMPLES", "TOP_FACTOR"]
+           "rk4_allowance", "CYCLE_SAMPLES", "BARRIER_SAMPLES", "TOP_MARGIN"]
 
 #: Samples of the cycle over one turn (the curve stored and drawn), θ uniform.
 CYCLE_SAMPLES = 1024
 #: Segments M of the barrier's lower polyline (M + 1 samples over one turn, θ uniform).
 BARRIER_SAMPLES = 4096
-#: The upper line θ̇ = top of the barrier, top = TOP_FACTOR·(|τ| + ω0²)/(2α): strictly above
-#: the speed beyond which θ̈ < 0 everywhere.
-TOP_FACTOR = 1.0 + 1e-3
+#: The least relative margin q of the barrier's upper line θ̇ = top = (1 + q)(|τ| + ω0²)/(2α):
+#: strictly above the speed beyond which θ̈ < 0 everywhere.
+TOP_MARGIN = 1e-3
 #: Distance φ = θ − π/2 [rad] from the saddle-node (τ = ω0²) of the start on its centre
 #: manifold.
 _CENTRE_START = 1e-3
@@ -268,46 +274,69 @@ def homoclinic_threshold(alpha: float, omega0: float, *, rtol: float = 1e-12) ->
     return brentq(outcome, 0.0, omega0**2, xtol=1e-15 * omega0**2, rtol=1e-13)
 
 
-@dataclass(frozen=True)
-class RunningBarrier:
-    """A certified region of orbits that converge to the running limit cycle.
+@dataclass(frozen=True, kw_only=True)
+class RunningCertificate(RunningBarrier):
+    """A :class:`atlas.labels.RunningBarrier` (what the kernels test, and what
+    :func:`atlas.label` takes as ``running``) with the record of its verification.
 
-    In the canonical frame (τ > 0) the region is the band {g(θ) ≤ θ̇ ≤ top} of the cylinder,
-    with g the polyline through the samples ``g`` at θ = theta0 + 2πi/M (i = 0…M, linear in
-    between), continued 2π-periodically (it jumps from g[M] down to g[0] at theta0 + 2πj).
-    For direction −1 the region is its mirror image: (θ, θ̇) is in it when (−θ, −θ̇) is in
-    the band (:func:`contains`).
+    The region, in the canonical frame (τ > 0), is the band {g(θ) ≤ θ̇ ≤ top} of the cylinder,
+    g the polyline through the samples ``g`` at θ = theta0 + 2πi/M (i = 0…M, linear in
+    between), continued 2π-periodically (it drops from g[M] to g[0] at theta0 + 2πj); for
+    direction −1 its mirror image: (θ, θ̇) is in it when (−θ, −θ̇) is in the band
+    (:func:`contains`).
 
     theta0:          θa [rad], canonical frame: where the cycle is slowest.
     g:               float64 [rad s⁻¹], M + 1 samples of the lower curve, all > 0, g[M] ≥ g[0].
     top:             the upper line [rad s⁻¹], > (|τ| + ω0²)/(2α).
     direction:       +1 or −1, the sign of τ.
     epsilon:         ε [rad s⁻²] of the construction dg/dθ = (θ̈(θ, g) − ε)/g.
-    verified_margin: the certified lower bound of d/dt(θ̇ − g(θ)) on the curve θ̇ = g(θ)
-                     [rad s⁻²] (:func:`check_barrier`), > 0.
+    verified_margin: the certified lower bound of d/dt(θ̇ − g(θ)) on the lower curve, less the
+                     RK4 allowance when ``dt`` is set [rad s⁻²] (:func:`check_barrier`), > 0.
+    dt:              the RK4 step [s] whose map the region is also invariant under, or None
+                     (the exact flow only).
     """
 
-    theta0: float
-    g: np.ndarray
-    top: float
-    direction: int
     epsilon: float
     verified_margin: float
+    dt: float | None = None
 
 
 @dataclass(frozen=True)
 class BarrierCheck:
     """Outcome of :func:`check_barrier`: ``ok``, the ``reason`` when not, and ``margin``, the
-    certified lower bound of d/dt(θ̇ − g(θ)) over the whole lower curve [rad s⁻²]."""
+    certified lower bound of d/dt(θ̇ − g(θ)) over the whole lower curve, less the RK4
+    allowance when a step is given [rad s⁻²]."""
 
     ok: bool
     reason: str
     margin: float
 
 
-def check_barrier(alpha: float, omega0: float, torque: float, barrier) -> BarrierCheck:
+def rk4_allowance(alpha: float, omega0: float, torque: float, dt: float, speed, slope=0.0):
+    """The rate [rad s⁻²] at which the flow must cross a boundary piece (at speeds up to
+    ``speed`` [rad s⁻¹], slope ``slope`` [s⁻¹]; arrays broadcast) for the RK4 step of ``dt``
+    [s] to cross it inward as well: (ω0² + |τ|)(Λ·dt)⁴(1 + |s|/Λ)/50, Λ = speed + ω0 + 2α.
+
+    RK4's local error per step is dt⁵ times fifth derivatives of the solution, with
+    coefficients of about 1/120 (Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.3). Along
+    θ̈ = τ − ω0² sin θ − 2αθ̇ each time derivative brings a factor of at most Λ
+    (d/dt sin θ = θ̇ cos θ; ω0 and 2α bound the linear rates), and |θ̈| ≤ 2(ω0² + |τ|) below
+    top; so a step moves θ̇ off the exact flow by O((ω0² + |τ|)Λ⁴dt⁵), θ by one factor Λ
+    less, and θ̇ − g(θ) by the first plus |s| times the second. Like
+    :func:`atlas.labels.trap_margin` the constant is measured, not proven:
+    ``tests/test_running.py`` finds RK4's local error per unit time below 1/20 of the
+    allowance (in θ̇, and in θ times Λ) throughout the regions of its cases, for dt up to
+    0.1 s; a boundary crossed faster than the allowance is crossed inward by the step too.
+    """
+    lam = np.asarray(speed) + omega0 + 2.0 * alpha
+    return (omega0**2 + abs(torque)) * (lam * dt) ** 4 * (1.0 + np.abs(slope) / lam) / 50.0
+
+
+def check_barrier(alpha: float, omega0: float, torque: float, barrier, *,
+                  dt: float | None = None) -> BarrierCheck:
     """Verify that ``barrier`` (anything with theta0, g, top, direction) is forward invariant
-    for θ̈ = τ − ω0² sin θ − 2αθ̇, from its stored numbers alone (not from its construction).
+    for θ̈ = τ − ω0² sin θ − 2αθ̇, from its stored numbers alone (not from its construction),
+    and with ``dt`` [s] under the RK4 step of dt too.
 
     Checks, in the canonical frame (τ > 0; for τ < 0 the mirror image, direction −1):
 
@@ -324,6 +353,11 @@ def check_barrier(alpha: float, omega0: float, torque: float, barrier) -> Barrie
        the Lipschitz bound (ω0² + (2α + |s|)|s|)·h/2 and as rigorous). So
        min Φ ≥ min(Φ(a), Φ(b)) − ω0²h²/8 − (rounding: 64 ulp of the terms), which must be > 0
        on every segment; ``margin`` is the least such bound.
+
+    With ``dt``, the margins of 2 and 4 must also exceed :func:`rk4_allowance` (at the
+    speed top, and at each segment's highest g and its slope): then the RK4 step, too, moves
+    states on or near the boundary inward. The vertical piece needs nothing more: a step
+    advances θ by about θ̇·dt ≥ g·dt, far more than its error.
 
     Then the closed region is positively invariant: the flow points strictly inward across
     every piece of its boundary (the upper line, the lower curve, the vertical piece). It is
@@ -346,6 +380,10 @@ def check_barrier(alpha: float, omega0: float, torque: float, barrier) -> Barrie
                             -math.inf)
     if not barrier.top > _ceiling(alpha, omega0, tau):
         return BarrierCheck(False, "top must exceed (|torque| + omega0^2)/(2 alpha)", -math.inf)
+    if dt is not None and not (2.0 * alpha * barrier.top - tau - w2
+                               > rk4_allowance(alpha, omega0, tau, dt, barrier.top)):
+        return BarrierCheck(False, f"top is too close to (|torque| + omega0^2)/(2 alpha) for "
+                            f"the RK4 step dt = {dt:g}", -math.inf)
     if not g.max() < barrier.top:
         return BarrierCheck(False, "max g must be below top", -math.inf)
     if not g[-1] >= g[0]:
@@ -361,11 +399,14 @@ def check_barrier(alpha: float, omega0: float, torque: float, barrier) -> Barrie
     phi_b = tau - w2 * sin[1:] - c * g[1:]
     size = tau + w2 * (1.0 + np.abs(theta[1:])) + np.abs(c) * g[1:]
     bound = np.minimum(phi_a, phi_b) - w2 * h * h / 8.0 - 64.0 * np.finfo(float).eps * size
+    if dt is not None:
+        bound = bound - rk4_allowance(alpha, omega0, tau, dt, np.maximum(g[:-1], g[1:]), s)
     margin = float(bound.min())
     if not margin > 0.0:
         i = int(bound.argmin())
+        step = "" if dt is None else f" with the RK4 step dt = {dt:g}"
         return BarrierCheck(False, f"the flow is not certified to cross the lower curve "
-                            f"upward on segment {i} (bound {margin:.3g})", margin)
+                            f"upward{step} on segment {i} (bound {margin:.3g})", margin)
     return BarrierCheck(True, "", margin)
 
 
@@ -409,9 +450,13 @@ def _margin_for(alpha, omega0, tau, theta_a, v0):
 
 
 def running_barrier(alpha: float, omega0: float, torque: float, cycle: LimitCycle | None = None,
-                    *, samples: int = BARRIER_SAMPLES) -> RunningBarrier | None:
-    """A verified :class:`RunningBarrier` around the running limit cycle, or None where there
-    is no cycle. ``cycle``: :func:`limit_cycle`'s result, computed here if not given.
+                    *, dt: float | None = None,
+                    samples: int = BARRIER_SAMPLES) -> RunningCertificate | None:
+    """A verified :class:`RunningCertificate` around the running limit cycle (pass it to
+    :func:`atlas.label` as ``running``), or None where there is no cycle. ``cycle``:
+    :func:`limit_cycle`'s result, computed here if not given. ``dt`` [s]: the RK4 step of
+    the kernels that will test it; the region is then verified to be invariant under that
+    step too (:func:`check_barrier`). Without it, under the exact flow only.
 
     Construction (canonical frame, τ > 0): θa is the cycle sample where it is slowest and
     v0 = c·min θ̇ of the cycle, c from 0.01 up (a lower curve certifies more orbits, and
@@ -421,9 +466,13 @@ def running_barrier(alpha: float, omega0: float, torque: float, cycle: LimitCycl
     polyline's chord error in Φ is about g·h·|g''|/2, and where the curve passes slowly over
     a saddle it is hyperbola-like with g·g'' bounded, g'' itself ~ 1/g.) ε = 0 would follow
     an orbit, which below the cycle gains speed over a turn, P(v0) > v0; ε is 3/4 of the
-    largest value that still returns g(θa + 2π) ≥ v0. The top is
-    TOP_FACTOR·(|τ| + ω0²)/(2α), above the cycle: at the cycle's fastest point θ̈ = 0, so its
-    speed there is at most (|τ| + ω0²)/(2α).
+    largest value that still returns g(θa + 2π) ≥ v0.
+
+    The top is (1 + q)(|τ| + ω0²)/(2α), above the cycle (at the cycle's fastest point θ̈ = 0,
+    so its speed there is at most (|τ| + ω0²)/(2α)); there θ̈ ≤ −q(|τ| + ω0²). q is
+    TOP_MARGIN, or with ``dt`` twice what :func:`rk4_allowance` asks at speed 1.1·(|τ| +
+    ω0²)/(2α) if more; ValueError where that exceeds 0.1 (dt too coarse for the speeds of
+    the rotation: Λ·dt ≳ 0.5 rad per step).
 
     The first candidate that :func:`check_barrier` accepts is returned, trying each c with
     M = ``samples``, then 4× and 16× as many segments (the chord error shrinks like h; close
@@ -435,12 +484,20 @@ def running_barrier(alpha: float, omega0: float, torque: float, cycle: LimitCycl
     if cycle is None:
         return None
     direction, tau = cycle.direction, abs(torque)
-    top = TOP_FACTOR * _ceiling(alpha, omega0, tau)
+    ceiling = _ceiling(alpha, omega0, tau)
+    q = TOP_MARGIN
+    if dt is not None:
+        q = max(q, 2.0 * float(rk4_allowance(alpha, omega0, tau, dt, 1.1 * ceiling))
+                / (tau + omega0**2))
+        if q > 0.1:
+            raise ValueError(f"dt = {dt:g} s is too coarse for the running speeds "
+                             f"~{ceiling:.3g} rad/s (RK4's error near the top)")
+    top = (1.0 + q) * ceiling
     speed = direction * cycle.theta_dot  # canonical frame
     if not speed.max() < top:
         raise RuntimeError("the limit cycle lies above the barrier's top")
     slowest = int(speed.argmin())
-    theta_a = direction * cycle.theta[slowest]
+    theta_a = float(direction * cycle.theta[slowest])
     reasons = []
     for c in _START_FRACTIONS:
         v0 = c * speed[slowest]
@@ -451,11 +508,12 @@ def running_barrier(alpha: float, omega0: float, torque: float, cycle: LimitCycl
             g = _lower_curve(alpha, omega0, tau, theta_a, v0, epsilon, m)
             if g is None:
                 break
-            barrier = RunningBarrier(theta0=theta_a, g=g, top=top, direction=direction,
-                                     epsilon=epsilon, verified_margin=math.nan)
-            check = check_barrier(alpha, omega0, torque, barrier)
+            candidate = SimpleNamespace(theta0=theta_a, g=g, top=top, direction=direction)
+            check = check_barrier(alpha, omega0, torque, candidate, dt=dt)
             if check.ok:
-                return dataclasses.replace(barrier, verified_margin=check.margin)
+                return RunningCertificate(theta0=theta_a, g=g, top=top, direction=direction,
+                                          epsilon=epsilon, verified_margin=check.margin,
+                                          dt=dt)
             reasons.append(f"c = {c}, M = {m}: {check.reason}")
     raise RuntimeError("no running barrier verified: " + "; ".join(reasons))
 

@@ -9,19 +9,22 @@ Dynamics and Chaos*, §8.5) and the large-torque limit ⟨θ̇⟩ → τ/(2α); 
 
 from __future__ import annotations
 
-import dataclasses
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from scipy.integrate import simpson, solve_ivp
 
+from atlas.defaults import DT
+from atlas.labels import RunningBarrier
 from atlas.running import (
-    RunningBarrier,
+    RunningCertificate,
     check_barrier,
     contains,
     homoclinic_threshold,
     limit_cycle,
+    rk4_allowance,
     running_barrier,
 )
 
@@ -46,7 +49,8 @@ def cycles():
 
 @pytest.fixture(scope="module")
 def barriers(cycles):
-    return {name: running_barrier(*CASES[name], cycles[name]) for name in CASES}
+    """The barriers for the kernels' default RK4 step."""
+    return {name: running_barrier(*CASES[name], cycles[name], dt=DT) for name in CASES}
 
 
 def dop853(alpha, omega0, torque, y0, t_end, **kwargs):
@@ -61,6 +65,30 @@ def dop853(alpha, omega0, torque, y0, t_end, **kwargs):
                                - 2 * alpha * theta_dot])
 
     return solve_ivp(rhs, (0.0, t_end), y0.ravel(), method="DOP853", **kwargs)
+
+
+def rk4_step(alpha, omega0, torque, theta, theta_dot, dt):
+    """One classical RK4 step of the actual equation (the kernels' method "rk4")."""
+
+    def f(th, v):
+        return v, torque - omega0**2 * np.sin(th) - 2 * alpha * v
+
+    k1 = f(theta, theta_dot)
+    k2 = f(theta + dt / 2 * k1[0], theta_dot + dt / 2 * k1[1])
+    k3 = f(theta + dt / 2 * k2[0], theta_dot + dt / 2 * k2[1])
+    k4 = f(theta + dt * k3[0], theta_dot + dt * k3[1])
+    return (theta + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]),
+            theta_dot + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]))
+
+
+def region_points(barrier, n, seed):
+    """Random points of the barrier's region (actual coordinates)."""
+    rng = np.random.default_rng(seed)
+    theta = rng.uniform(-TWO_PI, TWO_PI, 40 * n)
+    theta_dot = barrier.direction * rng.uniform(0, barrier.top, 40 * n)
+    inside = contains(barrier, theta, theta_dot)
+    assert inside.sum() >= n
+    return theta[inside][:n], theta_dot[inside][:n]
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -145,8 +173,11 @@ def test_threshold_agrees_with_the_existence_of_the_cycle():
 def test_barrier_is_verified_and_holds_the_cycle(case, cycles, barriers):
     alpha, omega0, torque = CASES[case]
     b, c = barriers[case], cycles[case]
-    check = check_barrier(alpha, omega0, torque, b)
+    assert isinstance(b, RunningBarrier) and isinstance(b, RunningCertificate) and b.dt == DT
+    check = check_barrier(alpha, omega0, torque, b, dt=DT)
     assert check.ok and check.margin == b.verified_margin > 0
+    exact = check_barrier(alpha, omega0, torque, b)  # the exact flow needs no RK4 allowance
+    assert exact.ok and exact.margin > check.margin
     assert b.top > (abs(torque) + omega0**2) / (2 * alpha) and b.g.dtype == np.float64
     # on the cycle, just below it, and one turn on either side
     for k in (-1, 0, 3):
@@ -193,23 +224,74 @@ def test_barrier_never_holds_a_rest_state_or_the_energy_trap(case, barriers):
 
 @pytest.mark.parametrize("case", CASES)
 def test_orbits_in_the_region_stay_there_and_reach_the_cycle(case, cycles, barriers):
+    """Exact (DOP853) and RK4 (step DT) orbits from random points of the region never leave
+    it in 200 s, and the exact ones end on the cycle."""
     alpha, omega0, torque = CASES[case]
     b, c = barriers[case], cycles[case]
-    rng = np.random.default_rng(7)
-    theta = rng.uniform(-TWO_PI, TWO_PI, 400)
-    theta_dot = c.direction * rng.uniform(0, b.top, 400)
-    inside = contains(b, theta, theta_dot)
-    theta, theta_dot = theta[inside][:12], theta_dot[inside][:12]
-    assert theta.size == 12
+    theta, theta_dot = region_points(b, 12, seed=7)
+    n = theta.size
     t = np.linspace(0, 200, 20_001)
     sol = dop853(alpha, omega0, torque, np.concatenate([theta, theta_dot]), 200.0,
                  rtol=1e-10, atol=1e-10, t_eval=t)
-    n = theta.size
     assert contains(b, sol.y[:n], sol.y[n:]).all()  # never leave
     # and end on the cycle: θ̇ against the cycle's θ̇ at the same angle
     phase = np.mod(c.direction * (sol.y[:n, -1] - c.theta0), TWO_PI)
     on_cycle = np.interp(phase, c.direction * (c.theta - c.theta0), c.theta_dot)
     np.testing.assert_allclose(sol.y[n:, -1], on_cycle, rtol=0, atol=1e-5)
+    for _ in range(round(200 / DT)):
+        theta, theta_dot = rk4_step(alpha, omega0, torque, theta, theta_dot, DT)
+        assert contains(b, theta, theta_dot).all()
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_rk4_step_maps_the_boundary_inward(case, barriers):
+    """States on the lower curve (at its vertices and between them), on the seam and on the
+    top line (each 1e-9 inside, against rounding) stay in the region after one RK4 step of
+    DT."""
+    alpha, omega0, torque = CASES[case]
+    b = barriers[case]
+    d, m = b.direction, b.g.size - 1
+    u = b.theta0 + TWO_PI * np.arange(0, m, 0.5) / m
+    g = np.interp(u, b.theta0 + TWO_PI * np.arange(m + 1) / m, b.g)
+    seam = np.full(50, b.theta0 + TWO_PI * (1 - 1e-12))
+    theta = np.concatenate([u, seam, u[::64]])
+    theta_dot = np.concatenate([g + 1e-9, np.linspace(b.g[-1], b.top - 1e-9, 50),
+                                np.full(u[::64].size, b.top - 1e-9)])
+    assert contains(b, d * theta, d * theta_dot).all()
+    after = rk4_step(alpha, omega0, torque, d * theta, d * theta_dot, DT)
+    assert contains(b, *after).all()
+
+
+@pytest.mark.parametrize(("case", "dt"), [("bstab", 0.01), ("bstab", 0.05), ("bistable", 0.1),
+                                          ("omega0=1.5", 0.1), ("reversed", 0.05),
+                                          ("monostable", 0.05)])
+def test_rk4_allowance_covers_the_local_error(case, dt, barriers):
+    """RK4's local error per unit time, against DOP853 at rtol 1e-13, at random points of the
+    region: below 1/10 of the allowance in θ̇, and in θ times Λ = |θ̇| + ω0 + 2α."""
+    alpha, omega0, torque = CASES[case]
+    theta, theta_dot = region_points(barriers[case], 200, seed=3)
+    n = theta.size
+    exact = dop853(alpha, omega0, torque, np.concatenate([theta, theta_dot]), dt, rtol=1e-13,
+                   atol=1e-13).y[:, -1]
+    rk4 = rk4_step(alpha, omega0, torque, theta, theta_dot, dt)
+    allowance = rk4_allowance(alpha, omega0, torque, dt, np.abs(theta_dot))
+    lam = np.abs(theta_dot) + omega0 + 2 * alpha
+    assert np.all(np.abs(rk4[1] - exact[n:]) / dt < allowance / 10)
+    assert np.all(lam * np.abs(rk4[0] - exact[:n]) / dt < allowance / 10)
+
+
+def test_rk4_step_too_coarse_is_refused(cycles, barriers):
+    alpha, omega0, torque = CASES["bstab"]
+    with pytest.raises(ValueError, match="too coarse"):
+        running_barrier(alpha, omega0, torque, cycles["bstab"], dt=0.1)
+    # the exact flow's barrier keeps its top too close for the RK4 step dt = 0.1
+    alpha, omega0, torque = CASES["omega0=1.5"]
+    exact = running_barrier(alpha, omega0, torque, cycles["omega0=1.5"])
+    assert exact.dt is None and check_barrier(alpha, omega0, torque, exact).ok
+    check = check_barrier(alpha, omega0, torque, exact, dt=0.1)
+    assert not check.ok and "top" in check.reason and "RK4" in check.reason
+    assert check_barrier(alpha, omega0, torque, running_barrier(
+        alpha, omega0, torque, cycles["omega0=1.5"], dt=0.1), dt=0.1).ok
 
 
 def test_verification_rejects_broken_barriers(cycles, barriers):
@@ -218,7 +300,8 @@ def test_verification_rejects_broken_barriers(cycles, barriers):
     b, c = barriers["bstab"], cycles["bstab"]
 
     def reason(**changes):
-        check = check_barrier(alpha, omega0, torque, dataclasses.replace(b, **changes))
+        fields = dict(theta0=b.theta0, g=b.g, top=b.top, direction=b.direction) | changes
+        check = check_barrier(alpha, omega0, torque, SimpleNamespace(**fields))
         assert not check.ok
         return check.reason
 
@@ -256,8 +339,7 @@ def test_verification_bounds_the_flow_inside_each_segment():
     top = 1.01 * (torque + omega0**2) / (2 * alpha)
 
     def line(level):
-        return RunningBarrier(theta0=math.pi / 4, g=np.full(5, level), top=top, direction=1,
-                              epsilon=0.0, verified_margin=math.nan)
+        return RunningBarrier(theta0=math.pi / 4, g=np.full(5, level), top=top, direction=1)
 
     rejected = check_barrier(alpha, omega0, torque, line(1.5))
     assert not rejected.ok and "cross the lower curve upward" in rejected.reason
