@@ -41,11 +41,12 @@ import math
 
 import numpy as np
 
-from .kernels import NEAR_BOUNDARY, TRAPPED
+from .kernels import NEAR_BOUNDARY, RUNNING, TRAPPED
 from .manifold import RTOL_CHECK, StableManifold, basin_areas
 from .model import Pendulum
 
-__all__ = ["SAFETY", "cert_distance", "Certifier", "labelled", "add_tallies"]
+__all__ = ["SAFETY", "cert_distance", "Certifier", "MapOnly", "certifier_for", "labelled",
+           "add_tallies"]
 
 #: Safety factor of d_cert over the measured RK4-vs-exact boundary shift (module docstring).
 SAFETY = 10.0
@@ -182,7 +183,7 @@ class Certifier:
                  "certified": np.int64(np.count_nonzero(new_status == TRAPPED)),
                  "mismatched": np.int64(np.count_nonzero(has_label & ~agree
                                                          & (dist > self.d_cert))),
-                 "unlabelled": np.int64(np.count_nonzero(~has_label))}
+                 **_unlabelled(status)}
         return new_status, dist.astype(np.float32), tally
 
     def _doubt(self, rows, k, has_label, side, clean, theta, theta_dot, n_near):
@@ -225,6 +226,7 @@ class Certifier:
                 "basin_fraction": grid, "basin_fraction_grid_error_bound": bound,
                 "basin_fraction_grid_error": np.abs(grid - exact),
                 "unresolved_fraction": int(tally["unlabelled"]) / n,
+                "running_fraction": int(tally["running"]) / n,
                 "certified_fraction": int(tally["certified"]) / n, "d_cert": self.d_cert,
                 "boundary_shift": self.shift, "boundary_reference_error": self.reference_error,
                 "side_mismatches": int(tally["mismatched"])}
@@ -240,9 +242,65 @@ def add_tallies(tallies) -> dict:
         at = slice(int(t["k0"]) - k0, int(t["k0"]) - k0 + t["count"].size)
         total["count"][at] += t["count"]
         total["bound"][at] += t["bound"]
-    for name in ("certified", "mismatched", "unlabelled"):
+    for name in ("certified", "mismatched", "unlabelled", "running"):
         total[name] = np.int64(sum(int(t[name]) for t in tallies))
     return total
+
+
+def _unlabelled(status) -> dict:
+    """The tally's counts of orbits without a well label: certified running, or neither
+    (unresolved, nonfinite)."""
+    status = np.asarray(status)
+    running = np.count_nonzero(status == RUNNING)
+    return {"running": np.int64(running),
+            "unlabelled": np.int64(np.count_nonzero(~labelled(status)) - running)}
+
+
+class MapOnly:
+    """The certifier of a pendulum whose exact basin boundaries atlas does not compute (a
+    torque τ ≠ 0: the tilted saddles' stable manifolds are not integrated yet). Nothing is
+    certified for the exact equation: every well label is ``near_boundary`` (certified for
+    the RK4 map only), running labels keep their status (certified for the RK4 map by the
+    running barrier), and the exact fractions, boundary distances, d_cert and the grid
+    error bound are NaN: not computed. Same interface as :class:`Certifier`."""
+
+    def __init__(self, pendulum: Pendulum, theta0, theta_dot0):
+        self.pendulum = pendulum
+        self.theta0, self.theta_dot0 = np.asarray(theta0, float), np.asarray(theta_dot0, float)
+        self.n_points = self.theta0.size * self.theta_dot0.size
+        self.d_cert = math.nan
+
+    def tile(self, rows: slice, attractor, status):
+        has_label = labelled(status)
+        k = np.asarray(attractor, np.int64)[has_label]
+        k0 = int(k.min()) if k.size else 0
+        count = np.bincount(k - k0) if k.size else np.zeros(1, np.int64)
+        tally = {"k0": np.int64(k0), "count": count, "bound": np.full(count.size, np.nan),
+                 "certified": np.int64(0), "mismatched": np.int64(0), **_unlabelled(status)}
+        new_status = np.where(has_label, NEAR_BOUNDARY, status).astype(np.int8)
+        return new_status, np.full(np.shape(status), np.nan, np.float32), tally
+
+    def summary(self, tally: dict) -> dict:
+        k0 = int(tally["k0"])
+        ks = np.arange(k0, k0 + tally["count"].size)
+        grid = tally["count"] / self.n_points
+        nan = np.full(ks.size, np.nan)
+        n = self.n_points
+        return {"k": ks, "basin_fraction_exact": nan, "basin_fraction_exact_error": nan,
+                "basin_fraction": grid, "basin_fraction_grid_error_bound": nan,
+                "basin_fraction_grid_error": nan,
+                "unresolved_fraction": int(tally["unlabelled"]) / n,
+                "running_fraction": int(tally["running"]) / n, "certified_fraction": 0.0,
+                "d_cert": math.nan, "boundary_shift": math.nan,
+                "boundary_reference_error": math.nan, "side_mismatches": 0}
+
+
+def certifier_for(pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float):
+    """The certifier of one parameter point: :class:`Certifier` (exact boundaries) for the
+    untilted pendulum, :class:`MapOnly` for τ ≠ 0."""
+    if pendulum.torque != 0.0:
+        return MapOnly(pendulum, theta0, theta_dot0)
+    return Certifier(pendulum, theta0, theta_dot0, shift, tol)
 
 
 def _edge_weights(num: int) -> np.ndarray:

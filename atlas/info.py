@@ -24,6 +24,7 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
     for point in every:
         lines.append(f"pendulum  {point_label(point)}")
         lines += ["  " + line for line in _basin_lines(at_point(ds, point))]
+        lines += ["  " + line for line in _torque_lines(tree, point)]
         sep = point_group(tree, "separatrices", point)
         if sep is not None:
             lines += ["  " + line for line in _separatrix_lines(sep)]
@@ -37,7 +38,7 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
 def _basin_lines(ds: xr.Dataset) -> list[str]:
     """The basins of one parameter point: exact area fractions first, then the grid counts
     with their error bound and measured error, then d_cert and the certified share."""
-    present = ds["basin_fraction_exact"].values + ds["basin_fraction"].values > 0
+    present = (ds["basin_fraction_exact"].values > 0) | (ds["basin_fraction"].values > 0)
     ks = ds["k"].values[present]
     exact = ds["basin_fraction_exact"].values[present]
     exact_err = ds["basin_fraction_exact_error"].values[present]
@@ -46,8 +47,15 @@ def _basin_lines(ds: xr.Dataset) -> list[str]:
     measured = ds["basin_fraction_grid_error"].values[present]
     lines = ["basins    k   area fraction (exact)        grid count   grid error: bound, "
              "measured"]
-    lines += [f"          {int(k):+d}  {e:.14f} ± {ee:.0e}   {g:.6f}     {b:.1e}, {m:.1e}"
+    lines += [f"          {int(k):+d}  "
+              + (f"{e:.14f} ± {ee:.0e}" if e == e else f"{'not computed':<22}")
+              + f"   {g:.6f}     "
+              + (f"{b:.1e}, {m:.1e}" if b == b else "not computed")
               for k, e, ee, g, b, m in zip(ks, exact, exact_err, grid, bound, measured)]
+    running = float(ds["running_fraction"])
+    if running:
+        lines.append(f"running   {running:.6f} of the grid (a count) converges to the running "
+                     "limit cycle: certified for the RK4 map by the running barrier")
     d_cert = float(ds["d_cert"])
     n = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
     certified = int(round(float(ds["certified_fraction"]) * n))
@@ -61,6 +69,29 @@ def _basin_lines(ds: xr.Dataset) -> list[str]:
     if int(ds["side_mismatches"]):
         lines.append(f"warning   {int(ds['side_mismatches'])} labels beyond d_cert disagree "
                      "with the exact boundaries")
+    return lines
+
+
+def _torque_lines(tree: xr.DataTree, point: dict) -> list[str]:
+    """For a pendulum with torque: its rest states or their absence, and its running limit
+    cycle."""
+    if not point.get("torque"):
+        return []
+    lines = []
+    cp = point_group(tree, "critical_points", point)
+    if cp is not None and cp.sizes.get("point", 0) == 0:
+        lines.append("critical  none: |torque| >= omega0^2, every orbit runs")
+    elif cp is not None:
+        kinds = sorted(set(cp["kind"].values.tolist()))
+        lines.append(f"critical  {cp.sizes['point']} in the window (" + ", ".join(kinds)
+                     + "), tilted: rest states at theta = asin(torque/omega0^2) + 2 pi k")
+    cycle = point_group(tree, "limit_cycle", point)
+    if cycle is None:
+        lines.append("cycle     no running limit cycle (below the homoclinic torque)")
+    else:
+        lines.append(f"cycle     running limit cycle: period {float(cycle.attrs['period']):.10g} "
+                     f"s, mean angular velocity {float(cycle.attrs['mean_theta_dot']):.10g} "
+                     f"rad/s (relative error {float(cycle.attrs['relative_error']):.0e})")
     return lines
 
 

@@ -23,12 +23,13 @@ from .errors import AtlasError, InputFileError
 from .kernels import NONFINITE, TRAPPED, UNRESOLVED
 from .labels import CHECK_EVERY, check_integration, n_checks_for, trap_margin
 from .layout import point_group
+from .validate import STATUS_MEANINGS
 
 __all__ = ["Orbit", "integrate", "report", "plot_orbit", "parse_number"]
 
 TWO_PI = 2.0 * math.pi
-STATUS_NAMES = {TRAPPED: "trapped", UNRESOLVED: "unresolved", NONFINITE: "nonfinite",
-                3: "near_boundary"}
+#: The name of each status code (as the file's CF flag_meanings say).
+STATUS_NAMES = STATUS_MEANINGS
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
 
-from .kernels import NEAR_BOUNDARY, TRAPPED  # noqa: E402
+from .kernels import NEAR_BOUNDARY, RUNNING, TRAPPED  # noqa: E402
 from .layout import PARAMETERS, first_point, point_group, point_label, point_of  # noqa: E402
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curves",
@@ -33,6 +33,9 @@ __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curv
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
          "axes.titlesize": 11, "legend.fontsize": 8, "legend.frameon": False}
 SEPARATRIX_COLOR = "red"
+#: The running basin's colour, and the running limit cycle's.
+RUNNING_COLOR, CYCLE_COLOR = "0.82", "black"
+TWO_PI = 2.0 * np.pi
 
 
 def pi_ticks(ax, lo: float, hi: float) -> None:
@@ -56,14 +59,17 @@ def point_title(point: dict[str, float]) -> str:
     return text + (f", τ = {torque:g} rad/s²" if torque else "")
 
 
-def critical_point_markers(ax, theta, is_saddle) -> None:
+def critical_point_markers(ax, theta, is_saddle, tilted: bool = False) -> None:
     """Mark the critical points (θ [rad], 0) on the θ axis: attractors (2πk, 0) as black dots,
-    saddles ((2j+1)π, 0) as open red circles (essay Figure 9), labelled for the legend."""
+    saddles ((2j+1)π, 0) as open red circles (essay Figure 9), labelled for the legend;
+    ``tilted``: a pendulum with torque, whose rest states sit at θ* + 2πk, θ* = asin(τ/ω0²),
+    and saddles at π − θ* + 2πk."""
     theta, is_saddle = np.asarray(theta, float), np.asarray(is_saddle, bool)
     ax.plot(theta[~is_saddle], np.zeros((~is_saddle).sum()), "o", color="black", ms=5,
-            label="attractors (2πk, 0)", zorder=5)
+            label="attractors (θ* + 2πk, 0)" if tilted else "attractors (2πk, 0)", zorder=5)
     ax.plot(theta[is_saddle], np.zeros(is_saddle.sum()), "o", mfc="none",
-            mec=SEPARATRIX_COLOR, mew=1.5, ms=7, label="saddles ((2j+1)π, 0)", zorder=5)
+            mec=SEPARATRIX_COLOR, mew=1.5, ms=7,
+            label="saddles (π − θ* + 2πk, 0)" if tilted else "saddles ((2j+1)π, 0)", zorder=5)
 
 
 def _critical(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
@@ -72,7 +78,26 @@ def _critical(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
     cp = point_group(tree, "critical_points", point_of(ds))
     if cp is None:
         return
-    critical_point_markers(ax, cp["theta"].values, cp["n"].values % 2 != 0)  # odd n: saddles
+    critical_point_markers(ax, cp["theta"].values, cp["n"].values % 2 != 0,  # odd n: saddles
+                           tilted=bool(float(ds["torque"])))
+
+
+def _limit_cycle(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
+    """The running limit cycle of the parameter point that ``ds`` shows (if it has one),
+    repeated 2π-periodically across the window."""
+    cycle = point_group(tree, "limit_cycle", point_of(ds))
+    if cycle is None:
+        return
+    theta, speed = cycle["theta"].values, cycle["theta_dot"].values
+    lo, hi = float(ds["theta0"][0]), float(ds["theta0"][-1])
+    order = np.argsort(theta)
+    theta, speed = theta[order], speed[order]
+    shifts = np.arange(np.floor((lo - theta.max()) / TWO_PI), np.ceil((hi - theta.min()) / TWO_PI)
+                       + 1)
+    for i, shift in enumerate(shifts):
+        ax.plot(theta + TWO_PI * shift, speed, color=CYCLE_COLOR, lw=1.6, ls="--",
+                label=f"limit cycle (period {float(cycle.attrs['period']):.4g} s)"
+                if i == 0 else None)
 
 
 def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
@@ -140,16 +165,27 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4.8))
     k = ds["attractor"].values.astype(float)
-    k[~np.isin(ds["status"].values, (TRAPPED, NEAR_BOUNDARY))] = np.nan
+    status = ds["status"].values
+    k[~np.isin(status, (TRAPPED, NEAR_BOUNDARY))] = np.nan
     finite = k[np.isfinite(k)]
     kmin, kmax = (int(finite.min()), int(finite.max())) if finite.size else (0, 0)
-    levels = np.arange(kmin, kmax + 2) - 0.5
-    cmap = ListedColormap(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10)).with_extremes(
-        bad="white")
+    colors = list(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10))
+    ticks, names = list(range(kmin, kmax + 1)), [f"{k:+d}" for k in range(kmin, kmax + 1)]
+    running = status == RUNNING
+    if running.any():  # the running basin: one more colour after the wells
+        k[running] = kmax + 1
+        colors.append(RUNNING_COLOR)
+        ticks.append(kmax + 1)
+        names.append("running")
+    cmap = ListedColormap(colors).with_extremes(bad="white")
+    levels = np.arange(kmin, kmin + len(colors) + 1) - 0.5
     mesh = _grid_image(ax, ds, k, "mode", cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
-    cbar = ax.figure.colorbar(mesh, ax=ax, ticks=np.arange(kmin, kmax + 1))
-    cbar.set_label("attractor k: orbit settles at (2πk, 0)")
+    cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
+    cbar.ax.set_yticklabels(names)
+    cbar.set_label("attractor k: orbit settles at the rest state of well k"
+                   + ("; running: rotates" if running.any() else ""))
     _separatrices(ax, tree, ds)
+    _limit_cycle(ax, tree, ds)
     _critical(ax, tree, ds)
     ax.set_title(f"Basins of attraction, {point_title(point_of(ds))}")
     ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)

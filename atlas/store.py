@@ -51,11 +51,13 @@ from .tiles import (
 __all__ = ["finalize", "open_atlas", "partial_path", "describe", "FILLS",
            "DamagedTile", "summary_dataset"]
 
-STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3], np.int8),
-                "flag_meanings": "trapped unresolved nonfinite near_boundary",
+STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3, 4], np.int8),
+                "flag_meanings": "trapped unresolved nonfinite near_boundary running",
                 "comment": "trapped: certified for the exact equation (energy trap of the RK4 "
                            "map, and farther than d_cert from every basin boundary); "
-                           "near_boundary: trapped, certified for the RK4 map only"}
+                           "near_boundary: trapped, certified for the RK4 map only; running: "
+                           "in the running barrier (torque), certified for the RK4 map to "
+                           "converge to the running limit cycle"}
 _COMPRESSION = {"compression": "gzip", "compression_opts": DEFLATE_LEVEL, "shuffle": True}
 SCHEMA = "atlas-basin-map/1"
 #: Fill values of the label variables (also the padding of a tile's edge chunk).
@@ -132,6 +134,8 @@ POINT_VARIABLES = {
                                          "(unresolved or nonfinite)"},
     "certified_fraction": {"long_name": "fraction of the grid whose label is certified for "
                                         "the exact equation (status trapped)"},
+    "running_fraction": {"long_name": "fraction of the grid labelled running (a count, not "
+                                      "an area)"},
     "d_cert": {"long_name": "distance to the basin boundaries beyond which RK4 labels are "
                             "certified for the exact equation",
                "comment": "10 x (boundary shift + bisection tol + reference error); NaN: "
@@ -157,7 +161,10 @@ def summary_dataset(layout: Layout, points: list[dict]) -> xr.Dataset:
     for name, attrs in BASIN_VARIABLES.items():
         table = np.zeros((len(points), len(ks)))
         for row, p in zip(table, points):
-            row[np.searchsorted(ks, p["k"])] = p[name]
+            values = np.asarray(p[name], float)
+            if values.size and np.isnan(values).all():
+                row[:] = np.nan  # not computed for this point (no exact boundaries)
+            row[np.searchsorted(ks, p["k"])] = values
         data[name] = ((*lead_dims, "k"), table.reshape(*lead, len(ks)), {"units": "1", **attrs})
     for name, attrs in POINT_VARIABLES.items():
         values = np.array([p[name] for p in points], np.float64).reshape(lead)

@@ -31,10 +31,11 @@ import numpy as np
 import xarray as xr
 
 from . import store, zarrstore
-from .certificate import Certifier, add_tallies
+from . import running
+from .certificate import Certifier, add_tallies, certifier_for
 from .config import Config, config_hash
 from .errors import AtlasError, InputFileError, StorageError
-from .labels import CHECK_EVERY, label, trap_margin
+from .labels import CHECK_EVERY, RunningBarrier, label, trap_margin
 from .layout import PARAMETERS, Layout, node_name, point_label
 from .lock import output_lock
 from .model import Pendulum, critical_points
@@ -91,10 +92,11 @@ def _pendulums(layout: Layout) -> list[Pendulum]:
     return [Pendulum(**layout.point(p)) for p in range(layout.n_params)]
 
 
-def compute_tile(certifier: Certifier, rows: slice, dt, t_max, backend="cpu",
-                 numba_threads=None):
+def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice, dt, t_max,
+                 backend="cpu", numba_threads=None):
     """Label and certify the orbits of one tile: the grid rows ``rows`` of ``certifier``'s
-    parameter point (θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows).
+    parameter point (θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows); ``barrier`` the
+    point's running certificate (None where it has no running limit cycle).
 
     Returns ({variable: array shaped (rows, columns)} for every per-orbit variable of the
     file, the tile's tally). A plain function of picklable arguments, so it can run as a Dask
@@ -106,15 +108,16 @@ def compute_tile(certifier: Certifier, rows: slice, dt, t_max, backend="cpu",
         numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
     p = certifier.pendulum
     res = label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
-                omega0=p.omega0, dt=dt, t_max=t_max, backend=backend)
+                omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
+                running=barrier)
     status, distance, tally = certifier.tile(rows, res.attractor, res.status)
     return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
             "boundary_distance": distance}, tally
 
 
 def _tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
-    return (certifiers[index // layout.bands], layout.tile(index)[1], cfg.integrator.dt,
-            cfg.integrator.t_max)
+    certifier, barrier = certifiers[index // layout.bands]
+    return (certifier, barrier, layout.tile(index)[1], cfg.integrator.dt, cfg.integrator.t_max)
 
 
 def _local_results(cfg, layout, certifiers, todo, backend) -> Iterator[tuple[int, tuple]]:
@@ -208,15 +211,44 @@ def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
     return out
 
 
-def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list) -> list[Certifier]:
-    """One :class:`Certifier` per parameter point, with the boundary shift its separatrices
-    measured (NaN without them: then no label is certified for the exact equation)."""
+def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list,
+                cycles: list) -> list[tuple]:
+    """(certifier, running barrier) of every parameter point: the certifier with the boundary
+    shift its separatrices measured (NaN without them: then no label is certified for the
+    exact equation; :func:`atlas.certificate.certifier_for`), the barrier around its running
+    limit cycle (None without one)."""
     out = []
-    for p, sep in zip(pendulums, traced):
+    for p, sep, cycle in zip(pendulums, traced, cycles):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
-        out.append(Certifier(p, layout.theta0, layout.theta_dot0, shift, tol))
+        built = (None if cycle is None else
+                 running.running_barrier(p.alpha, p.omega0, p.torque, cycle))
+        barrier = (None if built is None else
+                   RunningBarrier(built.theta0, built.g, built.top, built.direction))
+        out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol), barrier))
     return out
+
+
+def _limit_cycles(pendulums: list[Pendulum]) -> list:
+    """The running limit cycle of every parameter point (None where there is none)."""
+    return [running.limit_cycle(p.alpha, p.omega0, p.torque) if p.torque else None
+            for p in pendulums]
+
+
+def limit_cycle_dataset(cycle) -> xr.Dataset:
+    """One parameter point's node of ``/limit_cycle``: the running periodic orbit sampled
+    uniformly in θ over one turn, with its period and mean angular velocity."""
+    return xr.Dataset(
+        {"theta_dot": ("sample", cycle.theta_dot, {"units": "rad s-1",
+                                                   "long_name": "angular velocity"}),
+         "time": ("sample", cycle.time, {"units": "s", "long_name": "time from the first "
+                                                                    "sample"})},
+        coords={"theta": ("sample", cycle.theta, {"units": "rad", "long_name": "angle"})},
+        attrs={"description": "the running limit cycle (steady rotation) of the pendulum with "
+                              "torque: fixed point of the Poincare map over one turn (DOP853)",
+               "period": cycle.period, "period_units": "s",
+               "mean_theta_dot": cycle.mean_theta_dot, "direction": np.int8(cycle.direction),
+               "relative_error": cycle.error})
 
 
 def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.Dataset:
@@ -229,7 +261,7 @@ def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.D
         except Exception as exc:  # a damaged record: OSError, ValueError, BadZipFile
             raise store.DamagedTile(index, exc.__class__.__name__) from None
     points = []
-    for p, (cert, point) in enumerate(zip(certifiers, tallies)):
+    for p, ((cert, _), point) in enumerate(zip(certifiers, tallies)):
         summary = cert.summary(add_tallies(point))
         pendulum = cert.pendulum
         summary["trap_margin"] = trap_margin(cfg.integrator.dt, pendulum.alpha, pendulum.omega0)
@@ -372,12 +404,16 @@ def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], ba
             log.debug("tile %d of %d written", index + 1, layout.n_tiles)
 
 
-def _groups(layout: Layout, pendulums: list[Pendulum], traced: list) -> dict[str, xr.Dataset]:
-    """The per-point groups (path → dataset): ``/critical_points`` and ``/separatrices``."""
+def _groups(layout: Layout, pendulums: list[Pendulum], traced: list,
+            cycles: list) -> dict[str, xr.Dataset]:
+    """The per-point groups (path → dataset): ``/critical_points``, ``/separatrices`` and
+    ``/limit_cycle`` (points with a running cycle only)."""
     lo, hi = float(layout.theta0[0]), float(layout.theta0[-1])
     return {**_per_point(layout, "critical_points",
                          [critical_points_dataset(p, lo, hi) for p in pendulums]),
-            **_per_point(layout, "separatrices", traced)}
+            **_per_point(layout, "separatrices", traced),
+            **_per_point(layout, "limit_cycle",
+                         [None if c is None else limit_cycle_dataset(c) for c in cycles])}
 
 
 def _process_age() -> float | None:
@@ -410,8 +446,9 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     pendulums = _pendulums(tiles.layout)
     traced = _trace_separatrices(cfg, pendulums)
     phase.done("separatrices")
-    certifiers = _certifiers(tiles.layout, pendulums, traced)
-    groups = _groups(tiles.layout, pendulums, traced)
+    cycles = _limit_cycles(pendulums)
+    certifiers = _certifiers(tiles.layout, pendulums, traced, cycles)
+    groups = _groups(tiles.layout, pendulums, traced, cycles)
     phase.done("exact boundaries and areas")
     for _ in range(3):
         _compute_into(tiles, cfg, certifiers, backend, quiet)

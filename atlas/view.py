@@ -34,19 +34,21 @@ import numpy as np
 import xarray as xr
 
 from .errors import AtlasError, InputFileError
-from .kernels import NEAR_BOUNDARY, NONFINITE, TRAPPED, UNRESOLVED
+from .kernels import NEAR_BOUNDARY, TRAPPED
 from .labels import CHECK_EVERY, trap_margin
 from .layout import at_point, point_group
 from .layout import points as parameter_points
+from .validate import STATUS_MEANINGS
 
-__all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json", "DIST_STEPS"]
+__all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json",
+           "DIST_STEPS"]
 
 #: Steps per octave of the log2-quantised boundary distance.
 DIST_STEPS = 256
 _DIST_OFFSET = 128  # log2 d from -128 to +128 fits uint16 at 256 steps per octave
 _T_NAN = np.iinfo(np.uint32).max
-STATUS_NAMES = {TRAPPED: "trapped", UNRESOLVED: "unresolved", NONFINITE: "nonfinite",
-                NEAR_BOUNDARY: "near_boundary"}
+#: The name of each status code (as the file's CF flag_meanings say).
+STATUS_NAMES = STATUS_MEANINGS
 #: matplotlib's tab10, the colour of well k being TAB10[k mod 10] as in atlas.plotting.
 TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
          "#7f7f7f", "#bcbd22", "#17becf"]

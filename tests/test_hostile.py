@@ -127,7 +127,7 @@ def _decreasing_theta0(f):
 
 
 def _flags(f):
-    f["status"].attrs["flag_meanings"] = "unresolved trapped nonfinite near_boundary"
+    f["status"].attrs["flag_meanings"] = "unresolved trapped nonfinite near_boundary running"
 
 
 BROKEN = [
