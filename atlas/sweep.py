@@ -30,8 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import store, zarrstore
-from . import running
+from . import running, store, zarrstore
 from .certificate import Certifier, add_tallies, certifier_for
 from .config import Config, config_hash
 from .errors import AtlasError, InputFileError, StorageError
@@ -211,20 +210,18 @@ def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
     return out
 
 
-def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list,
-                cycles: list) -> list[tuple]:
+def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, cycles: list,
+                dt: float) -> list[tuple]:
     """(certifier, running barrier) of every parameter point: the certifier with the boundary
     shift its separatrices measured (NaN without them: then no label is certified for the
     exact equation; :func:`atlas.certificate.certifier_for`), the barrier around its running
-    limit cycle (None without one)."""
+    limit cycle, with the margins RK4 at step ``dt`` needs (None without one)."""
     out = []
     for p, sep, cycle in zip(pendulums, traced, cycles):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
-        built = (None if cycle is None else
-                 running.running_barrier(p.alpha, p.omega0, p.torque, cycle))
-        barrier = (None if built is None else
-                   RunningBarrier(built.theta0, built.g, built.top, built.direction))
+        barrier = (None if cycle is None else
+                   running.running_barrier(p.alpha, p.omega0, p.torque, cycle, dt=dt))
         out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol), barrier))
     return out
 
@@ -447,7 +444,7 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     traced = _trace_separatrices(cfg, pendulums)
     phase.done("separatrices")
     cycles = _limit_cycles(pendulums)
-    certifiers = _certifiers(tiles.layout, pendulums, traced, cycles)
+    certifiers = _certifiers(tiles.layout, pendulums, traced, cycles, cfg.integrator.dt)
     groups = _groups(tiles.layout, pendulums, traced, cycles)
     phase.done("exact boundaries and areas")
     for _ in range(3):
