@@ -227,6 +227,7 @@ class Certifier:
                 "basin_fraction_grid_error": np.abs(grid - exact),
                 "unresolved_fraction": int(tally["unlabelled"]) / n,
                 "running_fraction": int(tally["running"]) / n,
+                "running_fraction_exact": 0.0,  # no torque: no running basin
                 "certified_fraction": int(tally["certified"]) / n, "d_cert": self.d_cert,
                 "boundary_shift": self.shift, "boundary_reference_error": self.reference_error,
                 "side_mismatches": int(tally["mismatched"])}
@@ -290,7 +291,8 @@ class MapOnly:
                 "basin_fraction": grid, "basin_fraction_grid_error_bound": nan,
                 "basin_fraction_grid_error": nan,
                 "unresolved_fraction": int(tally["unlabelled"]) / n,
-                "running_fraction": int(tally["running"]) / n, "certified_fraction": 0.0,
+                "running_fraction": int(tally["running"]) / n,
+                "running_fraction_exact": math.nan, "certified_fraction": 0.0,
                 "d_cert": math.nan, "boundary_shift": math.nan,
                 "boundary_reference_error": math.nan, "side_mismatches": 0}
 

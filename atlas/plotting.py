@@ -275,6 +275,38 @@ def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: 
     return ax
 
 
+def basin_stability(tree: xr.DataTree, ax=None, dim: str = "torque"):
+    """Basin stability against the swept parameter ``dim``: the share of the window that
+    settles at a rest state (all wells together) and the running basin's share, as exact
+    areas (lines, where computed) and grid counts (markers; error bars: the grid error bound,
+    where computed). Any other swept parameter is held at its first value."""
+    full = tree.to_dataset(inherit=False)
+    ds = full.isel({d: 0 for d in PARAMETERS if d in full.dims and d != dim})
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 4.5))
+    x = ds[dim].values
+    exact = ds["basin_fraction_exact"].sum("k", skipna=False).values
+    grid = ds["basin_fraction"].sum("k").values
+    bound = ds["basin_fraction_grid_error_bound"].sum("k", skipna=False).values
+    running = ds["running_fraction"].values
+    running_exact = ds["running_fraction_exact"].values
+    shown = np.isfinite(exact)
+    if shown.any():
+        ax.plot(x[shown], exact[shown], "-", color="C0", label="rest states, exact area")
+        ax.plot(x[shown], running_exact[shown], "-", color="0.4", label="running, exact area")
+    ax.errorbar(x, grid, yerr=np.where(np.isfinite(bound), bound, 0.0), fmt="o", ms=3,
+                capsize=2, color="C0", label="rest states, grid count")
+    ax.plot(x, running, "s", ms=3, color="0.4", label="running, grid count")
+    ax.set_xlabel(PARAMETER_AXES[dim])
+    ax.set_ylabel("basin stability (fraction of the window)")
+    ax.set_ylim(-0.02, 1.02)
+    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and n in full.dims}
+    ax.set_title("Basin stability of the rest states and of the running cycle"
+                 + (f"\nat {point_label(held)}" if held else ""))
+    ax.legend()
+    return ax
+
+
 def plot_atlas(tree: xr.DataTree, path: Path) -> list[Path]:
     """Write the figures of the atlas stored at ``path`` next to it; returns the PNG paths."""
     path = Path(path)
@@ -287,6 +319,9 @@ def plot_atlas(tree: xr.DataTree, path: Path) -> list[Path]:
         for dim in (name for name in PARAMETERS if name in ds.dims):
             jobs.append((path.with_name(f"{path.stem}_fractions_{dim}.png"),
                          lambda t, dim=dim: fraction_curves(t, dim=dim)))
+            if dim == "torque":
+                jobs.append((path.with_name(f"{path.stem}_basin_stability.png"),
+                             basin_stability))
         for out, draw in jobs:
             ax = draw(tree)
             ax.figure.tight_layout()

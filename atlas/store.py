@@ -136,6 +136,9 @@ POINT_VARIABLES = {
                                         "the exact equation (status trapped)"},
     "running_fraction": {"long_name": "fraction of the grid labelled running (a count, not "
                                       "an area)"},
+    "running_fraction_exact": {"long_name": "area fraction of the window in the running "
+                                            "basin, from the exact basin boundaries",
+                               "comment": "NaN: not computed"},
     "d_cert": {"long_name": "distance to the basin boundaries beyond which RK4 labels are "
                             "certified for the exact equation",
                "comment": "10 x (boundary shift + bisection tol + reference error); NaN: "

@@ -193,7 +193,7 @@ def _trace_separatrices(cfg: Config, pendulums: list[Pendulum]) -> list[xr.Datas
     window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
     return [separatrices.trace(p, *window, tol=cfg.separatrices.tol,
                                max_spacing=cfg.separatrices.max_spacing, dt=cfg.integrator.dt)
-            for p in pendulums]
+            if p.torque == 0.0 else None for p in pendulums]
 
 
 def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]

@@ -50,7 +50,8 @@ STATUS_MEANINGS = {0: "trapped", 1: "unresolved", 2: "nonfinite", 3: "near_bound
                    4: "running"}
 _BASIN = ("basin_fraction_exact", "basin_fraction_exact_error", "basin_fraction",
           "basin_fraction_grid_error_bound", "basin_fraction_grid_error")
-_POINT = ("unresolved_fraction", "running_fraction", "certified_fraction", "d_cert",
+_POINT = ("unresolved_fraction", "running_fraction", "running_fraction_exact",
+          "certified_fraction", "d_cert",
           "boundary_shift", "boundary_reference_error", "trap_margin", "side_mismatches")
 
 

@@ -51,6 +51,7 @@ def traced(request):
     return p, sep, cert
 
 
+@pytest.mark.slow
 def test_d_cert_covers_the_measured_shift_tenfold(traced):
     """d_cert exceeds ten times the RK4 map's measured boundary shift, and is not much more:
     the reference's own error (rtol 1e-13) is far below the shift."""
@@ -61,6 +62,7 @@ def test_d_cert_covers_the_measured_shift_tenfold(traced):
     assert math.isnan(cert_distance(float("nan"), 1e-12, 1e-11))
 
 
+@pytest.mark.slow
 def test_certified_labels_are_the_exact_equations(traced):
     """Points on either side of the exact boundaries at 10·d_cert: every label atlas certifies
     is DOP853's; at 0.1·d_cert none is certified, so the flag is not vacuous."""

@@ -19,6 +19,7 @@ def _one_clean_line(proc, *fragments):
     return lines[0]
 
 
+@pytest.mark.slow
 def test_run_info_plot_end_to_end(small_config, tmp_path):
     cfg = small_config()
     proc = run_cli("run", cfg, "--quiet")
@@ -39,6 +40,7 @@ def test_run_info_plot_end_to_end(small_config, tmp_path):
     assert (tmp_path / "small_boundary_distance.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_bad_config_exits_2_and_writes_nothing(tmp_path):
     cfg = tmp_path / "bad.yaml"
     out = tmp_path / "out.h5"
@@ -47,6 +49,7 @@ def test_bad_config_exits_2_and_writes_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == [cfg]
 
 
+@pytest.mark.slow
 def test_bad_config_does_not_overwrite_an_existing_output(tmp_path):
     out = tmp_path / "out.h5"
     out.write_bytes(b"precious")
@@ -56,6 +59,7 @@ def test_bad_config_does_not_overwrite_an_existing_output(tmp_path):
     assert out.read_bytes() == b"precious"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args,fragment", [
     (["run"], "the following arguments are required: config"),
     (["run", "nope.yaml"], "nope.yaml: no such config file"),
@@ -68,6 +72,7 @@ def test_bad_arguments(args, fragment):
     _one_clean_line(run_cli(*args), fragment)
 
 
+@pytest.mark.slow
 def test_info_and_plot_refuse_files_that_are_not_atlases(tmp_path):
     missing = tmp_path / "missing.h5"
     text = tmp_path / "text.h5"
@@ -81,6 +86,7 @@ def test_info_and_plot_refuse_files_that_are_not_atlases(tmp_path):
         _one_clean_line(run_cli(cmd, foreign), "foreign.h5", "not an atlas")
 
 
+@pytest.mark.slow
 def test_truncated_file_is_refused(small_config, tmp_path):
     assert run_cli("run", small_config(), "--quiet").returncode == 0
     data = (tmp_path / "small.h5").read_bytes()
@@ -91,6 +97,7 @@ def test_truncated_file_is_refused(small_config, tmp_path):
     assert not (tmp_path / "cut.png").exists()
 
 
+@pytest.mark.slow
 def test_cuda_backend_without_a_gpu_is_one_clear_line(small_config, tmp_path):
     env = {k: v for k, v in __import__("os").environ.items() if k != "NUMBA_ENABLE_CUDASIM"}
     proc = run_cli("run", small_config(), "--backend", "cuda", env=env)
@@ -98,6 +105,7 @@ def test_cuda_backend_without_a_gpu_is_one_clear_line(small_config, tmp_path):
     assert not (tmp_path / "small.h5").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text,message", BAD, ids=[m for _, m in BAD])
 def test_every_bad_config_through_the_cli(tmp_path, text, message):
     out = tmp_path / "out.h5"
@@ -109,6 +117,7 @@ def test_every_bad_config_through_the_cli(tmp_path, text, message):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.yaml", "out.h5"]
 
 
+@pytest.mark.slow
 def test_figures_and_bench_refuse_an_output_folder_they_cannot_make(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")

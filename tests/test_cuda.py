@@ -91,6 +91,7 @@ def _child(code: str, simulator: bool) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["simulator", "gpu"])
 def test_cuda_kernels_match_cpu_kernel(mode):
     out = _child(COMPARE, simulator=mode == "simulator")
@@ -107,6 +108,7 @@ def test_cuda_kernels_match_cpu_kernel(mode):
     assert max(out["prop_err"].values()) < 1e-9
 
 
+@pytest.mark.slow
 def test_cpu_path_never_imports_numba_cuda():
     code = ("import json, sys, atlas\n"
             "atlas.label([0.5, 3.0], [0.0, 1.0], alpha=0.1, omega0=1.0, t_max=5.0)\n"
@@ -137,6 +139,7 @@ print(json.dumps({"ok": ok, "why": why, "message": message}))
     assert out["why"] and out["why"] in message
 
 
+@pytest.mark.slow
 def test_gpu_bench_under_simulator():
     code = r"""
 import json

@@ -13,6 +13,8 @@ import pytest
 import atlas
 from tests.helpers import REPO, write_config
 
+pytestmark = pytest.mark.slow  # local Dask clusters
+
 distributed = pytest.importorskip("distributed")
 
 CONFIG = """\

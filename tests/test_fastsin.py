@@ -57,6 +57,7 @@ def _near_multiples_of_half_pi(k_max, width=1e-6, n=21):
     return np.add.outer(k * (math.pi / 2), np.linspace(-width, width, n)).ravel()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("bound", [4.0 * math.pi, 100.0, 1e4, EXACT_RANGE])
 def test_fast_sin_error_bound(bound):
     rng = np.random.default_rng(1)

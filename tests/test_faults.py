@@ -18,6 +18,8 @@ import atlas
 from atlas.store import describe
 from tests.helpers import REPO, lock_is_free, run_cli, write_config
 
+pytestmark = pytest.mark.slow  # every test runs atlas in subprocesses and waits
+
 SLOW = """\
 grid:
   theta0: {{start: -3pi, stop: 3pi, num: 48}}

@@ -34,6 +34,7 @@ def markers(ax):
     return [ln for ln in ax.lines if len(ln.get_xdata()) <= 10 and ln.get_marker() == "o"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stem", list(figures.FIGURES))
 def test_every_figure_draws_labelled_axes(stem):
     fig = figures.FIGURES[stem](small=True)
@@ -192,6 +193,7 @@ def test_figures_draw_into_given_axes():
         figures.fig6_phase_curve_in_time_3d(ax, small=True)
 
 
+@pytest.mark.slow
 def test_write_all_writes_twelve_pngs(tmp_path):
     paths = figures.write_all(tmp_path / "figs", small=True)
     assert [p.name for p in paths] == [f"{stem}.png" for stem in figures.FIGURES]

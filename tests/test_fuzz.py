@@ -150,6 +150,7 @@ def good(tmp_path_factory) -> Path:
     return tmp / "good.h5"
 
 
+@pytest.mark.slow
 @FUZZ
 @given(st.dictionaries(st.sampled_from(KEYS), values, max_size=6)
        | st.dictionaries(st.text(max_size=8), values, max_size=4).map(lambda d: {(k,): v
@@ -162,6 +163,7 @@ def test_random_configs_from_the_schema(good, entries):
     _run_config(yaml.safe_dump(config, allow_unicode=True), good)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(st.lists(st.tuples(st.sampled_from(KEYS), values, st.booleans()), min_size=1,
                 max_size=3))
@@ -192,6 +194,7 @@ def _damage(data: bytes, edits, truncate) -> bytes:
     return bytes(out[: int(truncate * n)] if truncate else out)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(st.lists(st.tuples(st.integers(0, 2), st.integers(0, 2**31), st.integers(0, 255)),
                 min_size=1, max_size=12),
@@ -212,6 +215,7 @@ def test_damaged_atlas_files(good, edits, truncate):
                 assert _snapshot(Path(tmp)) == before, (args, err)
 
 
+@pytest.mark.slow
 def test_damaged_files_and_configs_in_a_subprocess(good, tmp_path):
     """No signal, no core dump, no traceback: a few cases through the real executable."""
     rng = random.Random(2026)

@@ -149,6 +149,7 @@ BROKEN = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("what,make,fragment", BROKEN, ids=[b[0] for b in BROKEN])
 def test_every_reader_refuses_a_file_that_fails_the_check(good, tmp_path, what, make,
                                                           fragment):
@@ -228,6 +229,7 @@ def test_a_file_atlas_did_not_write_is_kept_unless_force(tmp_path, good):
     atlas.open(precious).close()
 
 
+@pytest.mark.slow
 def test_a_config_may_run_again_over_an_atlas_file(tmp_path, good):
     """`make` re-runs a changed config over its own finished output; another config's atlas
     file may be written over as well."""
@@ -241,6 +243,7 @@ def test_a_config_may_run_again_over_an_atlas_file(tmp_path, good):
 
 # ---- logging, exit statuses ----------------------------------------------------------------
 
+@pytest.mark.slow
 def test_vv_logs_atlas_detail_not_numba_internals(tmp_path):
     cfg = tiny_config(tmp_path, tmp_path / "v.h5")
     code, _, err = cli("run", "-vv", cfg, "--quiet")

@@ -6,6 +6,8 @@ import shutil
 import subprocess
 import sys
 
+import pytest
+
 PROBE = """
 import numpy as np
 from atlas.kernels import cache_dir
@@ -24,6 +26,7 @@ def _probe(root, env):
     return value, folder
 
 
+@pytest.mark.slow
 def test_an_edit_to_an_inlined_kernel_file_recompiles(tmp_path):
     from tests.helpers import REPO
 

@@ -22,6 +22,7 @@ def small_grid():
     return np.meshgrid(theta0, theta_dot0)
 
 
+@pytest.mark.slow
 def test_labels_agree_with_dop853_away_from_boundaries(small_grid):
     theta0, theta_dot0 = small_grid
     res = atlas.label(theta0, theta_dot0, alpha=ALPHA, omega0=OMEGA0)
@@ -97,6 +98,7 @@ def _one_step_each(method):
     return advance
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["rk4", "rk4-trigfree"])
 @pytest.mark.parametrize("alpha,omega0,dt", [(0.1, 1.0, 0.01), (0.02, 1.0, 0.01),
                                              (1.0, 2.0, 0.02), (3.0, 1.0, 0.05),

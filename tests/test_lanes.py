@@ -73,6 +73,7 @@ def test_trapping_times_with_sparse_checks_bracket_the_exact_ones():
     np.testing.assert_array_equal(n16, 16 * np.ceil(n1 / 16).astype(np.int32))
 
 
+@pytest.mark.slow
 def test_propagate_matches_straightforward():
     th, v = _grid(31, 33)  # 1023 orbits: not a multiple of LANES
     assert th.size % LANES
@@ -85,6 +86,7 @@ def test_propagate_matches_straightforward():
     np.testing.assert_allclose(v, ref_v, rtol=0, atol=1e-10)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kernel", [label_lanes, label_trigfree])
 def test_independent_of_threads_chunking_and_order(kernel):
     th, v = _grid(160, 128)  # 20480 orbits: several chunks
@@ -112,6 +114,7 @@ def test_independent_of_threads_chunking_and_order(kernel):
             np.testing.assert_array_equal(x[idx], y)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("propagate", [propagate_lanes, propagate_trigfree])
 def test_propagate_independent_of_threads_and_blocks(propagate):
     th, v = _grid(40, 25)
@@ -173,6 +176,7 @@ def _packed_fma_host() -> str | None:
     return None
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("propagate", [propagate_lanes, propagate_trigfree])
 def test_lane_loop_is_vectorised(propagate):
     if reason := _packed_fma_host():

@@ -68,6 +68,7 @@ def test_boundaries_are_the_independently_integrated_manifolds(case):
                                        rtol=0, atol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["underdamped", "omega0=2", "off-centre"])
 def test_distance_to_the_nearest_boundary_against_brute_force(case):
     alpha, omega0, theta_window, speed_window = CASES[case]
@@ -134,6 +135,7 @@ def test_exact_fractions_are_symmetric_under_point_reflection(case):
                                  a.error + a.error[::-1] + 1e-15)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["underdamped", "off-centre"])
 def test_exact_fractions_against_monte_carlo(case):
     """10⁶ uniform random initial conditions labelled by RK4: each fraction within 4.5

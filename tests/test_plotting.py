@@ -48,6 +48,7 @@ def test_trap_time_map_uses_a_log_scale(sweep_tree):
     plt.close("all")
 
 
+@pytest.mark.slow
 def test_big_maps_are_coarsened_by_the_mode_of_their_labels():
     """A map wider than the figure's pixels is drawn from blocks; a block of labels takes its
     most frequent label (never an average, which could name a well no orbit reached), and
@@ -104,6 +105,7 @@ def test_plot_atlas_writes_the_figures(sweep_tree):
     assert all(p.stat().st_size > 10_000 for p in written)
 
 
+@pytest.mark.slow
 def test_atlas_plot_cli_draws_separatrices(tmp_path):
     cfg = write_config(tmp_path / "c.yaml", f"""\
 grid:

@@ -5,6 +5,7 @@ import math
 
 import numba
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -84,6 +85,7 @@ def test_energy_never_increases_along_an_orbit(theta0, theta_dot0, alpha, omega0
     assert rise <= 0.05 * trap_margin(dt, alpha, omega0) * p.saddle_energy
 
 
+@pytest.mark.slow
 @settings(max_examples=6, deadline=None)
 @given(alphas, omegas, st.integers(1, 200))
 def test_basin_fractions_in_unit_interval_summing_to_one(tmp_path_factory, alpha, omega0,

@@ -12,6 +12,8 @@ import xarray as xr
 import atlas
 from tests.helpers import REPO, crash_on_tile, run_cli, write_config
 
+pytestmark = pytest.mark.slow  # whole runs, kills and resumes
+
 LABELS = ("attractor", "status", "t_trap")
 
 

@@ -83,6 +83,7 @@ def dop853_distances(p: Pendulum, ds: xr.Dataset, every: int = 7) -> np.ndarray:
     return np.array(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("regime", REGIMES)
 def test_bisection_agrees_with_backward_integration(traced, regime):
     alpha = REGIMES[regime]
@@ -152,6 +153,7 @@ def test_labels_differ_at_plus_minus_tol_across_every_point(traced, alpha):
         np.testing.assert_array_equal(res.attractor, k)
 
 
+@pytest.mark.slow
 def test_halving_dt_shifts_points_as_rk4_order_four():
     """The located curve is RK4's basin boundary: its offset from the exact manifold is
     C·dt⁴. Re-bisect across the same lines at dt = 0.08, 0.04, 0.02, 0.01: successive shifts
@@ -195,6 +197,7 @@ def test_point_reflection_symmetry(traced, alpha):
         np.testing.assert_allclose(-theta_dot[there], theta_dot[here], rtol=0, atol=TOL)
 
 
+@pytest.mark.slow
 def test_approaches_undamped_separatrix_as_alpha_vanishes():
     """θ̇ = ±2ω0 cos(θ/2) at α = 0. Damping adds the energy 2α∫|θ̇|dθ along the branch, to
     first order 2α·4ω0 between the saddle and the well bottom, where θ̇ = 2ω0: so |θ̇| exceeds
@@ -345,6 +348,7 @@ def test_the_bounds_scale_with_the_window_and_are_inclusive():
         check_separatrix_settings((-1.0, 1.0), (-40.0, 40.0), smallest, MIN_MAX_SPACING)
 
 
+@pytest.mark.slow
 def test_smallest_accepted_tol_runs_to_the_end():
     """At the bound, orbits stuck at the saddle in floating point can keep brackets wider
     than tol (α = 2): trace stores their widths and says so, it does not raise."""
@@ -409,6 +413,7 @@ def mapped(request):
     return p, dt, window, ds, (th, v), k
 
 
+@pytest.mark.slow
 def test_every_label_change_on_a_basin_map_lies_on_a_stored_boundary(mapped):
     """Completeness: between any two 4-neighbouring cells with different certified labels a
     basin boundary passes, so a stored polyline comes within one cell diagonal of the pair's
@@ -430,6 +435,7 @@ def test_every_label_change_on_a_basin_map_lies_on_a_stored_boundary(mapped):
     assert distance_to_polylines(ds, mids).max() <= diagonal
 
 
+@pytest.mark.slow
 def test_every_stored_segment_separates_neighbouring_basins(mapped):
     """Soundness: across the middle of every segment inside the window, offset ±δ along the
     normal (δ four times the chord-error bound max_spacing²/8), the certified labels differ by

@@ -133,6 +133,7 @@ def test_failed_run_leaves_no_file_at_the_output(written, tmp_path, monkeypatch)
     assert not info["complete"] and info["tiles_done"] == 2
 
 
+@pytest.mark.slow
 def test_the_python_api_does_not_write_over_a_file_atlas_did_not_write(written, tmp_path):
     from atlas.errors import OutputInTheWay
 

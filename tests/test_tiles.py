@@ -68,6 +68,7 @@ def test_identity_is_checked_before_anything_is_touched(cfg):
     assert not leftover.exists() and again.done().size == 0 and store.todo().size == 4
 
 
+@pytest.mark.slow
 def test_a_damaged_tile_is_set_aside_and_computed_again(cfg):
     tree = atlas.run(cfg, quiet=True)
     clean = tree["attractor"].values.copy()
@@ -108,6 +109,7 @@ def test_tile_write_is_atomic(cfg, monkeypatch):
     assert list(store.done()) == [2] and store.read_tile(2).tally["count"].tolist() == [96]
 
 
+@pytest.mark.slow
 def test_an_interrupted_removal_never_leaves_half_a_partial_run(cfg, monkeypatch):
     """Killed while deleting the finished run's tiles (after the output is in place): the
     partial folder was renamed away first, so the next run neither finds half a partial run

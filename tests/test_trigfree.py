@@ -50,6 +50,7 @@ def test_default_cpu_method_is_classical_rk4():
         resolve_method("cuda", None, "rk4-trigfree")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0.1, 2.0])
 def test_certified_trigfree_labels_are_the_exact_equations(alpha, monkeypatch):
     """Random points of the window plus points 1.5 and 3 d_cert off the exact boundaries,

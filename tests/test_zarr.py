@@ -8,6 +8,8 @@ import xarray as xr
 import atlas
 from tests.helpers import crash_on_tile
 
+pytestmark = pytest.mark.slow  # whole runs into Zarr
+
 pytest.importorskip("zarr")
 LABELS = ("attractor", "status", "t_trap", "boundary_distance", "basin_fraction",
           "basin_fraction_exact", "basin_fraction_grid_error_bound", "unresolved_fraction",
