@@ -192,6 +192,7 @@ rk4_step_torque = make_rk4_step_torque(_libm_sin)
 running_test = make_running_test(np.floor)
 
 NO_BARRIER = np.zeros(0)
+NO_BARRIER.flags.writeable = False
 
 
 def torque_model(omega0, torque, running_theta0=0.0, running_g=None, running_top=math.inf,
@@ -208,6 +209,9 @@ def torque_model(omega0, torque, running_theta0=0.0, running_g=None, running_top
     g = NO_BARRIER if running_g is None else np.ascontiguousarray(running_g, dtype=np.float64)
     if g.ndim != 1:
         raise ValueError("running_g must be one-dimensional")
+    if g.flags.writeable:  # always a read-only view: one compiled specialisation, not two
+        g = g.view()
+        g.flags.writeable = False
     return (torque, shift, vers, -1.0 if torque < 0.0 else 1.0, float(running_theta0), g,
             float(running_top), float(span))
 
