@@ -464,3 +464,25 @@ def test_cuda_torque_kernel_matches_cpu_kernel():
     fast, plain = out["statuses"]["fast"], out["statuses"]["straightforward"]
     assert fast[RUNNING] > 5 and fast[TRAPPED] > 0 and fast[NONFINITE] == 2
     assert plain[RUNNING] == 0 and plain[UNRESOLVED] > 5
+
+
+@pytest.mark.parametrize("kernel", [label_lanes, label_trigfree])
+def test_tilted_lanes_are_independent_of_threads_and_order(kernel, barriers):
+    import numba as nb
+
+    alpha, omega0, tau, *_ = CASES["bstab"]
+    b = barriers["bstab"]
+    th, v = np.meshgrid(np.linspace(-3 * math.pi, 3 * math.pi, 80), np.linspace(-6, 6, 64))
+    th, v = th.ravel().copy(), v.ravel().copy()
+    full, _ = _kernel_run(kernel, th, v, alpha, omega0, tau, b)
+    n_threads = nb.get_num_threads()
+    try:
+        nb.set_num_threads(1)
+        one, _ = _kernel_run(kernel, th, v, alpha, omega0, tau, b)
+    finally:
+        nb.set_num_threads(n_threads)
+    perm = np.random.default_rng(0).permutation(th.size)
+    shuffled, _ = _kernel_run(kernel, th[perm], v[perm], alpha, omega0, tau, b)
+    for x, y, z in zip(full, one, shuffled):
+        np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(x[perm], z)

@@ -68,6 +68,18 @@ idle lanes hold (0, 0)), and an orbit's path depends on its initial state only, 
 are bit-identical for any thread count, chunking, input length and position of an orbit in
 the input (tested with 1 and N threads).
 
+Torque (θ̈ = −ω0² sin θ − 2αθ̇ + τ). With τ = 0 and no running barrier the kernels run the
+specialisations above, unchanged from earlier versions (bit-identical labels, pinned by
+``tests/test_torque_kernels.py``). Otherwise separate specialisations run the same lane
+machinery (:func:`make_label_chunk`, every callable taking a ``model`` tuple from
+:func:`atlas.kernels.rk4.torque_model`) with the τ ≠ 0 step, the tilted trap and the running
+certificate (tested in the scalar pass after the trap). The paths change with the speed bound:
+with τ the energy no longer bounds |θ̇|, but the band |θ̇| ≤ B = max(|θ̇0|, (ω0² + |τ|)/2α) is
+forward-invariant (above it θ̈ points back), so "rk4" takes SHARED when the stage offset at
+speed B stays below ``MAX_STAGE_OFFSET``, FULL otherwise; and since a running orbit's θ grows
+without bound, an orbit goes to SCALAR unless |θ0| + B·(the run's length) stays within half
+of fast_sin's EXACT_RANGE (α > 0 is needed for B).
+
 What may differ from the straightforward kernel of the same method, and why. The polynomial
 sin differs from libm by ≤ 1e-15 abs (≈ a few ulp), and without 'reassoc' the RK4 sums are
 rounded in written order; trajectories therefore differ by ~1e-11 after 1000 steps. A label

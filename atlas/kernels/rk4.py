@@ -4,6 +4,10 @@ The RK4 step and the trap test are built by factories that close over a ``sin``
 implementation, so the straightforward kernel (``math.sin``) and the lane-blocked kernel
 (polynomial sin, :mod:`atlas.kernels.lanes`) share one definition of the method.
 
+With a torque τ the step, the tilted trap and the running certificate come from their own
+factories (``make_rk4_step_torque``, ``make_well_energy_torque``, ``make_running_test``), so
+that the τ = 0 code stays that of earlier versions; :func:`label_straightforward` dispatches.
+
 Reference: Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1 (classical 4th-order
 Runge–Kutta, local error O(dt⁵), global error O(dt⁴)).
 """
