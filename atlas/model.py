@@ -93,10 +93,18 @@ class Pendulum:
         k = np.floor((np.asarray(theta) + self.rest_angle) / (2.0 * np.pi) + 0.5)
         return k.astype(np.int64) if np.ndim(k) else int(k)
 
+    def well_bounds(self, k: int = 0) -> tuple[float, float]:
+        """(θ_left, θ_right) [rad]: the saddles −π − θ* + 2πk and π − θ* + 2πk bounding well k."""
+        s = self.rest_angle
+        return -math.pi - s + 2.0 * math.pi * k, math.pi - s + 2.0 * math.pi * k
+
     @property
     def regime(self) -> str:
         """'undamped', 'underdamped', 'critically damped' or 'overdamped' (essay §2): α
-        against √κ, the rest states' natural frequency (ω0 when τ = 0)."""
+        against √κ, the rest states' natural frequency (ω0 when τ = 0); 'no rest state' when
+        |τ| ≥ ω0²."""
+        if not self.has_rest_states:
+            return "no rest state"
         if self.alpha == 0.0:
             return "undamped"
         omega = self.omega0 if self.torque == 0.0 else math.sqrt(self.stiffness)

@@ -161,6 +161,7 @@ def test_no_critical_point_from_the_saddle_node_on(tau):
         with pytest.raises(ValueError, match="no rest state"):
             method()
     assert Pendulum(0.1, 1.0, math.nextafter(1.0, 0.0)).has_rest_states
+    assert p.regime == "no rest state"
 
 
 @pytest.mark.parametrize("alpha,omega0,tau", [(0.1, 1.0, 0.5), (0.05, 2.0, -1.7), (1.0, 1.0, 0.99)])
@@ -182,6 +183,9 @@ def test_saddle_energies_are_the_same_in_every_well(alpha, omega0, tau):
         assert p.energy(math.pi - s + 2 * math.pi * k, 0.0, k) == pytest.approx(right,
                                                                                  abs=20 * scale)
         assert p.well(s + 2 * math.pi * k) == k
+        lo, hi = p.well_bounds(k)
+        assert lo == pytest.approx(-math.pi - s + 2 * math.pi * k, abs=1e-12) and hi - lo == (
+            pytest.approx(2 * math.pi))
         assert p.well(math.pi - s + 2 * math.pi * k - 1e-9) == k
         assert p.well(math.pi - s + 2 * math.pi * k + 1e-9) == k + 1
     # the potential rises monotonically from the rest state to either saddle
