@@ -290,9 +290,9 @@ def label(
 
     Integrates eq. (1) with fixed-step RK4 (step ``dt`` [s], at most ``t_max`` [s] rounded up
     to a whole number of trap tests) and stops each orbit once certified by the energy trap.
-    ``method`` picks the discretisation (:data:`atlas.kernels.METHODS`): on the CPU
-    "rk4-trigfree" by default (RK4 with cos θ, sin θ carried as state), or "rk4" (RK4 with a
-    sin per stage, the lane kernel of earlier versions and the CUDA backend's method).
+    ``method`` picks the discretisation (:data:`atlas.kernels.METHODS`): "rk4" by default
+    (RK4 with a sin per stage, also the CUDA backend's method), or "rk4-trigfree" (RK4 with
+    cos θ, sin θ carried as state).
     ``kernel="straightforward"`` selects the plain one-orbit-per-thread CPU kernel of the
     method, "rk4" unless ``method`` says otherwise.
     ``torque`` τ [rad s⁻²] tilts the wells (module docstring); ``running`` (a
