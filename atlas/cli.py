@@ -132,7 +132,7 @@ def _cmd_orbit(args) -> int:
                           zip(args.values[-2:], ("theta0", "theta_dot0")))
     opts = {name: None if getattr(args, name) is None else parse_number(getattr(args, name),
                                                                          f"--{name}")
-            for name in ("alpha", "omega0", "dt", "t_max")}
+            for name in ("alpha", "omega0", "torque", "dt", "t_max")}
     orbit, lines, context = report(theta0, theta_dot0, file=file, **opts)
     output = Path(args.output) if args.output else default_output(file)
     _output_folder(output.parent)
@@ -161,6 +161,7 @@ def _add_view_and_orbit(sub, common) -> None:
     p.add_argument("values", nargs="+", metavar="[FILE] THETA0 THETA_DOT0")
     p.add_argument("--alpha", help="damping [1/s] (with a file: selects a parameter point)")
     p.add_argument("--omega0", help="natural frequency [rad/s] (with a file: selects a point)")
+    p.add_argument("--torque", help="torque [rad/s^2] (default 0; with a file: selects a point)")
     p.add_argument("--dt", help="RK4 step [s] (default 0.01; with a file: the file's)")
     p.add_argument("--t-max", dest="t_max", help="t_max [s] (default 200; a file: the file's)")
     p.add_argument("-o", "--output", help="the PNG (default: FILE_orbit.png next to the "

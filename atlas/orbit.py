@@ -1,17 +1,21 @@
 """``atlas orbit``: one orbit — its label, its certificate, and its pictures (the essay's
 Figure 9 phase curve over the basin map, and Figure 6's θ(t), for any initial condition).
 
-:func:`integrate` follows one orbit with atlas's RK4 step and energy trap (the formulas of
-:mod:`atlas.kernels.rk4` with ``math.sin``, the trap tested every ``check_every`` steps as
-the kernels do), keeping the whole trajectory; the label itself is also taken from
+:func:`integrate` follows one orbit of θ̈ = −ω0² sin θ − 2αθ̇ + τ with atlas's RK4 step and
+certificates (the formulas of :mod:`atlas.kernels.rk4` with ``math.sin``, tested every
+``check_every`` steps as the kernels do): the energy trap of the (tilted) wells at the level
+:func:`atlas.labels.energy_cap`, then, with a torque and a :class:`atlas.labels.RunningBarrier`,
+the running certificate; it keeps the whole trajectory. The label itself is also taken from
 :func:`atlas.label` and the two must agree. :func:`report` adds the certificate for the exact
 equation: the distance to the exact basin boundaries from :class:`atlas.certificate.Certifier`
-(DOP853 stable manifolds) compared with the file's ``d_cert``, and the file's stored values at
-the nearest grid point.
+(DOP853 stable manifolds) compared with the file's ``d_cert`` (τ = 0 only: for τ ≠ 0 the
+exact boundaries are not computed and the label is certified for the RK4 map), and the file's
+stored values at the nearest grid point.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,25 +24,38 @@ import numpy as np
 
 from . import defaults
 from .errors import AtlasError, InputFileError
-from .kernels import NONFINITE, TRAPPED, UNRESOLVED
-from .labels import CHECK_EVERY, check_integration, n_checks_for, trap_margin
+from .kernels import NONFINITE, RUNNING, TRAPPED, UNRESOLVED
+from .labels import (
+    CHECK_EVERY,
+    RunningBarrier,
+    check_integration,
+    energy_cap,
+    n_checks_for,
+    trap_margin,
+)
 from .layout import point_group
 from .validate import STATUS_MEANINGS
 
-__all__ = ["Orbit", "integrate", "report", "plot_orbit", "parse_number"]
+__all__ = ["Orbit", "integrate", "report", "plot_orbit", "parse_number", "running_barrier_for",
+           "cycle_from_group"]
 
 TWO_PI = 2.0 * math.pi
+INV_TWO_PI = 1.0 / TWO_PI
 #: The name of each status code (as the file's CF flag_meanings say).
 STATUS_NAMES = STATUS_MEANINGS
 
 
 @dataclass(frozen=True)
 class Orbit:
-    """One orbit from (θ0 [rad], θ̇0 [rad s⁻¹]): its trajectory ``t`` [s], ``theta``,
-    ``theta_dot`` (followed past the trap until it has nearly settled), and its label:
-    ``status`` (0 trapped, 1 unresolved, 2 nonfinite), ``k``, ``t_trap`` [s], the well energy
-    ``energy`` E_k at the trap against ``cap`` = 2ω0²(1 − m), ``margin`` m, and
-    ``trap_index`` (the trajectory index of the trap)."""
+    """One orbit from (θ0 [rad], θ̇0 [rad s⁻¹]) of θ̈ = −ω0² sin θ − 2αθ̇ + τ: its trajectory
+    ``t`` [s], ``theta``, ``theta_dot`` (followed past the certificate until it has nearly
+    settled, or for ``turns`` more turns when running), and its label: ``status`` (0 trapped,
+    1 unresolved, 2 nonfinite, 4 running), ``k``, ``t_trap`` [s] (the time of the trap or of
+    the running certificate), the well energy ``energy`` E_k at the trap against ``cap``
+    (:func:`atlas.labels.energy_cap`: 2ω0²(1 − m) when τ = 0), ``margin`` m, ``trap_index``
+    (the trajectory index of the certificate), ``direction`` (sign(τ) when running, else 0),
+    the running certificate ``barrier`` that was tested (None: none) and the limit ``cycle``
+    (an :class:`atlas.running.LimitCycle`, when known, for the pictures)."""
 
     theta0: float
     theta_dot0: float
@@ -56,41 +73,108 @@ class Orbit:
     cap: float = math.nan
     margin: float = math.nan
     trap_index: int | None = None
+    torque: float = 0.0
+    direction: int = 0
+    barrier: RunningBarrier | None = field(default=None, repr=False)
+    cycle: object = field(default=None, repr=False)
+
+    @property
+    def rest_angle(self) -> float:
+        """θ* = arcsin(τ/ω0²) [rad] (0 when τ = 0; ±π/2 when |τ| ≥ ω0², where no well is)."""
+        return _shift(self.omega0, self.torque)
 
 
-def _step(theta, theta_dot, w2, a2, dt):
-    """One classical RK4 step of eq. (1), written as :func:`atlas.kernels.rk4.make_rk4_step`."""
+def _shift(omega0: float, torque: float) -> float:
+    """θ* as the kernels compute it (:func:`atlas.kernels.rk4.torque_model`): arcsin(τ/ω0²),
+    clamped to ±π/2."""
+    return math.asin(min(1.0, max(-1.0, torque / (omega0 * omega0))))
+
+
+def _step(theta, theta_dot, w2, a2, dt, torque=0.0):
+    """One classical RK4 step of θ̈ = τ − ω0² sin θ − 2αθ̇, written as
+    :func:`atlas.kernels.rk4.make_rk4_step_torque` (with τ = 0 the terms τ − x are −x
+    exactly: the step of :func:`atlas.kernels.rk4.make_rk4_step`)."""
     h2 = 0.5 * dt
     k1t = theta_dot
-    k1v = -w2 * math.sin(theta) - a2 * theta_dot
+    k1v = torque - w2 * math.sin(theta) - a2 * theta_dot
     k2t = theta_dot + h2 * k1v
-    k2v = -w2 * math.sin(theta + h2 * k1t) - a2 * k2t
+    k2v = torque - w2 * math.sin(theta + h2 * k1t) - a2 * k2t
     k3t = theta_dot + h2 * k2v
-    k3v = -w2 * math.sin(theta + h2 * k2t) - a2 * k3t
+    k3v = torque - w2 * math.sin(theta + h2 * k2t) - a2 * k3t
     k4t = theta_dot + dt * k3v
-    k4v = -w2 * math.sin(theta + dt * k3t) - a2 * k4t
+    k4v = torque - w2 * math.sin(theta + dt * k3t) - a2 * k4t
     h6 = dt / 6.0
     return (theta + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
             theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v))
 
 
-def _well_energy(theta, theta_dot, w2):
-    k = math.floor(theta / TWO_PI + 0.5)
-    s = math.sin(0.5 * (theta - TWO_PI * k))
-    return k, 0.5 * theta_dot * theta_dot + 2.0 * w2 * s * s
+def _well_energy(theta, theta_dot, w2, torque=0.0, shift=0.0, vers=0.0):
+    """(k, E_k) as the kernels compute them: :func:`atlas.kernels.rk4.make_well_energy` for
+    τ = 0, :func:`atlas.kernels.rk4.make_well_energy_torque` (θ* = ``shift``,
+    1 − cos θ* = ``vers``) otherwise."""
+    if torque == 0.0:
+        k = math.floor(theta * INV_TWO_PI + 0.5)
+        s = math.sin(0.5 * (theta - TWO_PI * k))
+        return k, 0.5 * theta_dot * theta_dot + 2.0 * w2 * s * s
+    k = math.floor((theta + shift) * INV_TWO_PI + 0.5)
+    phi = theta - TWO_PI * k
+    s = math.sin(0.5 * phi)
+    return k, (0.5 * theta_dot * theta_dot + w2 * (2.0 * (s * s) - vers)
+               - torque * (phi - shift))
+
+
+def _lower(barrier_g, theta0, u):
+    """ĝ(u): the barrier's lower curve at u (frame of positive rotation), as the kernels'
+    running test interpolates it (:func:`atlas.kernels.rk4.make_running_test`)."""
+    m = len(barrier_g) - 1
+    x = u - theta0
+    x = x - TWO_PI * math.floor(x * INV_TWO_PI)
+    t = x * (m * INV_TWO_PI)
+    i = min(max(float(math.floor(t)), 0.0), m - 1.0)
+    j = int(i)
+    return barrier_g[j] + (t - i) * (barrier_g[j + 1] - barrier_g[j])
+
+
+def _in_band(theta, theta_dot, sign, theta0, g, top) -> bool:
+    """The kernels' running test: σθ̇ ≤ top and σθ̇ ≥ ĝ(σθ) (σ = sign(τ))."""
+    w = sign * theta_dot
+    if not w <= top:
+        return False
+    return w >= _lower(g, theta0, sign * theta)
 
 
 def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
+              torque: float = 0.0, running: RunningBarrier | None = None,
               dt: float = defaults.DT, t_max: float = defaults.T_MAX,
-              check_every: int = CHECK_EVERY, settle: float = 1e-3) -> Orbit:
-    """Follow one orbit with atlas's RK4 and energy trap (module docstring); after the trap,
-    on until E_k < ``settle``·2ω0² (for the pictures) or t_max. Raises ValueError for
-    settings atlas cannot certify (:func:`atlas.labels.check_integration`)."""
-    check_integration(alpha, omega0, dt, t_max, check_every)
+              check_every: int = CHECK_EVERY, settle: float = 1e-3,
+              turns: float = 2.0) -> Orbit:
+    """Follow one orbit of θ̈ = −ω0² sin θ − 2αθ̇ + τ (τ = ``torque`` [rad s⁻²]) with atlas's
+    RK4 and certificates (module docstring), tested at the kernels' check steps in the
+    kernels' order: the energy trap first, then the running certificate ``running`` (a
+    :class:`atlas.labels.RunningBarrier` of direction sign(τ), as :func:`atlas.label` takes;
+    None: no orbit is labelled running). After the trap the orbit goes on until
+    E_k < ``settle`` times the trap's saddle energy (for the pictures), after the running
+    certificate for ``turns`` more turns, either at most to t_max. Raises ValueError for
+    settings atlas cannot certify (:func:`atlas.labels.check_integration`) or a barrier whose
+    direction is not sign(τ), TypeError for a ``running`` that is not a RunningBarrier."""
+    torque = float(torque)
+    check_integration(alpha, omega0, dt, t_max, check_every, torque)
+    if running is not None:
+        if not isinstance(running, RunningBarrier):
+            raise TypeError(f"running must be a RunningBarrier or None, got "
+                            f"{type(running).__name__}")
+        if torque == 0.0 or running.direction != (1 if torque > 0 else -1):
+            raise ValueError(f"running barrier of direction {running.direction:+d} given for "
+                             f"torque = {torque:g}: it must be sign(torque)")
     theta0, theta_dot0 = float(theta0), float(theta_dot0)
     w2, a2 = omega0 * omega0, 2.0 * alpha
     margin = trap_margin(dt, alpha, omega0)
-    cap = 2.0 * w2 * (1.0 - margin)
+    cap = energy_cap(dt, alpha, omega0, torque)
+    shift = _shift(omega0, torque) if torque else 0.0
+    vers = 2.0 * math.sin(0.5 * shift) ** 2
+    if running is not None:
+        sign, r_theta0, r_g, r_top = (float(running.direction), running.theta0,
+                                      running.g.tolist(), running.top)
     n_checks = n_checks_for(t_max, dt, check_every)
     th, v = theta0, theta_dot0
     thetas, speeds = [th], [v]
@@ -99,28 +183,86 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
         if not (math.isfinite(th) and math.isfinite(v)):
             result = {"status": NONFINITE}
             break
-        k, energy = _well_energy(th, v, w2)
+        k, energy = _well_energy(th, v, w2, torque, shift, vers)
         if energy < cap:
             result = {"status": TRAPPED, "k": int(k), "t_trap": j * check_every * dt,
                       "energy": energy, "trap_index": len(thetas) - 1}
             break
+        if running is not None and _in_band(th, v, sign, r_theta0, r_g, r_top):
+            result = {"status": RUNNING, "t_trap": j * check_every * dt,
+                      "trap_index": len(thetas) - 1, "direction": running.direction}
+            break
         if j == n_checks:
             break
         for _ in range(check_every):
-            th, v = _step(th, v, w2, a2, dt)
+            th, v = _step(th, v, w2, a2, dt, torque)
             thetas.append(th)
             speeds.append(v)
+    limit = n_checks * check_every
     if result["status"] == TRAPPED:
-        limit = n_checks * check_every
-        while len(thetas) - 1 < limit and _well_energy(th, v, w2)[1] > settle * 2.0 * w2:
+        level = settle * (2.0 * w2 if torque == 0.0 else
+                          min(_saddle_energies(alpha, omega0, torque)))
+        while (len(thetas) - 1 < limit
+               and _well_energy(th, v, w2, torque, shift, vers)[1] > level):
             for _ in range(check_every):
-                th, v = _step(th, v, w2, a2, dt)
+                th, v = _step(th, v, w2, a2, dt, torque)
+                thetas.append(th)
+                speeds.append(v)
+    elif result["status"] == RUNNING:
+        start = th
+        while len(thetas) - 1 < limit and abs(th - start) < turns * TWO_PI:
+            for _ in range(check_every):
+                th, v = _step(th, v, w2, a2, dt, torque)
                 thetas.append(th)
                 speeds.append(v)
     theta, theta_dot = np.array(thetas), np.array(speeds)
     return Orbit(theta0, theta_dot0, float(alpha), float(omega0), float(dt), float(t_max),
                  np.arange(theta.size) * dt, theta, theta_dot, cap=cap, margin=margin,
-                 **result)
+                 torque=torque, barrier=running, **result)
+
+
+def _saddle_energies(alpha: float, omega0: float, torque: float) -> tuple[float, float]:
+    from .model import Pendulum
+
+    return Pendulum(alpha, omega0, torque).saddle_energies
+
+
+# ---- the running certificate ------------------------------------------------------------
+
+def cycle_from_group(ds):
+    """The :class:`atlas.running.LimitCycle` stored in a parameter point's ``/limit_cycle``
+    node (the arrays and attributes the sweep wrote; :func:`atlas.sweep.limit_cycle_dataset`)."""
+    from .running import LimitCycle
+
+    theta = np.asarray(ds["theta"].values, np.float64)
+    return LimitCycle(theta0=float(theta[0]), theta=theta,
+                      theta_dot=np.asarray(ds["theta_dot"].values, np.float64),
+                      time=np.asarray(ds["time"].values, np.float64),
+                      period=float(ds.attrs["period"]), direction=int(ds.attrs["direction"]),
+                      error=float(ds.attrs.get("relative_error", math.nan)))
+
+
+def running_barrier_for(alpha: float, omega0: float, torque: float, dt: float, cycle=None):
+    """(running certificate, limit cycle) as the sweep builds them for its kernels:
+    :func:`atlas.running.running_barrier` at the RK4 step ``dt`` around ``cycle`` (a
+    LimitCycle, or a ``/limit_cycle`` node's dataset; computed by
+    :func:`atlas.running.limit_cycle` when None). (None, None) when τ = 0 or there is no
+    running cycle. Raises AtlasError where no barrier can be verified (dt too coarse)."""
+    from . import running
+
+    if torque == 0.0:
+        return None, None
+    if cycle is None:
+        cycle = running.limit_cycle(alpha, omega0, torque)
+        if cycle is None:
+            return None, None
+    elif not isinstance(cycle, running.LimitCycle):
+        cycle = cycle_from_group(cycle)
+    try:
+        barrier = running.running_barrier(alpha, omega0, torque, cycle, dt=dt)
+    except (ValueError, RuntimeError) as exc:
+        raise AtlasError(f"running certificate: {exc}") from None
+    return barrier, cycle
 
 
 def parse_number(text: str, name: str) -> float:
@@ -135,29 +277,41 @@ def parse_number(text: str, name: str) -> float:
 
 # ---- the file ---------------------------------------------------------------------------
 
-def _point(tree, path: Path, alpha: float | None, omega0: float | None):
-    """The basin map of the parameter point (α, ω0) asked for (the only one when not asked),
-    its parameters, and its indices along the swept dims for :func:`atlas.plotting.basin_map`."""
+def _listed(every: list[dict]) -> str:
+    with_torque = any(p.get("torque", 0.0) for p in every)
+    names = ("alpha", "omega0", "torque") if with_torque else ("alpha", "omega0")
+    text = ", ".join("(" + ", ".join(f"{p.get(n, 0.0):g}" for n in names) + ")"
+                     for p in every[:12]) + (", …" if len(every) > 12 else "")
+    return f"{', '.join(names)} = {text}"
+
+
+def _point(tree, path: Path, alpha: float | None, omega0: float | None,
+           torque: float | None = None):
+    """The basin map of the parameter point (α, ω0, τ) asked for (the only one when not
+    asked), its parameters, and its indices along the swept dims for
+    :func:`atlas.plotting.basin_map`."""
     from .layout import at_point, points
 
     ds = tree.to_dataset(inherit=False)
     every = points(ds)
-    listed = ", ".join(f"({p['alpha']:g}, {p['omega0']:g})" for p in every[:12]) \
-        + (", …" if len(every) > 12 else "")
-    if alpha is None and omega0 is None:
+    listed = _listed(every)
+    asked = {"alpha": alpha, "omega0": omega0, "torque": torque}
+    if all(value is None for value in asked.values()):
         if len(every) > 1:
+            options = ("--alpha, --omega0 and --torque" if "torque" in ds.dims
+                       else "--alpha and --omega0")
             raise AtlasError(f"{path}: a parameter atlas of {len(every)} points; choose one "
-                             f"with --alpha and --omega0 (alpha, omega0 = {listed})")
+                             f"with {options} ({listed})")
         fits = every
     else:
         fits = [p for p in every
-                if (alpha is None or math.isclose(p["alpha"], alpha, rel_tol=1e-9))
-                and (omega0 is None or math.isclose(p["omega0"], omega0, rel_tol=1e-9))]
+                if all(value is None
+                       or math.isclose(p.get(name, 0.0), value, rel_tol=1e-9, abs_tol=1e-300)
+                       for name, value in asked.items())]
         if len(fits) != 1:
-            raise AtlasError(f"{path}: no single parameter point with"
-                             f"{'' if alpha is None else f' alpha = {alpha:g}'}"
-                             f"{'' if omega0 is None else f' omega0 = {omega0:g}'} "
-                             f"(alpha, omega0 = {listed})")
+            wanted = "".join(f" {name} = {value:g}" for name, value in asked.items()
+                             if value is not None)
+            raise AtlasError(f"{path}: no single parameter point with{wanted} ({listed})")
     chosen = fits[0]
     index = {name: int(np.flatnonzero(ds[name].values == chosen[name])[0])
              for name in chosen if name in ds.dims}
@@ -179,7 +333,7 @@ def _nearest(point, theta0: float, theta_dot0: float) -> dict:
 
 def _exact(orbit: Orbit, window, shift: float, tol: float):
     """(distance to the nearest exact basin boundary, the exact side k, d_cert) by
-    :class:`atlas.certificate.Certifier` over ``window``."""
+    :class:`atlas.certificate.Certifier` over ``window`` (τ = 0)."""
     from .certificate import Certifier
     from .model import Pendulum
 
@@ -192,26 +346,35 @@ def _exact(orbit: Orbit, window, shift: float, tol: float):
     return float(dist[0]), int(side[0]), cert.d_cert
 
 
+#: What ``atlas orbit`` says of the exact equation for τ ≠ 0.
+TILTED_EXACT = ("exact boundaries for torque ≠ 0 not computed: certified for the RK4 map "
+                "only")
+
+
 def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
            alpha: float | None = None, omega0: float | None = None,
-           dt: float | None = None, t_max: float | None = None):
+           dt: float | None = None, t_max: float | None = None,
+           torque: float | None = None):
     """The orbit and the lines ``atlas orbit`` prints: (Orbit, lines, context for
-    :func:`plot_orbit`). With ``file``, α, ω0, dt, t_max come from the atlas (α/ω0 select a
-    parameter point); without, α and ω0 are required."""
+    :func:`plot_orbit`). With ``file``, α, ω0, τ, dt, t_max come from the atlas (α/ω0/τ
+    select a parameter point) and the running certificate is rebuilt from its stored limit
+    cycle; without, α and ω0 are required, τ defaults to 0 and the limit cycle is computed."""
     import atlas
 
     tree = point = None
     nearest = None
     shift = tol = math.nan
     index = {}
+    stored_cycle = None
     if file is not None:
         from .store import open_atlas
 
         path = Path(file)
         tree = open_atlas(path)
         ds = tree.to_dataset(inherit=False)
-        point, params, index = _point(tree, path, alpha, omega0)
+        point, params, index = _point(tree, path, alpha, omega0, torque)
         alpha, omega0 = params["alpha"], params["omega0"]
+        torque = params.get("torque", 0.0)
         file_dt, file_t_max = float(ds.attrs["dt"]), float(ds.attrs["t_max"])
         for name, given, stored in (("dt", dt, file_dt), ("t_max", t_max, file_t_max)):
             if given is not None and not math.isclose(given, stored, rel_tol=1e-12):
@@ -224,41 +387,52 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
         sep = point_group(tree, "separatrices", params)
         if sep is not None:
             tol = float(sep.attrs.get("tol", math.nan))
+        stored_cycle = point_group(tree, "limit_cycle", params)
     elif alpha is None or omega0 is None:
         raise AtlasError("give --alpha and --omega0, or an atlas file: "
                          "atlas orbit [FILE] THETA0 THETA_DOT0")
+    torque = 0.0 if torque is None else float(torque)
     dt = defaults.DT if dt is None else dt
     t_max = defaults.T_MAX if t_max is None else t_max
     try:
-        orbit = integrate(theta0, theta_dot0, alpha=alpha, omega0=omega0, dt=dt, t_max=t_max)
-        kernel = atlas.label(theta0, theta_dot0, alpha=alpha, omega0=omega0, dt=dt,
-                             t_max=t_max, kernel="straightforward")
+        check_integration(alpha, omega0, dt, t_max, CHECK_EVERY, torque)
+        if file is not None and stored_cycle is None:
+            barrier = cycle = None  # the file has no running cycle here: nor had its kernels
+        else:
+            barrier, cycle = running_barrier_for(alpha, omega0, torque, dt, stored_cycle)
+        orbit = integrate(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=torque,
+                          running=barrier, dt=dt, t_max=t_max)
+        kernel = atlas.label(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=torque,
+                             running=barrier, dt=dt, t_max=t_max, kernel="straightforward")
     except (ValueError, OverflowError) as exc:
         raise AtlasError(str(exc)) from None
+    orbit = dataclasses.replace(orbit, cycle=cycle)
 
+    tilt = f", torque = {torque:g} rad/s^2" if torque else ""
     lines = [f"orbit        from theta0 = {theta0:.10g} rad, theta_dot0 = {theta_dot0:.10g} "
-             f"rad/s; alpha = {alpha:g} 1/s, omega0 = {omega0:g} rad/s, dt = {dt:g} s, "
+             f"rad/s; alpha = {alpha:g} 1/s, omega0 = {omega0:g} rad/s{tilt}, dt = {dt:g} s, "
              f"t_max = {t_max:g} s"]
     same = (int(kernel.status) == orbit.status
             and (orbit.k is None or int(kernel.attractor) == orbit.k))
+    kernel_k = ("" if int(kernel.status) != TRAPPED else f", k = {int(kernel.attractor)}")
     agree = "the same as atlas.label" if same else (
-        f"atlas.label says status {STATUS_NAMES[int(kernel.status)]}, k = "
-        f"{int(kernel.attractor)}: a point on a knife edge, decided by rounding")
+        f"atlas.label says status {STATUS_NAMES[int(kernel.status)]}{kernel_k}: a point on a "
+        "knife edge, decided by rounding")
     if orbit.status == TRAPPED:
-        k, phi = orbit.k, orbit.theta[orbit.trap_index] - TWO_PI * orbit.k
-        lines += [
-            f"label        k = {k:+d}: settles at ({_pi(2 * k)}, 0) ({agree})",
-            f"t_trap       {orbit.t_trap:.2f} s",
-            f"certificate  energy trap at t_trap: |theta - 2pi k| = {abs(phi):.4f} <= pi and "
-            f"E_k = {orbit.energy:.10g} < 2 omega0^2 (1 - m) = {orbit.cap:.10g} "
-            f"(m = {orbit.margin:.2g}): the RK4 map's orbit never leaves well {k:+d}",
-        ]
+        lines += _trapped_lines(orbit, agree)
+    elif orbit.status == RUNNING:
+        lines += _running_lines(orbit, agree)
     else:
-        lines += [f"label        none: {STATUS_NAMES[orbit.status]} "
-                  f"({'not trapped by t_max' if orbit.status == UNRESOLVED else 'NaN or inf met'})"
-                  f" ({agree})"]
+        why = ("NaN or inf met" if orbit.status == NONFINITE else
+               "neither trapped nor certified running by t_max" if barrier is not None else
+               "not trapped by t_max")
+        lines += [f"label        none: {STATUS_NAMES[orbit.status]} ({why}) ({agree})"]
 
-    if orbit.status == TRAPPED:
+    if orbit.status == TRAPPED and torque != 0.0:
+        lines.append(f"exact        {TILTED_EXACT}")
+    elif orbit.status == RUNNING:
+        lines.append(f"exact        {TILTED_EXACT}")
+    elif orbit.status == TRAPPED:
         if nearest is not None:
             window = ((float(point["theta0"][0]), float(point["theta0"][-1])),
                       (float(point["theta_dot0"][0]), float(point["theta_dot0"][-1])))
@@ -293,6 +467,64 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
     return orbit, lines, context
 
 
+def _rest(k: int) -> str:
+    """"theta*", "theta* + 2pi", "theta* - 4pi": the rest state of well k with a torque."""
+    return "theta*" if k == 0 else f"theta* {'-' if k < 0 else '+'} {_pi(abs(2 * k))}"
+
+
+def _trapped_lines(orbit: Orbit, agree: str) -> list[str]:
+    k = orbit.k
+    if orbit.torque == 0.0:
+        phi = orbit.theta[orbit.trap_index] - TWO_PI * k
+        return [
+            f"label        k = {k:+d}: settles at ({_pi(2 * k)}, 0) ({agree})",
+            f"t_trap       {orbit.t_trap:.2f} s",
+            f"certificate  energy trap at t_trap: |theta - 2pi k| = {abs(phi):.4f} <= pi and "
+            f"E_k = {orbit.energy:.10g} < 2 omega0^2 (1 - m) = {orbit.cap:.10g} "
+            f"(m = {orbit.margin:.2g}): the RK4 map's orbit never leaves well {k:+d}",
+        ]
+    s = orbit.rest_angle
+    phi = orbit.theta[orbit.trap_index] - TWO_PI * k
+    lower = min(_saddle_energies(orbit.alpha, orbit.omega0, orbit.torque))
+    return [
+        f"label        k = {k:+d}: settles at ({_rest(k)}, 0) = ({s + TWO_PI * k:.10g}, 0), "
+        f"theta* = asin(torque/omega0^2) = {s:.10g} ({agree})",
+        f"t_trap       {orbit.t_trap:.2f} s",
+        f"certificate  tilted energy trap at t_trap: theta - 2pi k = {phi:.4f} in "
+        f"[-pi - theta*, pi - theta*) (between the well's two saddles) and E_k = "
+        f"{orbit.energy:.10g} < dE (1 - m) - rounding = {orbit.cap:.10g} (dE = {lower:.10g}, "
+        f"the lower saddle's energy above the rest state; m = {orbit.margin:.2g}): the RK4 "
+        f"map's orbit never leaves well {k:+d}",
+    ]
+
+
+def _running_lines(orbit: Orbit, agree: str) -> list[str]:
+    b, d = orbit.barrier, orbit.direction
+    i = orbit.trap_index
+    th, v = float(orbit.theta[i]), float(orbit.theta_dot[i])
+    lower = _lower(b.g.tolist(), b.theta0, d * th)
+    cycle = ""
+    if orbit.cycle is not None:
+        cycle = (f", period {orbit.cycle.period:.6g} s, mean theta_dot "
+                 f"{orbit.cycle.mean_theta_dot:.6g} rad/s")
+    verified = ""
+    if getattr(b, "verified_margin", None) is not None:
+        step = "" if getattr(b, "dt", None) is None else f" for the RK4 step dt = {b.dt:g} s"
+        verified = (f", flow across the lower curve verified >= {b.verified_margin:.3g} "
+                    f"rad/s^2{step}")
+    frame = "theta_dot" if d > 0 else "-theta_dot"
+    where = "g(theta)" if d > 0 else "g(-theta)"
+    return [
+        f"label        running: converges to the running limit cycle (direction {d:+d}"
+        f"{cycle}) ({agree})",
+        f"t_trap       {orbit.t_trap:.2f} s (certified running)",
+        f"certificate  running barrier at t_trap: (theta, theta_dot) = ({th:.4f}, {v:.4f}) "
+        f"with {where} = {lower:.6g} <= {frame} = {d * v:.6g} <= top = {b.top:.6g} rad/s "
+        f"(lower curve of {b.g.size - 1} segments{verified}): the RK4 map's orbit stays in "
+        f"the band around the limit cycle (direction {d:+d})",
+    ]
+
+
 def _around(orbit: Orbit, window):
     """A window that holds the initial condition (the file's, grown if needed)."""
     (t0, t1), (v0, v1) = window if window is not None else ((-math.pi, math.pi), (-1.0, 1.0))
@@ -304,15 +536,39 @@ def _pi(n: int) -> str:
     return "0" if n == 0 else f"{'-' if n < 0 else ''}{'' if abs(n) == 1 else abs(n)}pi"
 
 
+def _pi_label(n: int) -> str:
+    return "0" if n == 0 else ("−" if n < 0 else "") + ("" if abs(n) == 1 else str(abs(n))) + "π"
+
+
+#: The θ(t) panel marks wells and saddles only while it spans at most this many turns.
+MAX_TURNS_MARKED = 24
+
+
+def _draw_cycle(ax, cycle, lo: float, hi: float) -> None:
+    """The limit cycle (dashed), repeated 2π-periodically over θ ∈ [lo, hi]."""
+    from .plotting import CYCLE_COLOR
+
+    order = np.argsort(cycle.theta)
+    theta, speed = np.asarray(cycle.theta)[order], np.asarray(cycle.theta_dot)[order]
+    first = math.floor((lo - theta.max()) / TWO_PI)
+    last = math.ceil((hi - theta.min()) / TWO_PI)
+    for i, n in enumerate(range(first, last + 1)):
+        ax.plot(theta + TWO_PI * n, speed, color=CYCLE_COLOR, lw=1.4, ls="--", zorder=4,
+                label=f"limit cycle (period {cycle.period:.4g} s)" if i == 0 else None)
+
+
 def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
     """Write the orbit's phase curve (over the basin map when ``tree`` is given: essay Figure
-    9) and θ(t) (essay Figure 6) side by side to ``output`` (PNG)."""
+    9, with the running basin and the limit cycle for a torque atlas) and θ(t) (essay
+    Figure 6) side by side to ``output`` (PNG). Without a file the (tilted) critical points
+    and the limit cycle (when known) are drawn under the curve."""
     import matplotlib.pyplot as plt
 
     from .model import Pendulum, critical_points
-    from .plotting import STYLE, basin_map, critical_point_markers, pi_ticks
+    from .plotting import STYLE, basin_map, critical_point_markers, pi_ticks, point_title
 
     output = Path(output)
+    pendulum = Pendulum(orbit.alpha, orbit.omega0, orbit.torque)
     with plt.rc_context(STYLE):
         fig, (ax, ax_t) = plt.subplots(1, 2, figsize=(13, 4.8),
                                        gridspec_kw={"width_ratios": [1.35, 1]})
@@ -321,13 +577,17 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
         else:
             lo = min(-math.pi, orbit.theta.min()) - 0.5
             hi = max(math.pi, orbit.theta.max()) + 0.5
-            pts = critical_points(Pendulum(orbit.alpha, orbit.omega0), lo, hi)
-            critical_point_markers(ax, [p.theta for p in pts], [p.is_saddle for p in pts])
+            pts = critical_points(pendulum, lo, hi)
+            critical_point_markers(ax, [p.theta for p in pts], [p.is_saddle for p in pts],
+                                   tilted=orbit.torque != 0.0)
+            if orbit.cycle is not None:
+                _draw_cycle(ax, orbit.cycle, lo, hi)
             ax.set_xlim(lo, hi)
             pi_ticks(ax, lo, hi)
             ax.set_xlabel("θ [rad]")
             ax.set_ylabel("θ̇ [rad/s]")
-            ax.set_title(f"Phase curve, α = {orbit.alpha:g} s⁻¹, ω0 = {orbit.omega0:g} rad/s")
+            ax.set_title("Phase curve, " + point_title(
+                {"alpha": orbit.alpha, "omega0": orbit.omega0, "torque": orbit.torque}))
             ax.legend(loc="upper right")
         ax.plot(orbit.theta, orbit.theta_dot, color="white", lw=3.0, zorder=6)
         ax.plot(orbit.theta, orbit.theta_dot, color="black", lw=1.2, zorder=7, label="orbit")
@@ -337,21 +597,26 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
             ax.plot(orbit.theta[i], orbit.theta_dot[i], "x", color="black", ms=8, mew=2,
                     zorder=8)
         ax_t.plot(orbit.t, orbit.theta, color="black", lw=1.2)
-        lo, hi = orbit.theta.min(), orbit.theta.max()
-        for n in range(math.floor(lo / math.pi) - 1, math.ceil(hi / math.pi) + 2):
-            ax_t.axhline(n * math.pi, color="red" if n % 2 else "0.5",
-                         ls=":" if n % 2 else "--", lw=0.8)
-        if orbit.t_trap is not None:
+        lo, hi = float(orbit.theta.min()), float(orbit.theta.max())
+        if hi - lo <= MAX_TURNS_MARKED * TWO_PI:
+            for p in critical_points(pendulum, lo - math.pi, hi + math.pi):
+                ax_t.axhline(p.theta, color="red" if p.is_saddle else "0.5",
+                             ls=":" if p.is_saddle else "--", lw=0.8)
+            ns = range(math.ceil((lo - 0.5) / math.pi), math.floor((hi + 0.5) / math.pi) + 1)
+            ax_t.set_yticks([n * math.pi for n in ns])
+            ax_t.set_yticklabels([_pi_label(n) for n in ns])
+        if orbit.status == TRAPPED:
+            rest = ("" if orbit.torque == 0.0 else
+                    f" (rest at θ = {orbit.rest_angle + TWO_PI * orbit.k:.4g})")
             ax_t.axvline(orbit.t_trap, color="tab:blue", lw=1,
-                         label=f"trapped in well {orbit.k:+d} at t = {orbit.t_trap:.2f} s")
+                         label=f"trapped in well {orbit.k:+d} at t = {orbit.t_trap:.2f} s{rest}")
+            ax_t.legend(loc="best")
+        elif orbit.status == RUNNING:
+            ax_t.axvline(orbit.t_trap, color="tab:blue", lw=1,
+                         label=f"certified running ({orbit.direction:+d}) at t = "
+                         f"{orbit.t_trap:.2f} s")
             ax_t.legend(loc="best")
         ax_t.set_ylim(lo - 0.5, hi + 0.5)
-        ax_t.set_yticks([n * math.pi for n in range(math.ceil((lo - 0.5) / math.pi),
-                                                     math.floor((hi + 0.5) / math.pi) + 1)])
-        ax_t.set_yticklabels([("−" if n < 0 else "") + ("" if abs(n) == 1 else str(abs(n)))
-                              + "π" if n else "0" for n in
-                              range(math.ceil((lo - 0.5) / math.pi),
-                                    math.floor((hi + 0.5) / math.pi) + 1)])
         ax_t.set_xlabel("t [s]")
         ax_t.set_ylabel("θ [rad]")
         ax_t.set_title(f"θ(t) from θ0 = {orbit.theta0:.4g}, θ̇0 = {orbit.theta_dot0:.4g} "

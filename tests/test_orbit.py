@@ -106,3 +106,101 @@ def test_bad_input_is_one_line_and_exit_2(atlas_file, capsys, tmp_path, args, fr
     err = capsys.readouterr().err.strip()
     assert err.startswith("atlas: error: ") and fragment in err and "\n" not in err, err
     assert not (tmp_path / "x.png").exists()
+
+
+# ---- with a torque τ ----------------------------------------------------------------------
+
+SWING = {"alpha": 0.05, "omega0": 1.0, "torque": 0.5}
+
+
+@pytest.fixture(scope="module")
+def swing_file(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("swing")
+    cfg = atlas.Config.model_validate({
+        "name": "swing", "pendulum": SWING,
+        "grid": {"theta0": {"start": "-5pi/6", "stop": "7pi/6", "num": 48},
+                 "theta_dot0": {"start": -6, "stop": 6, "num": 40}},
+        "output": str(tmp / "swing.h5")})
+    atlas.run(cfg, quiet=True)
+    return cfg.output
+
+
+@pytest.mark.parametrize("torque", [0.5, -0.5])
+def test_integrate_with_torque_gives_the_kernels_labels(torque):
+    """Random points of the bistable swing pendulum (τ = ±0.5, α = 0.05, ω0 = 1): the same
+    status, well, direction and t_trap as atlas.label with the same running barrier, trapped
+    and running ones alike; and each certificate holds along the orbit from where it fired."""
+    from atlas.model import Pendulum
+    from atlas.orbit import running_barrier_for
+    from atlas.running import contains
+
+    alpha, omega0, dt = SWING["alpha"], SWING["omega0"], 0.01
+    barrier, cycle = running_barrier_for(alpha, omega0, torque, dt)
+    assert barrier is not None and barrier.direction == np.sign(torque)
+    rng = np.random.default_rng(3)
+    th, v = rng.uniform(-4, 4, 60), rng.uniform(-6, 6, 60)
+    ref = atlas.label(th, v, alpha=alpha, omega0=omega0, torque=torque, running=barrier, dt=dt,
+                      kernel="straightforward")
+    orbits = [integrate(a, b, alpha=alpha, omega0=omega0, torque=torque, running=barrier,
+                        dt=dt) for a, b in zip(th, v)]
+    status = np.array([o.status for o in orbits])
+    np.testing.assert_array_equal(status, ref.status)
+    assert (status == 0).sum() >= 5 and (status == 4).sum() >= 5  # both kinds are tested
+    np.testing.assert_array_equal([o.k if o.k is not None else ref.attractor[i]
+                                   for i, o in enumerate(orbits)], ref.attractor)
+    np.testing.assert_array_equal([o.direction for o in orbits], ref.direction)
+    np.testing.assert_array_equal(np.array([o.t_trap for o in orbits], np.float32), ref.t_trap)
+    p = Pendulum(alpha, omega0, torque)
+    for o in orbits:
+        i = o.trap_index
+        assert o.t[i] == pytest.approx(o.t_trap) and o.t.size == o.theta.size
+        if o.status == 0:  # below the lower saddle's energy, between the well's saddles
+            assert o.cap == energy_cap(dt, alpha, omega0, torque) < p.saddle_energy
+            energy = p.energy(o.theta[i:], o.theta_dot[i:], o.k)
+            phi = o.theta[i:] - 2 * np.pi * o.k
+            assert energy[0] < o.cap and np.all(energy < p.saddle_energy)
+            assert np.all((phi >= -np.pi - p.rest_angle) & (phi < np.pi - p.rest_angle))
+            assert energy[-1] < 1e-3 * p.saddle_energy
+        else:  # in the band from the certificate on, rotating in sign(τ)
+            assert o.k is None and o.direction == np.sign(torque)
+            assert np.all(contains(barrier, o.theta[i:], o.theta_dot[i:]))
+            assert abs(o.theta[-1] - o.theta[i]) >= 4 * np.pi  # followed on for 2 turns
+
+
+def test_orbit_on_a_torque_file(swing_file, tmp_path, capsys):
+    """The orbit takes τ and the running barrier from the file: a point the file labels
+    running is certified running by the barrier, a trapped one in the file's well, each the
+    same as atlas.label; the exact check is said not to exist for τ ≠ 0."""
+    ds = atlas.open(swing_file).to_dataset(inherit=False)
+    status = ds["status"].values
+    for code in (4, 3):  # running; trapped (near_boundary: no d_cert without separatrices)
+        j, i = np.argwhere(status == code)[np.sum(status == code) // 2]
+        th, v = float(ds["theta0"][i]), float(ds["theta_dot0"][j])
+        out = tmp_path / f"o{code}.png"
+        assert main(["orbit", str(swing_file), repr(th), repr(v), "-o", str(out)]) == 0
+        text = capsys.readouterr().out
+        assert "torque = 0.5 rad/s^2" in text and "the same as atlas.label" in text
+        assert "exact boundaries for torque ≠ 0 not computed: certified for the RK4 map only" \
+            in text
+        if code == 4:
+            assert "label        running" in text and "status running" in text
+            assert "certificate  running barrier" in text
+            assert "stays in the band around the limit cycle (direction +1)" in text
+        else:
+            k = int(ds["attractor"].values[j, i])
+            assert f"label        k = {k:+d}" in text and f"stored k = {k:+d}" in text
+            assert "tilted energy trap" in text
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_orbit_with_torque_without_a_file(tmp_path, capsys):
+    out = tmp_path / "free.png"
+    assert main(["orbit", "--alpha", "0.05", "--omega0", "1", "--torque", "-0.5", "-o",
+                 str(out), "--", "0", "-5"]) == 0
+    text = capsys.readouterr().out
+    assert "label        running" in text and "(direction -1)" in text and out.exists()
+    assert main(["orbit", "--alpha", "0.05", "--omega0", "1", "--torque", "1.5", "-o",
+                 str(out), "--", "0", "0"]) == 0  # |τ| > ω0²: no well, every orbit runs
+    assert "label        running" in capsys.readouterr().out
+    assert main(["orbit", "--alpha", "0.05", "--omega0", "1", "--torque", "abc", "0", "1"]) == 2
+    assert "--torque: cannot read 'abc'" in capsys.readouterr().err
