@@ -9,7 +9,7 @@ CONFIG ?= configs/default.yaml
 output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
 
 .DEFAULT_GOAL := help
-.PHONY: help run test atlas figures bench faults lint clean venv
+.PHONY: help run test test-fast atlas figures bench faults lint clean venv
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -e 's/:.*## /\t/' | expand -t 10
@@ -36,6 +36,9 @@ atlas: $(OUT) ## compute any config: make atlas CONFIG=configs/x.yaml
 
 test: $(STAMP) ## run the whole test suite
 	$(BIN)/python -m pytest -q
+
+test-fast: $(STAMP) ## the fast subset: every test not marked slow (under a minute)
+	$(BIN)/python -m pytest -q -m "not slow"
 
 figures: $(STAMP) ## the essay's Figures 1-12 → outputs/figures/
 	$(BIN)/atlas figures

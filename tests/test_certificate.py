@@ -92,6 +92,7 @@ def test_certified_labels_are_the_exact_equations(traced):
             assert res.attractor[i] == side[i] == exact_label(p, theta[i], speed[i])
 
 
+@pytest.mark.slow
 def test_grid_error_bound_holds_and_shrinks_at_first_order():
     p = Pendulum(0.1, 1.0)
     sep = separatrices.trace(p, *WINDOW)
@@ -124,6 +125,7 @@ def test_without_a_measured_shift_no_label_is_certified():
     assert np.all(status == NEAR_BOUNDARY) and np.all(dist > 0) and tally["certified"] == 0
 
 
+@pytest.mark.slow
 def test_an_atlas_file_stores_the_certificate(tmp_path):
     """Through atlas.run: distances, d_cert and statuses are consistent, and the fractions
     and their errors are those of the file's own labels."""

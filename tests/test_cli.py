@@ -143,6 +143,7 @@ def test_python_dash_m_atlas_and_the_bench_modules():
     assert proc.stdout.split() == ["['atlas.bench_gpu']"]
 
 
+@pytest.mark.slow
 def test_plot_and_open_refuse_a_partial_file(small_config, tmp_path):
     import atlas
     from atlas import store

@@ -116,6 +116,7 @@ def test_cpu_path_never_imports_numba_cuda():
     assert _child(code, simulator=False) == {"imported": False}
 
 
+@pytest.mark.slow
 def test_cuda_unavailable_is_one_clear_line():
     code = r"""
 import json
@@ -155,6 +156,7 @@ print(json.dumps({"default": run_gpu_bench() is None, "variants": sorted(r["vari
     assert "fast" in out["table"] and out["skip"].startswith("GPU benchmark skipped")
 
 
+@pytest.mark.slow
 def test_numpy_is_left_as_it_was():
     """The numpy.row_stack alias that numba-cuda's compiler needs exists only while kernels
     compile: with numpy lacking it (numpy ≥ 2.5; removed here to act like one), compiling

@@ -292,6 +292,7 @@ def test_the_page_escapes_names_attributes_and_file_names(tmp_path, good):
     assert data["file"] == evil.name
 
 
+@pytest.mark.slow
 def test_zarr_atlas_is_checked_too(tmp_path):
     pytest.importorskip("zarr")
     out = tmp_path / "z.zarr"

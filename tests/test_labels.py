@@ -124,6 +124,7 @@ def test_energy_never_increases_beyond_the_trap_margin(alpha, omega0, dt, method
     assert rise < 0.05 * margin, (rise, margin)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["rk4", "rk4-trigfree"])
 def test_trapped_orbits_never_leave_their_well(method):
     p = Pendulum(ALPHA, OMEGA0)

@@ -96,6 +96,7 @@ def test_fraction_curves_along_each_swept_parameter_hold_the_others(sweep_tree):
     plt.close("all")
 
 
+@pytest.mark.slow
 def test_plot_atlas_writes_the_figures(sweep_tree):
     tree, path = sweep_tree
     written = plot_atlas(tree, path)

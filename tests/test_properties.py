@@ -70,6 +70,7 @@ def test_labels_statuses_and_times_in_range(points, alpha, omega0, t_max):
     assert np.all((passes == 0) | (e0 >= p.saddle_energy * 0.999))
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(angles, speeds, alphas, omegas)
 def test_energy_never_increases_along_an_orbit(theta0, theta_dot0, alpha, omega0):

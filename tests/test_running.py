@@ -157,6 +157,7 @@ def test_threshold_of_the_bstab_pendulum_and_its_scaling():
     assert homoclinic_threshold(0.1, 2.0) == pytest.approx(4 * tau_c, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_threshold_agrees_with_the_existence_of_the_cycle():
     tau_c = homoclinic_threshold(0.05, 1.0)
     assert limit_cycle(0.05, 1.0, tau_c * (1 - 1e-4)) is None
@@ -222,6 +223,7 @@ def test_barrier_never_holds_a_rest_state_or_the_energy_trap(case, barriers):
     assert not contains(b, np.linspace(-10, 10, 1001), 0.0).any()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", CASES)
 def test_orbits_in_the_region_stay_there_and_reach_the_cycle(case, cycles, barriers):
     """Exact (DOP853) and RK4 (step DT) orbits from random points of the region never leave

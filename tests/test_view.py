@@ -22,6 +22,8 @@ import atlas
 from atlas.cli import main
 from atlas.view import pack_distance, safe_json, unpack_distance, write_view
 
+pytestmark = pytest.mark.slow  # two atlas runs for the page, a browser
+
 REPO = Path(__file__).resolve().parents[1]
 XSS = "</script><script>alert(1)</script>"
 BROWSER = find_browser()
@@ -140,7 +142,6 @@ def _far_points(point, n, min_distance, rng):
     return j[pick], i[pick]
 
 
-@pytest.mark.slow
 @needs_browser
 def test_clicked_orbits_end_where_atlas_says(files, browser):
     """Real clicks on grid points far from the boundaries (farther than a few pixels, so the
@@ -165,7 +166,6 @@ def test_clicked_orbits_end_where_atlas_says(files, browser):
     assert browser.dialogs() == [] and browser.console_errors() == []
 
 
-@pytest.mark.slow
 @needs_browser
 def test_page_orbits_match_atlas_labels_at_grid_points(files, browser):
     """The page's integrator from exact grid points away from the boundaries: the same well
@@ -195,7 +195,6 @@ def test_page_orbits_match_atlas_labels_at_grid_points(files, browser):
             < 1e-9
 
 
-@pytest.mark.slow
 @needs_browser
 def test_a_malicious_name_is_shown_as_text_and_never_runs(files, browser):
     # the detector works: a page that does open a dialog is seen
@@ -210,7 +209,6 @@ def test_a_malicious_name_is_shown_as_text_and_never_runs(files, browser):
     assert browser.console_errors() == []
 
 
-@pytest.mark.slow
 @needs_browser
 def test_parameter_slider(files, browser):
     ds = atlas.open(files["sweep"]).to_dataset(inherit=False)
@@ -237,7 +235,6 @@ def test_parameter_slider(files, browser):
         assert r["point"] == str(a) and int(r["orbitK"]) == int(k[a, j, i]) == int(r["gridK"])
 
 
-@pytest.mark.slow
 @needs_browser
 def test_screenshot(files, browser, tmp_path):
     """A picture of the page after a click. ATLAS_UPDATE_SCREENSHOT=1 keeps it as
