@@ -21,6 +21,10 @@ meaningful even where absolute times drift (the best of the repeats is kept in t
 * bulk (fixed number of steps, no early exit): steps/s of ``propagate_trigfree``,
   ``propagate_lanes``, ``propagate_straightforward`` and numpy; "512² map" there is the time
   to integrate every orbit to t_max without early exit.
+* torque: the swing equation's map (bSTAB's pendulum: α = 0.05, ω0 = 1, τ = 0.5, its window
+  θ ∈ [−5π/6, 7π/6], θ̇ ∈ [−10, 10], t_max = 400 s) against the untilted map of the same points
+  and α, both through :func:`atlas.label` with the file's method "rk4" (the tilted trap and the
+  running barrier against the plain energy trap).
 * scaling: the atlas map at 256² … 4096² (the same window, finer grids).
 * JIT: a subprocess with ``NUMBA_CACHE_DIR`` pointed at a fresh directory times import and the
   first call (compilation), then a second subprocess with the same directory (cache hit).
@@ -53,6 +57,8 @@ __all__ = ["run_bench", "format_table", "bench_to_json"]
 MAP_N = defaults.GRID_NUM
 SCALING = (256, 512, 1024, 2048, 4096)
 QUICK_SCALING = (256, 512, 1024)
+#: Grid side of the torque rows in a quick run.
+QUICK_TORQUE = 128
 #: Targets on the 2-core development machine.
 TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
            "bulk_vs_lanes": 1.5, "jit_cold_s": 5.0, "jit_warm_s": 1.0}
@@ -251,8 +257,11 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         scaling.append({"n": side, "orbits": th.size, "wall_s": s, "orbits_per_s": th.size / s,
                         "ns_per_orbit": s / th.size * 1e9})
 
+    torque = _torque_rows(QUICK_TORQUE if quick else MAP_N, repeats)
+
     result = {
         "machine": machine_info(), "problem": {**p, "grid": MAP_N, "check_every": CHECK_EVERY},
+        "torque": torque,
         "repeats": repeats, "quick": quick, "targets": TARGETS,
         "map": {"rows": map_rows,
                 "labels_equal_straightforward": _same_labels(atl, ref_tf),
@@ -281,6 +290,31 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         result["summary"].update(jit_cold_s=cold["import_s"] + cold["first_call_s"],
                                  jit_warm_s=warm["import_s"] + warm["first_call_s"])
     return result
+
+
+def _torque_rows(side: int, repeats: int) -> dict:
+    """The torque map against the untilted map of the same points (module docstring)."""
+    from .labels import label
+    from .running import running_barrier
+
+    alpha, omega0, torque, dt, t_max = 0.05, 1.0, 0.5, 0.01, 400.0
+    theta0 = np.linspace(-5 * np.pi / 6, 7 * np.pi / 6, side)[None, :]
+    theta_dot0 = np.linspace(-10.0, 10.0, side)[:, None]
+    barrier = running_barrier(alpha, omega0, torque, dt=dt)
+    runs = {
+        "untilted": lambda: label(theta0, theta_dot0, alpha=alpha, omega0=omega0, dt=dt,
+                                  t_max=t_max, method="rk4"),
+        "torque": lambda: label(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=torque,
+                                dt=dt, t_max=t_max, method="rk4", running=barrier),
+    }
+    t = _median_times(runs, repeats)
+    n = theta0.size * theta_dot0.size
+    return {"side": side, "orbits": n,
+            "rows": [{"variant": "untilted (tau = 0), energy trap", "wall_s": t["untilted"][0],
+                      "orbits_per_s": n / t["untilted"][0], "ratio": 1.0},
+                     {"variant": "torque tau = 0.5, tilted trap + running barrier",
+                      "wall_s": t["torque"][0], "orbits_per_s": n / t["torque"][0],
+                      "ratio": t["torque"][0] / t["untilted"][0]}]}
 
 
 def _same_labels(a, b) -> bool:
@@ -318,6 +352,13 @@ def format_table(result: dict) -> str:
     lines += _fmt_rows(result["map"]["rows"])
     lines.append("Bulk RK4, fixed steps, no early exit")
     lines += _fmt_rows(result["bulk"]["rows"])
+    if "torque" in result:
+        tq = result["torque"]
+        lines.append(f"Torque: the swing equation's {tq['side']}² map (alpha 0.05, omega0 1, "
+                     "bSTAB's window, t_max 400 s) against the same points untilted")
+        for r in tq["rows"]:
+            lines.append(f"  {r['variant']:48s} {_fmt_s(r['wall_s']):>9s} "
+                         f"{r['orbits_per_s']:10.3g} orbits/s {r['ratio']:6.2f}× untilted")
     lines.append("Scaling, atlas map")
     for r in result["scaling"]:
         lines.append(f"  {r['n']:5d}² {r['orbits']:9d} orbits {_fmt_s(r['wall_s']):>9s} "
