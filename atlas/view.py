@@ -2,17 +2,24 @@
 
 The page (no server, no network: every script, style and image is inline) shows the basin map
 of each parameter point as a PNG at the grid's native resolution with its separatrices and
-critical points. Clicking a point integrates that orbit in the browser — the same RK4 step and
-energy trap as atlas (:mod:`atlas.kernels.rk4`, :func:`atlas.labels.trap_margin`), tested
-every ``check_every`` steps — draws its phase curve, animates the pendulum along it, and shows
-the stored label, status, t_trap and boundary distance of the nearest grid point next to the
+critical points (and, with a torque τ, the running basin and the running limit cycle). Clicking
+a point integrates that orbit in the browser — the same RK4 step of θ̈ = −ω0² sin θ − 2αθ̇ + τ,
+the same (tilted) energy trap and the same running certificate as atlas's kernels
+(:mod:`atlas.kernels.rk4`, :func:`atlas.labels.energy_cap`, the barrier of
+:func:`atlas.running.running_barrier` that the sweep built for the file), tested every
+``check_every`` steps — draws its phase curve, animates the pendulum along it, and shows the
+stored label, status, t_trap and boundary distance of the nearest grid point next to the
 orbit's own end state. A parameter atlas gets a slider over its parameter points.
 
 Size: the per-point arrays the readout needs are packed as little-endian typed arrays,
 zlib-compressed and base64-encoded (the browser inflates them with ``DecompressionStream``):
 ``attractor`` int16, ``status`` int8, ``t_trap`` as uint32 counts of trap tests (exact; NaN as
 0xFFFFFFFF), ``boundary_distance`` as uint16 log2-quantised at 256 steps per octave (relative
-error ≤ 0.14 %; 0 for 0, 0xFFFF for NaN). A 512 × 512 atlas gives a page of about 1 MB.
+error ≤ 0.14 %; 0 for 0, 0xFFFF for NaN). A 512 × 512 atlas gives a page of about 1 MB. With a
+torque, each point with a running limit cycle adds its running barrier (rebuilt here from the
+file's ``/limit_cycle``, exactly as the sweep built it: :func:`atlas.orbit.running_barrier_for`)
+with the lower curve g as float64, zlib-compressed (never rounded: the certificate is verified
+for these numbers only; about 40 kB), and the cycle itself, rounded to 1e-4, for the picture.
 
 Safety: every string taken from the file (config name, attributes, file name) travels inside
 one JSON ``<script type="application/json">`` block with ``<``, ``>``, ``&`` and the JavaScript
@@ -34,8 +41,8 @@ import numpy as np
 import xarray as xr
 
 from .errors import AtlasError, InputFileError
-from .kernels import NEAR_BOUNDARY, TRAPPED
-from .labels import CHECK_EVERY, trap_margin
+from .kernels import NEAR_BOUNDARY, RUNNING, TRAPPED
+from .labels import CHECK_EVERY, energy_cap, trap_margin
 from .layout import at_point, point_group
 from .layout import points as parameter_points
 from .validate import STATUS_MEANINGS
@@ -52,6 +59,8 @@ STATUS_NAMES = STATUS_MEANINGS
 #: matplotlib's tab10, the colour of well k being TAB10[k mod 10] as in atlas.plotting.
 TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
          "#7f7f7f", "#bcbd22", "#17becf"]
+#: The running basin's colour (atlas.plotting's RUNNING_COLOR, grey 0.82).
+RUNNING_RGB = (209, 209, 209)
 
 
 def pack_distance(d: np.ndarray) -> np.ndarray:
@@ -85,13 +94,16 @@ def _uniform(values: np.ndarray, name: str, path) -> list[float]:
 
 
 def _map_png(attractor: np.ndarray, status: np.ndarray) -> str:
-    """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward."""
+    """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward: well k
+    in TAB10[k mod 10], running in grey, no certified label white."""
     from PIL import Image
 
     labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
     index = np.where(labelled, np.mod(attractor.astype(np.int64), 10), 10).astype(np.uint8)
+    index[status == RUNNING] = 11
     image = Image.fromarray(index[::-1], mode="P")
-    palette = [int(c[i:i + 2], 16) for c in TAB10 for i in (1, 3, 5)] + [255, 255, 255]
+    palette = ([int(c[i:i + 2], 16) for c in TAB10 for i in (1, 3, 5)] + [255, 255, 255]
+               + list(RUNNING_RGB))
     image.putpalette(palette)
     buffer = io.BytesIO()
     image.save(buffer, format="PNG", optimize=True)
@@ -115,6 +127,51 @@ def _critical(tree: xr.DataTree, point: dict[str, float]) -> dict[str, list[floa
         return {"attractors": [], "saddles": []}
     theta, n = cp["theta"].values, cp["n"].values
     return {"attractors": theta[n % 2 == 0].tolist(), "saddles": theta[n % 2 != 0].tolist()}
+
+
+#: About how many segments of the limit cycle the page draws (a picture only).
+CYCLE_DRAWN = 256
+
+
+def _running(tree: xr.DataTree, point: dict[str, float], dt: float) -> dict:
+    """The running barrier and the limit cycle of one parameter point for the page (None
+    each where the point has no running cycle): the barrier the sweep gave its kernels,
+    rebuilt from the stored cycle, g as a float64 blob; the cycle (about ``CYCLE_DRAWN``
+    segments, rounded to 1e-4) to draw."""
+    from .orbit import running_barrier_for
+
+    torque = point.get("torque", 0.0)
+    stored = point_group(tree, "limit_cycle", point) if torque else None
+    if stored is None:
+        return {"barrier": None, "cycle": None}
+    barrier, cycle = running_barrier_for(point["alpha"], point["omega0"], torque, dt, stored)
+    n = cycle.theta.size
+    drawn = np.unique(np.r_[0:n:max(1, (n - 1) // CYCLE_DRAWN), n - 1])  # both ends: one turn
+    return {
+        "barrier": {"theta0": barrier.theta0, "top": barrier.top,
+                    "direction": barrier.direction, "n": int(barrier.g.size),
+                    "g": _blob(barrier.g.astype("<f8"))},
+        "cycle": {"theta": np.round(cycle.theta[drawn], 4).tolist(),
+                  "theta_dot": np.round(cycle.theta_dot[drawn], 4).tolist(),
+                  "period": float(cycle.period)},
+    }
+
+
+def _tilt(point: dict[str, float], dt: float) -> dict:
+    """What the page's trap needs for the point's torque: the kernels' cap
+    (:func:`atlas.labels.energy_cap`; None when no well can trap, |τ| ≥ ω0²), θ* and
+    1 − cos θ* as :func:`atlas.kernels.rk4.torque_model` computes them, and the lower
+    saddle's energy above the rest state (the pictures follow a trapped orbit until it has
+    nearly settled, E_k below 1e-3 of it)."""
+    from .model import Pendulum
+
+    alpha, omega0, torque = point["alpha"], point["omega0"], point.get("torque", 0.0)
+    cap = energy_cap(dt, alpha, omega0, torque)
+    shift = math.asin(min(1.0, max(-1.0, torque / (omega0 * omega0)))) if torque else 0.0
+    pendulum = Pendulum(alpha, omega0, torque)
+    return {"torque": torque, "cap": cap if math.isfinite(cap) else None, "shift": shift,
+            "vers": 2.0 * math.sin(0.5 * shift) ** 2,
+            "saddle_energy": pendulum.saddle_energy if pendulum.has_rest_states else None}
 
 
 def _text(value) -> str:
@@ -152,6 +209,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
             "attractor": _blob(attractor), "status": _blob(status),
             "t_trap": _blob(n_check), "distance": _blob(pack_distance(distance)),
             "curves": _curves(tree, params), **_critical(tree, params),
+            **_tilt(params, dt), **_running(tree, params, dt),
         })
     return {
         "name": _name(ds), "file": Path(path).name, "title": _text(ds.attrs.get("title", "")),
@@ -246,15 +304,15 @@ style-src 'unsafe-inline'; script-src 'sha256-/*HASH*/'">
     <p id="clock"></p>
     <div id="readout" data-ready="0">
       <p class="hint">Click anywhere on the map: the orbit from that initial condition is
-      integrated here in the browser (RK4 with the file's α, ω0 and dt, the energy trap of
-      atlas) and drawn in black.</p>
+      integrated here in the browser (RK4 with the file's α, ω0, τ and dt, the energy trap
+      and the running certificate of atlas) and drawn in black.</p>
     </div>
   </aside>
 </main>
 <footer>
-  <p>θ̈ = −ω0² sin θ − 2αθ̇. Colour: the well k (rest state (2πk, 0)) each initial condition
-  reaches; white: no certified label. Red: the separatrices (basin boundaries); open circles:
-  saddles; dots: attractors. <span id="provenance"></span></p>
+  <p><span id="legend">θ̈ = −ω0² sin θ − 2αθ̇. Colour: the well k (rest state (2πk, 0)) each
+  initial condition reaches; white: no certified label. Red: the separatrices (basin
+  boundaries); open circles: saddles; dots: attractors.</span> <span id="provenance"></span></p>
 </footer>
 <script type="application/json" id="atlas-data">/*DATA*/</script>
 <script>/*SCRIPT*/</script>

@@ -255,3 +255,112 @@ def test_screenshot(files, browser, tmp_path):
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
     target = REPO / "docs" / "images" / "view.png" if update else tmp_path / "view.png"
     target.write_bytes(png)
+
+
+# ---- a torque atlas -------------------------------------------------------------------
+
+SWING = {"alpha": 0.05, "omega0": 1.0, "torque": 0.5}
+
+
+@pytest.fixture(scope="module")
+def swing(tmp_path_factory):
+    """A small atlas of the bistable swing pendulum (tilted wells and the running cycle)."""
+    tmp = tmp_path_factory.mktemp("swing")
+    cfg = atlas.Config.model_validate({
+        "name": "swing", "pendulum": SWING,
+        "grid": {"theta0": {"start": "-5pi/6", "stop": "7pi/6", "num": 48},
+                 "theta_dot0": {"start": -6, "stop": 6, "num": 40}},
+        "integrator": {"dt": 0.01, "t_max": 200.0}, "output": str(tmp / "swing.h5")})
+    atlas.run(cfg, quiet=True)
+    return cfg.output, write_view(cfg.output)
+
+
+def test_torque_page_carries_the_sweeps_certificates(swing):
+    """τ, the kernels' tilted trap level and the very running barrier the sweep gave its
+    kernels (g bit for bit, rebuilt from the stored cycle), the cycle to draw; still small."""
+    import base64
+    import zlib
+
+    from atlas.labels import energy_cap
+    from atlas.running import limit_cycle, running_barrier
+
+    path, page = swing
+    p = _data(page)["points"][0]
+    assert p["torque"] == 0.5 and p["cap"] == energy_cap(0.01, 0.05, 1.0, 0.5)
+    assert p["shift"] == pytest.approx(np.arcsin(0.5), abs=0)
+    ref = running_barrier(0.05, 1.0, 0.5, limit_cycle(0.05, 1.0, 0.5), dt=0.01)
+    b = p["barrier"]
+    g = np.frombuffer(zlib.decompress(base64.b64decode(b["g"])), "<f8")
+    np.testing.assert_array_equal(g, ref.g)
+    assert (b["theta0"], b["top"], b["direction"]) == (ref.theta0, ref.top, 1)
+    cycle = atlas.open(path)["limit_cycle"].to_dataset()
+    assert p["cycle"]["theta"][0] == round(float(cycle["theta"][0]), 4)
+    assert p["cycle"]["theta"][-1] == round(float(cycle["theta"][-1]), 4)
+    assert len(p["cycle"]["theta"]) < 300 and page.stat().st_size < 100_000
+    assert "running" in _data(page)["status_names"].values()
+
+
+def _uniform_cells(ds, code, k=None):
+    """Grid indices (j, i) whose 3 × 3 neighbourhood all has status ``code`` (and well k)."""
+    status, att = ds["status"].values, ds["attractor"].values
+    good = status == code if k is None else (np.isin(status, (0, 3)) & (att == k))
+    inner = np.zeros_like(good)
+    inner[1:-1, 1:-1] = True
+    for dj in (-1, 0, 1):
+        for di in (-1, 0, 1):
+            inner &= np.roll(good, (dj, di), axis=(0, 1))
+    return np.argwhere(inner)
+
+
+@pytest.mark.slow
+@needs_browser
+def test_torque_page_clicks_agree_with_the_file(swing, browser):
+    """Clicks on a torque page: a point the file labels running is certified running in the
+    browser (and shown as the file's), a point in a well's basin ends in the file's well; the
+    page's orbits from grid points inside uniform patches get the file's labels, and the
+    state at the certificate equals atlas.orbit.integrate's (the same RK4 map and tests)."""
+    from atlas.orbit import integrate, running_barrier_for
+
+    path, page = swing
+    ds = atlas.open(path).to_dataset(inherit=False)
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    _open(browser, page)
+    assert "θ* + 2πk" in browser.evaluate("document.getElementById('legend').textContent")
+    running = _uniform_cells(ds, 4)
+    well = _uniform_cells(ds, None, k=0)
+    assert len(running) and len(well)
+    for (j, i), expect in ((running[len(running) // 2], "running"),
+                           (well[len(well) // 2], "trapped")):
+        xy = browser.evaluate(f"atlasView.clientXY({float(th[i])!r}, {float(v[j])!r})")
+        browser.click(xy["x"], xy["y"])
+        r = _readout(browser)
+        assert r["orbitStatus"] == expect, (th[i], v[j], r)
+        if expect == "running":
+            assert r["gridStatus"] == "running" and r["orbitDirection"] == "1"
+            assert r["orbitK"] == "" and r["gridK"] == ""
+            assert browser.evaluate("document.querySelector('#readout .agree').textContent") \
+                == "running, as the stored label"
+        else:
+            k = int(ds["attractor"].values[j, i])
+            assert int(r["orbitK"]) == k == int(r["gridK"])
+    # the page's integrator from exact grid points of uniform patches: the file's labels
+    rng = np.random.default_rng(4)
+    cells = np.concatenate([running[rng.choice(len(running), 20, replace=False)],
+                            _uniform_cells(ds, None, k=0)[:10]])
+    pairs = json.dumps([[float(th[i]), float(v[j])] for j, i in cells])
+    got = browser.evaluate(f"{pairs}.map(([a, b]) => atlasView.orbit(a, b))")
+    status = ds["status"].values[cells[:, 0], cells[:, 1]]
+    names = {0: "trapped", 3: "trapped", 4: "running"}
+    assert [g["status"] for g in got] == [names[int(s)] for s in status]
+    assert [g["k"] for g in got if g["status"] == "trapped"] == \
+        ds["attractor"].values[cells[:, 0], cells[:, 1]][status != 4].tolist()
+    np.testing.assert_allclose([g["t_trap"] for g in got],
+                               ds["t_trap"].values[cells[:, 0], cells[:, 1]], atol=0.16 + 1e-9)
+    barrier, _ = running_barrier_for(0.05, 1.0, 0.5, 0.01)
+    for g in got[::3]:
+        ref = integrate(g["theta0"], g["theta_dot0"], running=barrier, **SWING)
+        assert ref.t_trap == pytest.approx(g["t_trap"]) and ref.k == g["k"]
+        i = ref.trap_index
+        assert abs(ref.theta[i] - g["theta_trap"]) + abs(ref.theta_dot[i] - g["theta_dot_trap"]) \
+            < 1e-9
+    assert browser.dialogs() == [] and browser.console_errors() == []

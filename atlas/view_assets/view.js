@@ -4,7 +4,8 @@
 (function () {
   const D = JSON.parse(document.getElementById("atlas-data").textContent);
   const $ = (id) => document.getElementById(id);
-  const TWO_PI = 2 * Math.PI;
+  const TWO_PI = 2 * Math.PI, INV_TWO_PI = 1 / TWO_PI;
+  const RUNNING_COLOR = "#d1d1d1";
   const [TH0, TH1, NT] = D.theta0, [V0, V1, NV] = D.theta_dot0;
   const HT = (TH1 - TH0) / (NT - 1), HV = (V1 - V0) / (NV - 1);
   const M = { left: 64, right: 14, top: 12, bottom: 46 }, W = 700, H = 420;
@@ -52,6 +53,8 @@
       p.img = await image(p.png);
       p.grid = { k: new Int16Array(k), status: new Int8Array(s), trap: new Uint32Array(t),
                  dist: new Uint16Array(d) };
+      // the running barrier's lower curve: float64, exactly the numbers the sweep verified
+      if (p.barrier) p.barrierG = new Float64Array(await inflate(p.barrier.g));
     }
     return p;
   }
@@ -68,30 +71,54 @@
              distance: q === 65535 ? null : q === 0 ? 0 : 2 ** (q / D.dist_steps - D.dist_offset) };
   }
 
-  // One orbit: atlas's RK4 step and energy trap, tested every check_every steps. After the
-  // trap the orbit is followed on (for the picture) until it has nearly settled.
+  // The running certificate's lower curve at u (frame of positive rotation), interpolated as
+  // the kernels' running test does (atlas.kernels.rk4.make_running_test).
+  function lowerCurve(b, g, u) {
+    const m = g.length - 1;
+    let x = u - b.theta0;
+    x = x - TWO_PI * Math.floor(x * INV_TWO_PI);
+    const t = x * (m * INV_TWO_PI), i = Math.min(Math.max(Math.floor(t), 0), m - 1);
+    return g[i] + (t - i) * (g[i + 1] - g[i]);
+  }
+
+  // One orbit of θ̈ = −ω0² sin θ − 2αθ̇ + τ: atlas's RK4 step, the (tilted) energy trap and
+  // then the running certificate, tested every check_every steps in the kernels' order and
+  // arithmetic (atlas.kernels.rk4). After the trap the orbit is followed on (for the
+  // picture) until it has nearly settled; after the running certificate for two more turns.
   function integrate(theta0, thetaDot0, p) {
-    const a = p.alpha, w = p.omega0, dt = D.dt, ce = D.check_every;
+    const a = p.alpha, w = p.omega0, tq = p.torque || 0, dt = D.dt, ce = D.check_every;
     const w2 = w * w, a2 = 2 * a, h2 = 0.5 * dt, h6 = dt / 6;
-    const cap = 2 * w2 * (1 - p.margin);
+    const cap = p.cap === null ? -Infinity : p.cap, shift = p.shift, vers = p.vers;
+    const b = p.barrier, g = p.barrierG, sign = b ? b.direction : 1;
     const nChecks = Math.max(1, Math.ceil(D.t_max / (dt * ce) - 1e-9));
     let th = theta0, v = thetaDot0;
     const path = [th, v];
-    const step = () => {
-      const k1t = v, k1v = -w2 * Math.sin(th) - a2 * v;
-      const k2t = v + h2 * k1v, k2v = -w2 * Math.sin(th + h2 * k1t) - a2 * k2t;
-      const k3t = v + h2 * k2v, k3v = -w2 * Math.sin(th + h2 * k2t) - a2 * k3t;
-      const k4t = v + dt * k3v, k4v = -w2 * Math.sin(th + dt * k3t) - a2 * k4t;
+    const step = () => {  // with τ = 0, τ − x is −x exactly: the untilted step
+      const k1t = v, k1v = tq - w2 * Math.sin(th) - a2 * v;
+      const k2t = v + h2 * k1v, k2v = tq - w2 * Math.sin(th + h2 * k1t) - a2 * k2t;
+      const k3t = v + h2 * k2v, k3v = tq - w2 * Math.sin(th + h2 * k2t) - a2 * k3t;
+      const k4t = v + dt * k3v, k4v = tq - w2 * Math.sin(th + dt * k3t) - a2 * k4t;
       th += h6 * (k1t + 2 * (k2t + k3t) + k4t);
       v += h6 * (k1v + 2 * (k2v + k3v) + k4v);
       path.push(th, v);
     };
     const energy = () => {
-      const k = Math.floor(th / TWO_PI + 0.5), s = Math.sin(0.5 * (th - TWO_PI * k));
-      return [k, 0.5 * v * v + 2 * w2 * s * s];
+      if (tq === 0) {
+        const k = Math.floor(th * INV_TWO_PI + 0.5), s = Math.sin(0.5 * (th - TWO_PI * k));
+        return [k, 0.5 * v * v + 2 * w2 * s * s];
+      }
+      const k = Math.floor((th + shift) * INV_TWO_PI + 0.5), phi = th - TWO_PI * k;
+      const s = Math.sin(0.5 * phi);
+      return [k, 0.5 * v * v + w2 * (2 * (s * s) - vers) - tq * (phi - shift)];
+    };
+    const running = () => {
+      if (!b) return false;
+      const u = sign * v;
+      return u <= b.top && u >= lowerCurve(b, g, sign * th);
     };
     const r = { theta0, theta_dot0: thetaDot0, status: "unresolved", k: null, t_trap: null,
-                energy: null, cap, margin: p.margin, theta_trap: null, theta_dot_trap: null };
+                energy: null, cap: p.cap, margin: p.margin, theta_trap: null,
+                theta_dot_trap: null, direction: 0 };
     for (let j = 0; j <= nChecks; j++) {
       if (!Number.isFinite(th) || !Number.isFinite(v)) { r.status = "nonfinite"; break; }
       const [k, e] = energy();
@@ -100,12 +127,24 @@
                            theta_trap: th, theta_dot_trap: v });
         break;
       }
+      if (running()) {
+        Object.assign(r, { status: "running", t_trap: j * ce * dt, theta_trap: th,
+                           theta_dot_trap: v, direction: b.direction,
+                           lower: sign * lowerCurve(b, g, sign * th) });
+        break;
+      }
       if (j === nChecks) break;
       for (let i = 0; i < ce; i++) step();
     }
     r.trap_index = path.length / 2 - 1;
     if (r.status === "trapped") {
-      while (path.length / 2 - 1 < nChecks * ce && energy()[1] > 2e-3 * w2) {
+      const level = 1e-3 * (tq === 0 ? 2 * w2 : p.saddle_energy);
+      while (path.length / 2 - 1 < nChecks * ce && energy()[1] > level) {
+        for (let i = 0; i < ce; i++) step();
+      }
+    } else if (r.status === "running") {
+      const start = th;
+      while (path.length / 2 - 1 < nChecks * ce && Math.abs(th - start) < 2 * TWO_PI) {
         for (let i = 0; i < ce; i++) step();
       }
     }
@@ -131,7 +170,7 @@
     }
     c.fillStyle = "#fff"; c.strokeStyle = "#000"; c.lineWidth = 1.5;
     c.beginPath(); c.arc(xOf(path[0]), yOf(path[1]), 4.5, 0, TWO_PI); c.fill(); c.stroke();
-    if (r.status === "trapped") {
+    if (r.status === "trapped" || r.status === "running") {
       const x = xOf(r.theta_trap), y = yOf(r.theta_dot_trap);
       c.beginPath(); c.moveTo(x - 4, y - 4); c.lineTo(x + 4, y + 4);
       c.moveTo(x - 4, y + 4); c.lineTo(x + 4, y - 4); c.stroke();
@@ -149,6 +188,17 @@
       c.beginPath(); c.moveTo(xOf(ts[0]), yOf(vs[0]));
       for (let i = 1; i < ts.length; i++) c.lineTo(xOf(ts[i]), yOf(vs[i]));
       c.stroke();
+    }
+    if (P.cycle) {  // the running limit cycle, dashed, repeated 2π-periodically
+      const ts = P.cycle.theta, vs = P.cycle.theta_dot;
+      const lo = Math.min(ts[0], ts[ts.length - 1]), hi = Math.max(ts[0], ts[ts.length - 1]);
+      c.strokeStyle = "#000"; c.lineWidth = 1.6; c.setLineDash([7, 4]);
+      for (let n = Math.floor((TH0 - hi) / TWO_PI); n <= Math.ceil((TH1 - lo) / TWO_PI); n++) {
+        c.beginPath(); c.moveTo(xOf(ts[0] + n * TWO_PI), yOf(vs[0]));
+        for (let i = 1; i < ts.length; i++) c.lineTo(xOf(ts[i] + n * TWO_PI), yOf(vs[i]));
+        c.stroke();
+      }
+      c.setLineDash([]);
     }
     c.fillStyle = "#000";
     for (const t of P.attractors) { c.beginPath(); c.arc(xOf(t), yOf(0), 3.5, 0, TWO_PI); c.fill(); }
@@ -182,7 +232,9 @@
     c.textBaseline = "middle"; c.fillText("θ̇0 = dθ/dt at t = 0 [rad/s]", 0, 0); c.restore();
   }
 
-  function drawPendulum(th, k) {
+  const bobColor = (r) => (r && r.status === "running" ? RUNNING_COLOR
+    : r && r.k !== null ? color(r.k) : "#999");
+  function drawPendulum(th, orbit) {
     const c = penCtx, cx = 110, cy = 100, r = 78;
     c.clearRect(0, 0, 220, 220);
     c.strokeStyle = "#ccc"; c.lineWidth = 1;
@@ -190,7 +242,7 @@
     const x = cx + r * Math.sin(th), y = cy + r * Math.cos(th);
     c.strokeStyle = "#333"; c.lineWidth = 3;
     c.beginPath(); c.moveTo(cx, cy); c.lineTo(x, y); c.stroke();
-    c.fillStyle = k === null ? "#999" : color(k);
+    c.fillStyle = bobColor(orbit);
     c.beginPath(); c.arc(x, y, 11, 0, TWO_PI); c.fill();
     c.strokeStyle = "#000"; c.lineWidth = 1; c.stroke();
     c.fillStyle = "#000"; c.beginPath(); c.arc(cx, cy, 3, 0, TWO_PI); c.fill();
@@ -204,10 +256,10 @@
     const t = (now - anim.start) / 1000 * anim.speed;
     const i = Math.min(n - 1, Math.floor(t / D.dt));
     const th = r.path[2 * i], v = r.path[2 * i + 1];
-    drawPendulum(th, r.k);
+    drawPendulum(th, r);
     ovCtx.clearRect(0, 0, CW, CH);
     ovCtx.save(); ovCtx.beginPath(); ovCtx.rect(M.left, M.top, W, H); ovCtx.clip();
-    ovCtx.fillStyle = r.k === null ? "#999" : color(r.k); ovCtx.strokeStyle = "#000";
+    ovCtx.fillStyle = bobColor(r); ovCtx.strokeStyle = "#000";
     ovCtx.beginPath(); ovCtx.arc(xOf(th), yOf(v), 6, 0, TWO_PI); ovCtx.fill(); ovCtx.stroke();
     ovCtx.restore();
     $("clock").textContent = "t = " + (i * D.dt).toFixed(2) + " s of " +
@@ -240,15 +292,21 @@
     const r = integrate(th, v, P), g = gridAt(P, th, v);
     current = r;
     drawMap(); animate(r);
-    const wellText = (k) => "well k = " + signed(k) + ": rest at (" + piLabel(2 * k) + ", 0)";
+    const tilted = (P.torque || 0) !== 0;
+    const wellText = (k) => "well k = " + signed(k) + ": rest at (" + (tilted
+      ? (k === 0 ? "θ*" : "θ* " + (k < 0 ? "−" : "+") + " " + piLabel(Math.abs(2 * k))) +
+        " = " + fix(P.shift + TWO_PI * k, 4) : piLabel(2 * k)) + ", 0)";
+    const runText = (d) => "running: converges to the limit cycle (direction " + signed(d) + ")";
     let cert = "—";
     if (g.status === "trapped") cert = "certified for the exact equation (distance > d_cert" +
       (P.d_cert === null ? ")" : " = " + sci(P.d_cert) + ")");
     else if (g.status === "near_boundary") cert = "certified for the RK4 map only (closer " +
       "than d_cert" + (P.d_cert === null ? " or d_cert not measured)" : " = " + sci(P.d_cert) + ")");
+    else if (g.status === "running") cert = "certified for the RK4 map (running barrier)";
     const grid = [
       ["grid point", "θ0 = " + fix(g.theta, 4) + ", θ̇0 = " + fix(g.theta_dot, 4)],
-      ["stored label", g.k === null ? "none (" + g.status + ")" : wellText(g.k)],
+      ["stored label", g.k !== null ? wellText(g.k) : g.status === "running" && P.barrier
+        ? runText(P.barrier.direction) : "none (" + g.status + ")"],
       ["status", g.status], ["certificate", cert],
       ["t_trap", g.t_trap === null ? "—" : g.t_trap.toFixed(2) + " s"],
       ["boundary distance", g.distance === null ? "—" : "≈ " + sci(g.distance)],
@@ -257,8 +315,15 @@
     if (r.status === "trapped") {
       orbit.push(["end state", "trapped in " + wellText(r.k) + " at t = " + r.t_trap.toFixed(2) + " s"],
         ["at the trap", "θ = " + fix(r.theta_trap, 4) + ", θ̇ = " + fix(r.theta_dot_trap, 4)],
-        ["energy trap", "E_k = " + sci(r.energy) + " < 2ω0²(1 − m) = " + r.cap.toPrecision(10) +
-         ", m = " + sci(r.margin)]);
+        ["energy trap", "E_k = " + sci(r.energy) + (tilted ? " < ΔE(1 − m) − rounding = "
+          : " < 2ω0²(1 − m) = ") + r.cap.toPrecision(10) + ", m = " + sci(r.margin)]);
+    } else if (r.status === "running") {
+      const b = P.barrier, d = r.direction;
+      orbit.push(["end state", runText(d) + ", certified at t = " + r.t_trap.toFixed(2) + " s"],
+        ["at the certificate", "θ = " + fix(r.theta_trap, 4) + ", θ̇ = " + fix(r.theta_dot_trap, 4)],
+        ["running barrier", (d > 0 ? "g(θ) = " + sci(r.lower) + " ≤ θ̇ ≤ top = " + sci(b.top)
+          : "−top = " + sci(-b.top) + " ≤ θ̇ ≤ " + sci(r.lower) + " = −g(−θ)") +
+         ": the RK4 map's orbit stays in the band around the limit cycle"]);
     } else {
       orbit.push(["end state", r.status === "nonfinite" ? "left the finite numbers"
         : "not trapped by t_max = " + D.t_max + " s"]);
@@ -267,13 +332,18 @@
     if (g.k !== null && r.k !== null) {
       orbit.push(g.k === r.k ? ["agreement", "same well as the stored label", "agree"]
         : ["agreement", "a different well from the nearest grid point's: the click is near a basin boundary", "differ"]);
+    } else if (g.status === "running" && r.status === "running") {
+      orbit.push(["agreement", "running, as the stored label", "agree"]);
+    } else if ((g.status === "running") !== (r.status === "running") &&
+               (g.k !== null || g.status === "running") && r.status !== "unresolved") {
+      orbit.push(["agreement", "a different label from the nearest grid point's: the click is near a basin boundary", "differ"]);
     }
     const box = $("readout");
     box.replaceChildren(table([["nearest grid point (stored in the file)", grid],
                                ["this orbit (integrated in your browser)", orbit]]));
     Object.assign(box.dataset, {
       theta0: th, thetaDot0: v, point: index,
-      orbitStatus: r.status, orbitK: r.k === null ? "" : r.k,
+      orbitStatus: r.status, orbitK: r.k === null ? "" : r.k, orbitDirection: r.direction,
       orbitTTrap: r.t_trap === null ? "" : r.t_trap,
       gridStatus: g.status, gridK: g.k === null ? "" : g.k,
       gridTTrap: g.t_trap === null ? "" : g.t_trap,
@@ -287,14 +357,22 @@
     index = clamp(i | 0, 0, D.points.length - 1);
     P = await load(D.points[index]);
     $("point").value = String(index);
-    $("point-label").textContent = "α = " + P.alpha + " s⁻¹, ω0 = " + P.omega0 + " rad/s (" +
-      (index + 1) + " of " + D.points.length + ")";
-    $("subtitle").textContent = "α = " + P.alpha + " s⁻¹, ω0 = " + P.omega0 + " rad/s, dt = " +
-      D.dt + " s, t_max = " + D.t_max + " s; grid " + NT + " × " + NV + "; file " + D.file;
+    const params = "α = " + P.alpha + " s⁻¹, ω0 = " + P.omega0 + " rad/s" +
+      (P.torque ? ", τ = " + P.torque + " rad/s²" : "");
+    $("point-label").textContent = params + " (" + (index + 1) + " of " + D.points.length + ")";
+    $("subtitle").textContent = params + ", dt = " + D.dt + " s, t_max = " + D.t_max +
+      " s; grid " + NT + " × " + NV + "; file " + D.file;
     if (current) show(current.theta0, current.theta_dot0); else drawMap();
   }
 
   $("name").textContent = D.name;
+  if (D.points.some((p) => p.torque)) {
+    $("legend").textContent = "θ̈ = −ω0² sin θ − 2αθ̇ + τ. Colour: the well k (rest state " +
+      "(θ* + 2πk, 0), θ* = arcsin(τ/ω0²)) each initial condition reaches; grey: running " +
+      "(certified to converge to the running limit cycle, dashed); white: no certified " +
+      "label. Red: the separatrices (basin boundaries); open circles: saddles " +
+      "(π − θ* + 2πk, 0); dots: attractors.";
+  }
   document.title = D.name + " · atlas view";
   $("provenance").textContent = [D.title, D.created && "created " + D.created,
     D.atlas_version && "atlas " + D.atlas_version].filter(Boolean).join("; ");
