@@ -167,6 +167,7 @@ def test_integrate_with_torque_gives_the_kernels_labels(torque):
             assert abs(o.theta[-1] - o.theta[i]) >= 4 * np.pi  # followed on for 2 turns
 
 
+@pytest.mark.slow
 def test_orbit_on_a_torque_file(swing_file, tmp_path, capsys):
     """The orbit takes τ and the running barrier from the file: a point the file labels
     running is certified running by the barrier, a trapped one in the file's well, each the
@@ -193,6 +194,7 @@ def test_orbit_on_a_torque_file(swing_file, tmp_path, capsys):
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_orbit_with_torque_without_a_file(tmp_path, capsys):
     out = tmp_path / "free.png"
     assert main(["orbit", "--alpha", "0.05", "--omega0", "1", "--torque", "-0.5", "-o",

@@ -450,6 +450,7 @@ print(json.dumps({"device": why, "failures": failures, "statuses": statuses}))
 """
 
 
+@pytest.mark.slow
 def test_cuda_torque_kernel_matches_cpu_kernel():
     """The CUDA tilted kernel (both variants; "fast" with the mirrored running barrier of
     τ < 0) against the CPU straightforward kernel, in numba's CUDA simulator (or on a GPU
