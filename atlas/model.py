@@ -2,7 +2,9 @@
 critical points.
 
 With τ = 0 this is the essay's eq. (1); with τ ≠ 0 it is the damped driven pendulum of
-Josephson junctions and the single-machine swing equation of power grids (issue 15).
+Josephson junctions (S. H. Strogatz, *Nonlinear Dynamics and Chaos*, §8.5) and the
+single-machine swing equation of power grids (P. J. Menck et al., "How basin stability
+complements the linear-stability paradigm", Nature Physics 9, 89–92, 2013).
 
 Units throughout: θ [rad], θ̇ [rad s⁻¹], t [s], α [s⁻¹], ω0 [rad s⁻¹], τ [rad s⁻²].
 

@@ -1,4 +1,4 @@
-"""The labelling kernels with a constant torque τ (θ̈ = −ω0² sin θ − 2αθ̇ + τ, issue 15): τ = 0
+"""The labelling kernels with a constant torque τ (θ̈ = −ω0² sin θ − 2αθ̇ + τ): τ = 0
 bit-identical to the untilted kernels, the tilted energy trap and the running certificate in
 every kernel (CPU lanes of both methods, the straightforward kernels, CUDA in the simulator),
 against scipy's DOP853 classified by the same certificates."""
