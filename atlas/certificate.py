@@ -41,15 +41,23 @@ import math
 
 import numpy as np
 
-from .kernels import NEAR_BOUNDARY, RUNNING, TRAPPED
+from .kernels import (
+    ATTRACTOR_FILL,
+    NEAR_BOUNDARY,
+    RUNNING,
+    RUNNING_NEAR_BOUNDARY,
+    TRAPPED,
+)
 from .manifold import RTOL_CHECK, StableManifold, basin_areas
 from .model import Pendulum
 
-__all__ = ["SAFETY", "cert_distance", "Certifier", "MapOnly", "certifier_for", "labelled",
-           "add_tallies"]
+__all__ = ["SAFETY", "cert_distance", "Certifier", "NoBoundaries", "certifier_for",
+           "exact_boundaries", "labelled", "add_tallies", "RUNNING_SIDE"]
 
 #: Safety factor of d_cert over the measured RK4-vs-exact boundary shift (module docstring).
 SAFETY = 10.0
+#: The exact side of a point in the running basin (the kernels' fill value: no well).
+RUNNING_SIDE = ATTRACTOR_FILL
 #: First search radius around the grid for boundaries [rad-ish]; grown while needed.
 _FIRST_MARGIN = 1.0
 
@@ -67,38 +75,27 @@ def labelled(status):
     return (status == TRAPPED) | (status == NEAR_BOUNDARY)
 
 
-class Certifier:
-    """Boundary distances, certificates and grid-error tallies of one parameter point's
-    basin map, tile by tile: grid axes ``theta0`` [rad] (columns) and ``theta_dot0``
-    [rad s⁻¹] (rows), the window being their ranges; ``shift`` [rad-ish], the measured
-    distance of the RK4 map's boundaries from the exact ones, located to ``tol`` (NaN when
-    not measured: then no label is certified for the exact equation).
+class _Untilted:
+    """The exact basin boundaries of the pendulum without torque (:mod:`atlas.manifold`):
+    side, distance, the boundaries near a point, exact areas and the reference's own error,
+    for :class:`Certifier`."""
 
-    A certifier is sent to where tiles are computed (a Dask worker): it pickles without its
-    boundary indices, which are rebuilt on first use."""
+    running_possible = False
+    #: A boundary of saddle n separates the wells (n − 1)/2 and (n − 1)/2 + upper_well.
+    upper_well = 1
 
-    def __init__(self, pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float):
-        self.pendulum = pendulum
-        self.theta0, self.theta_dot0 = np.asarray(theta0, float), np.asarray(theta_dot0, float)
-        self.window = ((self.theta0[0], self.theta0[-1]), (self.theta_dot0[0],
-                                                           self.theta_dot0[-1]))
+    def __init__(self, pendulum: Pendulum, window):
+        self.pendulum, self.window = pendulum, window
         self._indices: dict[float, object] = {}
         # the left branch at rtol 1e-13 (the search index's) and at 1e-12, each integrated
         # once: for the exact areas and for the reference's own error
         fine = self._index(_FIRST_MARGIN).manifold
-        coarse = StableManifold(pendulum, max(abs(v) for v in self.window[1]), RTOL_CHECK)
-        self.areas = basin_areas(pendulum, *self.window, manifolds=(fine, coarse))
-        self.shift = float(shift)
+        coarse = StableManifold(pendulum, max(abs(v) for v in window[1]), RTOL_CHECK)
+        areas = basin_areas(pendulum, *window, manifolds=(fine, coarse))
+        self.k, self.fraction, self.error = areas.k, areas.fraction, areas.error
+        self.running, self.running_error = 0.0, 0.0
+        self._saddles = areas.saddles
         self.reference_error = self._reference_error(fine, coarse)
-        self.d_cert = cert_distance(shift, tol, self.reference_error)
-        d_theta = np.diff(self.window[0])[0] / (self.theta0.size - 1)
-        d_speed = np.diff(self.window[1])[0] / (self.theta_dot0.size - 1)
-        self.half_diagonal = 0.5 * math.hypot(d_theta, d_speed)
-        self.n_points = self.theta0.size * self.theta_dot0.size
-        area = np.diff(self.window[0])[0] * np.diff(self.window[1])[0]
-        # cell areas a/A: interior cells dθ·dθ̇, half of that on an edge, a quarter at corners
-        self._col_weight = _edge_weights(self.theta0.size) * d_theta
-        self._row_weight = _edge_weights(self.theta_dot0.size) * d_speed / area
 
     def __getstate__(self):
         return {**self.__dict__, "_indices": {}}
@@ -123,6 +120,9 @@ class Certifier:
                                                     (v0 - margin, v1 + margin)))
         return self._indices[margin]
 
+    def side(self, theta, theta_dot):
+        return self._index(_FIRST_MARGIN).manifold.side(theta, theta_dot, self._saddles)
+
     def distance(self, theta, theta_dot):
         """Distance [rad-ish] of each point to the nearest exact basin boundary, and that
         boundary's saddle n. Boundaries are searched within a margin around the window,
@@ -137,51 +137,172 @@ class Certifier:
             margin = 2.0 * max(margin, finite.max(initial=0.0))
             dist[far], n[far] = self._index(margin).nearest(theta[far], theta_dot[far])
 
+    def saddles_within(self, theta, theta_dot, radius: float):
+        return self._index(_FIRST_MARGIN).saddles_within(theta, theta_dot, radius)
+
+
+class _Tilted:
+    """The exact basin boundaries of the pendulum with torque 0 < |τ| < ω0²
+    (:class:`atlas.tilted.TiltedBoundaries`), with the interface of :class:`_Untilted`; a
+    boundary's saddle s_j is named n = 2j + 1 (the saddle near (2j + 1)π). The reference
+    error includes the polylines' chord error (the distances are measured to polylines)."""
+
+    def __init__(self, pendulum: Pendulum, window):
+        from .tilted import TiltedBoundaries
+
+        self.exact = TiltedBoundaries(pendulum, *window)
+        self.running_possible = self.exact.bistable
+        # bistable: the boundary of s_j separates well j from the running basin; otherwise
+        # wells j and j + 1
+        self.upper_well = 0 if self.exact.bistable else 1
+        areas = self.exact.areas()
+        self.k, self.fraction, self.error = areas.k, areas.fraction, areas.error
+        self.running, self.running_error = areas.running, areas.running_error
+        self.reference_error = self.exact.reference_error + self.exact.chord_error
+        self._tree = None
+
+    def __getstate__(self):
+        return {**self.__dict__, "_tree": None}
+
+    def side(self, theta, theta_dot):
+        return self.exact.side(theta, theta_dot)
+
+    def distance(self, theta, theta_dot):
+        dist, j = self.exact.distance(theta, theta_dot)
+        return dist, 2 * np.asarray(j, np.int64) + 1
+
+    def saddles_within(self, theta, theta_dot, radius: float):
+        """(lowest, highest) saddle n = 2j + 1 of the boundaries with a vertex within
+        ``radius`` + the longest segment of each point (a superset of the boundaries within
+        ``radius``); (0, 0) where none."""
+        from scipy.spatial import cKDTree
+
+        from .tilted import MAX_SEGMENT
+
+        if self._tree is None:
+            curves = self.exact.curves(clip=False)
+            xy = np.concatenate([np.column_stack([t, v]) for _, _, t, v in curves])
+            self._n = np.concatenate([np.full(t.size, 2 * j + 1) for j, _, t, _ in curves])
+            self._tree = cKDTree(xy)
+        points = np.column_stack([np.ravel(theta), np.ravel(theta_dot)])
+        lo, hi = np.zeros(len(points), np.int64), np.zeros(len(points), np.int64)
+        for i, near in enumerate(self._tree.query_ball_point(points, radius + MAX_SEGMENT)):
+            if near:
+                ns = self._n[near]
+                lo[i], hi[i] = ns.min(), ns.max()
+        return lo, hi
+
+
+def exact_boundaries(pendulum: Pendulum, window):
+    """The exact basin boundaries of ``pendulum`` over ``window`` ((θmin, θmax) [rad],
+    (θ̇min, θ̇max) [rad s⁻¹]); None where atlas has none (|τ| ≥ ω0²: no rest state, no
+    boundary)."""
+    if pendulum.torque == 0.0:
+        return _Untilted(pendulum, window)
+    if pendulum.has_rest_states:
+        return _Tilted(pendulum, window)
+    return None
+
+
+class Certifier:
+    """Boundary distances, certificates and grid-error tallies of one parameter point's
+    basin map, tile by tile: grid axes ``theta0`` [rad] (columns) and ``theta_dot0``
+    [rad s⁻¹] (rows), the window being their ranges; ``shift`` [rad-ish], the measured
+    distance of the RK4 map's boundaries from the exact ones, located to ``tol`` (NaN when
+    not measured: then no label is certified for the exact equation). With torque the
+    running basin is one more basin: a running label is certified for the exact equation
+    (status ``running``) on the same terms as a well's, else it becomes
+    ``running_near_boundary``.
+
+    A certifier is sent to where tiles are computed (a Dask worker): it pickles without its
+    boundary indices, which are rebuilt on first use."""
+
+    def __init__(self, pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float,
+                 exact=None):
+        self.pendulum = pendulum
+        self.theta0, self.theta_dot0 = np.asarray(theta0, float), np.asarray(theta_dot0, float)
+        self.window = ((self.theta0[0], self.theta0[-1]), (self.theta_dot0[0],
+                                                           self.theta_dot0[-1]))
+        self.exact = exact if exact is not None else exact_boundaries(pendulum, self.window)
+        self.shift = float(shift)
+        self.reference_error = self.exact.reference_error
+        self.d_cert = cert_distance(shift, tol, self.reference_error)
+        d_theta = np.diff(self.window[0])[0] / (self.theta0.size - 1)
+        d_speed = np.diff(self.window[1])[0] / (self.theta_dot0.size - 1)
+        self.half_diagonal = 0.5 * math.hypot(d_theta, d_speed)
+        self.n_points = self.theta0.size * self.theta_dot0.size
+        area = np.diff(self.window[0])[0] * np.diff(self.window[1])[0]
+        # cell areas a/A: interior cells dθ·dθ̇, half of that on an edge, a quarter at corners
+        self._col_weight = _edge_weights(self.theta0.size) * d_theta
+        self._row_weight = _edge_weights(self.theta_dot0.size) * d_speed / area
+
+    @property
+    def areas(self):
+        """The exact areas: ``k``, ``fraction``, ``error``, ``running``, ``running_error``."""
+        return self.exact
+
+    def distance(self, theta, theta_dot):
+        """Distance [rad-ish] of each point to the nearest exact basin boundary, and that
+        boundary's saddle n (odd)."""
+        return self.exact.distance(theta, theta_dot)
+
     def certify(self, theta, theta_dot, attractor, status):
         """Certify labelled points (arrays broadcast to one shape; θ [rad], θ̇ [rad s⁻¹]):
-        returns (status, with ``near_boundary`` where a trapped label is not certified for
-        the exact equation; boundary distance [rad-ish]; the exact side k; the saddle n of
+        returns (status, with ``near_boundary`` / ``running_near_boundary`` where a trapped /
+        running label is not certified for the exact equation; boundary distance
+        [rad-ish]; the exact side: k, or RUNNING_SIDE for the running basin; the saddle n of
         the nearest boundary)."""
         theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
         full = np.broadcast_shapes(theta.shape, theta_dot.shape, np.shape(status))
-        side = self._index(_FIRST_MARGIN).manifold.side(theta, theta_dot, self.areas.saddles)
+        side = self.exact.side(theta, theta_dot)
         theta, theta_dot = np.broadcast_to(theta, full), np.broadcast_to(theta_dot, full)
         dist, n_near = self.distance(theta, theta_dot)
-        has_label = labelled(status)
-        agree = has_label & (np.asarray(attractor, np.int64) == side)
+        status = np.asarray(status)
+        has_label, running = labelled(status), status == RUNNING
+        agree = (has_label | running) & (_basin(attractor, status) == side)
         certified = agree & (dist > self.d_cert)
-        status = np.where(has_label & ~certified, NEAR_BOUNDARY, status).astype(np.int8)
+        status = np.where(has_label & ~certified, NEAR_BOUNDARY, status)
+        status = np.where(running & ~certified, RUNNING_NEAR_BOUNDARY, status).astype(np.int8)
         return status, dist, np.broadcast_to(side, full), n_near
 
     def tile(self, rows: slice, attractor, status):
         """Certify the grid rows ``rows`` (arrays shaped (rows, columns)) with
         :meth:`certify`; returns (status, boundary distance as float32, the tile's tally:
-        basin counts and grid-error bounds over the wells k0, k0 + 1, …, and the certified,
-        mismatched and unlabelled counts; tallies of tiles add up, :func:`add_tallies`)."""
+        basin counts and grid-error bounds over the wells k0, k0 + 1, …, the running count
+        and bound, and the certified, mismatched and unlabelled counts; tallies of tiles add
+        up, :func:`add_tallies`)."""
         theta, theta_dot = self.theta0[None, :], self.theta_dot0[rows][:, None]
         new_status, dist, side, n_near = self.certify(theta, theta_dot, attractor, status)
-        has_label = labelled(status)
+        has_label, running = labelled(status), status == RUNNING
+        basin = _basin(attractor, status)
         k = attractor.astype(np.int64)
-        agree = has_label & (k == side)
+        agree = (has_label | running) & (basin == side)
         clean = agree & (dist > self.half_diagonal)
+        side_well = side != RUNNING_SIDE
         # the wells this tile can touch: its labels, its sides and their neighbours
-        k_lo, k_hi, worst = self._doubt(rows, k, has_label, side, clean,
-                                        *np.broadcast_arrays(theta, theta_dot), n_near)
-        ks = np.concatenate([k[has_label], side.ravel(), k_lo, k_hi])
-        k0 = int(ks.min())
-        size = int(ks.max()) - k0 + 1
+        k_lo, k_hi, worst, may_run = self._doubt(rows, k, has_label, side, clean,
+                                                 *np.broadcast_arrays(theta, theta_dot),
+                                                 n_near)
+        ks = np.concatenate([k[has_label], side[side_well].ravel(), k_lo, k_hi])
+        k0 = int(ks.min()) if ks.size else 0
+        size = int(ks.max()) - k0 + 1 if ks.size else 1
         count = np.bincount(k[has_label] - k0, minlength=size)
         weight = self._row_weight[rows][:, None] * self._col_weight[None, :]  # a/A
         gap = np.abs(1.0 / self.n_points - weight)
         # clean cells are wholly in their basin, off only by their weight; every other cell
         # counts at most max(1/N, a/A) in each basin it may meet
-        bound = np.bincount(k[clean] - k0, weights=gap[clean], minlength=size).astype(float)
+        clean_well = clean & has_label
+        bound = np.bincount(k[clean_well] - k0, weights=gap[clean_well],
+                            minlength=size).astype(float)
         change = np.bincount(k_lo - k0, weights=worst, minlength=size + 1) \
             - np.bincount(k_hi + 1 - k0, weights=worst, minlength=size + 1)
         bound += np.cumsum(change)[:size]
+        running_bound = float(gap[clean & running].sum() + worst[may_run].sum())
         tally = {"k0": np.int64(k0), "count": count, "bound": bound,
-                 "certified": np.int64(np.count_nonzero(new_status == TRAPPED)),
-                 "mismatched": np.int64(np.count_nonzero(has_label & ~agree
+                 "running_bound": np.float64(running_bound),
+                 "certified": np.int64(np.count_nonzero((new_status == TRAPPED)
+                                                        | (new_status == RUNNING))),
+                 "mismatched": np.int64(np.count_nonzero((has_label | running) & ~agree
                                                          & (dist > self.d_cert))),
                  **_unlabelled(status)}
         return new_status, dist.astype(np.float32), tally
@@ -189,48 +310,63 @@ class Certifier:
     def _doubt(self, rows, k, has_label, side, clean, theta, theta_dot, n_near):
         """For the cells that are not clean: the range of wells [k_lo, k_hi] each may meet
         (its label, its exact side, and both sides of every boundary within its
-        half-diagonal) and its weight max(1/N, a/A)."""
+        half-diagonal), its weight max(1/N, a/A), and whether it may meet the running basin
+        (its label or side is running, or a boundary of a running basin is near)."""
         doubt = ~clean
-        lo_n, hi_n = self._index(_FIRST_MARGIN).saddles_within(
-            theta[doubt], theta_dot[doubt], self.half_diagonal)
+        lo_n, hi_n = self.exact.saddles_within(theta[doubt], theta_dot[doubt],
+                                               self.half_diagonal)
         near = n_near[doubt]
         lo_n = np.where(lo_n == 0, near, np.minimum(lo_n, near))
         hi_n = np.where(hi_n == 0, near, np.maximum(hi_n, near))
-        k_lo = np.minimum((lo_n - 1) // 2, side[doubt])
-        k_hi = np.maximum((hi_n + 1) // 2, side[doubt])
+        own_side = side[doubt]
+        side_well = own_side != RUNNING_SIDE
+        top = (hi_n - 1) // 2 + self.exact.upper_well
+        k_lo = np.where(side_well, np.minimum((lo_n - 1) // 2, own_side), (lo_n - 1) // 2)
+        k_hi = np.where(side_well, np.maximum(top, own_side), top)
         own = has_label[doubt]
         k_lo = np.where(own, np.minimum(k_lo, k[doubt]), k_lo)
         k_hi = np.where(own, np.maximum(k_hi, k[doubt]), k_hi)
         weight = self._row_weight[rows][:, None] * self._col_weight[None, :]
-        return k_lo, k_hi, np.maximum(1.0 / self.n_points, weight[doubt])
+        may_run = np.full(k_lo.shape, self.exact.running_possible)
+        return k_lo, k_hi, np.maximum(1.0 / self.n_points, weight[doubt]), may_run
 
     def summary(self, tally: dict) -> dict[str, np.ndarray]:
         """The parameter point's summary from the sum of its tiles' tallies: per basin k
         (every k the window meets or a label names) the exact fraction and its error, the grid
-        fraction, its error bound and its measured error; and the point's certificate
-        figures (the variables of :data:`atlas.store.BASIN_VARIABLES` and
+        fraction, its error bound and its measured error; the running basin's; and the
+        point's certificate figures (the variables of :data:`atlas.store.BASIN_VARIABLES` and
         :data:`atlas.store.POINT_VARIABLES` but ``trap_margin``)."""
         k0 = int(tally["k0"])
         grid_k = np.arange(k0, k0 + tally["count"].size)
-        ks = np.union1d(self.areas.k, grid_k)
+        a = self.exact
+        ks = np.union1d(a.k, grid_k)
         exact = np.zeros(ks.size)
         error = np.zeros(ks.size)
-        exact[np.searchsorted(ks, self.areas.k)] = self.areas.fraction
-        error[np.searchsorted(ks, self.areas.k)] = self.areas.error
+        exact[np.searchsorted(ks, a.k)] = a.fraction
+        error[np.searchsorted(ks, a.k)] = a.error
         grid = np.zeros(ks.size)
         bound = np.zeros(ks.size)
         grid[np.searchsorted(ks, grid_k)] = tally["count"] / self.n_points
         bound[np.searchsorted(ks, grid_k)] = tally["bound"]
         n = self.n_points
+        running = int(tally["running"]) / n
         return {"k": ks, "basin_fraction_exact": exact, "basin_fraction_exact_error": error,
                 "basin_fraction": grid, "basin_fraction_grid_error_bound": bound,
                 "basin_fraction_grid_error": np.abs(grid - exact),
                 "unresolved_fraction": int(tally["unlabelled"]) / n,
-                "running_fraction": int(tally["running"]) / n,
-                "running_fraction_exact": 0.0,  # no torque: no running basin
+                "running_fraction": running,
+                "running_fraction_exact": float(a.running),
+                "running_fraction_exact_error": float(a.running_error),
+                "running_fraction_grid_error_bound": float(tally["running_bound"]),
                 "certified_fraction": int(tally["certified"]) / n, "d_cert": self.d_cert,
                 "boundary_shift": self.shift, "boundary_reference_error": self.reference_error,
                 "side_mismatches": int(tally["mismatched"])}
+
+
+def _basin(attractor, status) -> np.ndarray:
+    """The basin a label names: well k, or RUNNING_SIDE for a running orbit."""
+    return np.where(np.asarray(status) == RUNNING, RUNNING_SIDE,
+                    np.asarray(attractor, np.int64))
 
 
 def add_tallies(tallies) -> dict:
@@ -245,6 +381,7 @@ def add_tallies(tallies) -> dict:
         total["bound"][at] += t["bound"]
     for name in ("certified", "mismatched", "unlabelled", "running"):
         total[name] = np.int64(sum(int(t[name]) for t in tallies))
+    total["running_bound"] = np.float64(sum(float(t["running_bound"]) for t in tallies))
     return total
 
 
@@ -257,52 +394,48 @@ def _unlabelled(status) -> dict:
             "unlabelled": np.int64(np.count_nonzero(~labelled(status)) - running)}
 
 
-class MapOnly:
-    """The certifier of a pendulum whose exact basin boundaries atlas does not compute (a
-    torque τ ≠ 0: the tilted saddles' stable manifolds are not integrated yet). Nothing is
-    certified for the exact equation: every well label is ``near_boundary`` (certified for
-    the RK4 map only), running labels keep their status (certified for the RK4 map by the
-    running barrier), and the exact fractions, boundary distances, d_cert and the grid
-    error bound are NaN: not computed. Same interface as :class:`Certifier`."""
+class NoBoundaries:
+    """The certifier of a pendulum without rest states (|τ| ≥ ω0²): the running limit cycle
+    is its only attractor, so its basin is the whole plane, there is no basin boundary
+    (``boundary_distance`` is +inf, d_cert 0) and every running label is certified for the
+    exact equation; an orbit not yet in the running barrier stays unresolved. Same
+    interface as :class:`Certifier`."""
 
     def __init__(self, pendulum: Pendulum, theta0, theta_dot0):
         self.pendulum = pendulum
         self.theta0, self.theta_dot0 = np.asarray(theta0, float), np.asarray(theta_dot0, float)
         self.n_points = self.theta0.size * self.theta_dot0.size
-        self.d_cert = math.nan
+        self.d_cert = 0.0
 
     def tile(self, rows: slice, attractor, status):
-        has_label = labelled(status)
-        k = np.asarray(attractor, np.int64)[has_label]
-        k0 = int(k.min()) if k.size else 0
-        count = np.bincount(k - k0) if k.size else np.zeros(1, np.int64)
-        tally = {"k0": np.int64(k0), "count": count, "bound": np.full(count.size, np.nan),
-                 "certified": np.int64(0), "mismatched": np.int64(0), **_unlabelled(status)}
-        new_status = np.where(has_label, NEAR_BOUNDARY, status).astype(np.int8)
-        return new_status, np.full(np.shape(status), np.nan, np.float32), tally
+        tally = {"k0": np.int64(0), "count": np.zeros(1, np.int64), "bound": np.zeros(1),
+                 "running_bound": np.float64(0.0),
+                 "certified": np.int64(np.count_nonzero(np.asarray(status) == RUNNING)),
+                 "mismatched": np.int64(0), **_unlabelled(status)}
+        return status, np.full(np.shape(status), np.inf, np.float32), tally
 
     def summary(self, tally: dict) -> dict:
-        k0 = int(tally["k0"])
-        ks = np.arange(k0, k0 + tally["count"].size)
-        grid = tally["count"] / self.n_points
-        nan = np.full(ks.size, np.nan)
         n = self.n_points
-        return {"k": ks, "basin_fraction_exact": nan, "basin_fraction_exact_error": nan,
-                "basin_fraction": grid, "basin_fraction_grid_error_bound": nan,
-                "basin_fraction_grid_error": nan,
+        running = int(tally["running"]) / n
+        return {"k": np.zeros(0, np.int64), "basin_fraction_exact": np.zeros(0),
+                "basin_fraction_exact_error": np.zeros(0), "basin_fraction": np.zeros(0),
+                "basin_fraction_grid_error_bound": np.zeros(0),
+                "basin_fraction_grid_error": np.zeros(0),
                 "unresolved_fraction": int(tally["unlabelled"]) / n,
-                "running_fraction": int(tally["running"]) / n,
-                "running_fraction_exact": math.nan, "certified_fraction": 0.0,
-                "d_cert": math.nan, "boundary_shift": math.nan,
-                "boundary_reference_error": math.nan, "side_mismatches": 0}
+                "running_fraction": running, "running_fraction_exact": 1.0,
+                "running_fraction_exact_error": 0.0,
+                "running_fraction_grid_error_bound": 1.0 - running,
+                "certified_fraction": int(tally["certified"]) / n,
+                "d_cert": 0.0, "boundary_shift": 0.0, "boundary_reference_error": 0.0,
+                "side_mismatches": 0}
 
 
 def certifier_for(pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float):
-    """The certifier of one parameter point: :class:`Certifier` (exact boundaries) for the
-    untilted pendulum, :class:`MapOnly` for τ ≠ 0."""
-    if pendulum.torque != 0.0:
-        return MapOnly(pendulum, theta0, theta_dot0)
-    return Certifier(pendulum, theta0, theta_dot0, shift, tol)
+    """The certifier of one parameter point: :class:`Certifier` (exact boundaries) where the
+    pendulum has rest states, :class:`NoBoundaries` where it has none (|τ| ≥ ω0²)."""
+    if pendulum.torque == 0.0 or pendulum.has_rest_states:
+        return Certifier(pendulum, theta0, theta_dot0, shift, tol)
+    return NoBoundaries(pendulum, theta0, theta_dot0)
 
 
 def _edge_weights(num: int) -> np.ndarray:

@@ -52,17 +52,20 @@ def _basin_lines(ds: xr.Dataset) -> list[str]:
               + f"   {g:.6f}     "
               + (f"{b:.1e}, {m:.1e}" if b == b else "not computed")
               for k, e, ee, g, b, m in zip(ks, exact, exact_err, grid, bound, measured)]
-    running = float(ds["running_fraction"])
-    if running:
-        lines.append(f"running   {running:.6f} of the grid (a count) converges to the running "
-                     "limit cycle: certified for the RK4 map by the running barrier")
+    running, running_exact = float(ds["running_fraction"]), float(ds["running_fraction_exact"])
+    if running or running_exact:
+        lines.append(f"          run {running_exact:.14f} ± "
+                     f"{float(ds['running_fraction_exact_error']):.0e}   {running:.6f}     "
+                     f"{float(ds['running_fraction_grid_error_bound']):.1e}, "
+                     f"{abs(running - running_exact):.1e}   (the running limit cycle)")
     d_cert = float(ds["d_cert"])
     n = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
     certified = int(round(float(ds["certified_fraction"]) * n))
     if d_cert == d_cert:  # not NaN
         lines.append(f"certified {certified:,} of {n:,} labels ({certified / n:.2%}) hold for "
                      f"the exact equation: farther than d_cert = {d_cert:.1e} from every "
-                     "basin boundary (status trapped); the others for the RK4 map only")
+                     "basin boundary (status trapped or running); the others for the RK4 "
+                     "map only")
     else:
         lines.append("certified d_cert not measured (separatrices disabled): labels are "
                      "certified for the RK4 map only (status near_boundary)")

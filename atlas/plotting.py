@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
 
-from .kernels import NEAR_BOUNDARY, RUNNING, TRAPPED  # noqa: E402
+from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED  # noqa: E402
 from .layout import PARAMETERS, first_point, point_group, point_label, point_of  # noqa: E402
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curves",
@@ -171,7 +171,7 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     kmin, kmax = (int(finite.min()), int(finite.max())) if finite.size else (0, 0)
     colors = list(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10))
     ticks, names = list(range(kmin, kmax + 1)), [f"{k:+d}" for k in range(kmin, kmax + 1)]
-    running = status == RUNNING
+    running = (status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)
     if running.any():  # the running basin: one more colour after the wells
         k[running] = kmax + 1
         colors.append(RUNNING_COLOR)

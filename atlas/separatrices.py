@@ -147,6 +147,7 @@ _MAX_STALLS = 20  # rounds in a row without a certified label inside a bracket
 _SPEED_GROWTH = 0.3  # predictor: max log-growth of the speed between vertices (near the saddle)
 _CHORD_AIM = 0.9  # predictor: aim at this × the allowed chord (curvature varies along it)
 _MAX_VERTICES = 1_000_000  # a branch 100 rad-ish long at MIN_MAX_SPACING
+_SHIFT_STRIDE = 8  # with torque: every 8th vertex is located again on its 2π-shifted copy
 
 
 @dataclass(frozen=True)
@@ -816,6 +817,13 @@ def max_discrepancy(ds: xr.Dataset) -> float:
     return float(ds.attrs["discrepancy"])
 
 
+def _basin_name(k) -> str:
+    """A crossing's basin: its well k, or "run" for the running basin."""
+    from .kernels import ATTRACTOR_FILL
+
+    return "run" if int(k) == ATTRACTOR_FILL else str(int(k))
+
+
 def summary(ds: xr.Dataset) -> list[str]:
     """Short human-readable lines for ``atlas info``."""
     found = {(n, b) for n, b, *_ in branches(ds)}
@@ -829,10 +837,15 @@ def summary(ds: xr.Dataset) -> list[str]:
         f"{', '.join(map(str, saddles)) or '-'}), {len(found)} branches, "
         f"{ds.sizes.get('point', 0)} points; bisection tol {float(ds.attrs['tol']):.0e}, "
         f"max spacing {float(ds.attrs['max_spacing']):g}",
-        "symmetry: right branch of -pi vs reflected left branch of pi: "
-        + (f"max distance {symmetry:.1e} ({'within' if symmetry <= symmetry_bound else 'EXCEEDS'}"
-           f" bound {symmetry_bound:.0e})" if symmetry == symmetry else
-           "not checked (the window needs one of them only)"),
+        (f"symmetry: torque breaks the point reflection; the 2 pi shift between copies, "
+         f"located independently: max distance {float(ds.attrs['shift_error']):.1e} over "
+         f"{int(ds.attrs.get('shift_pairs', 0))} pairs"
+         if "shift_error" in ds.attrs else
+         "symmetry: right branch of -pi vs reflected left branch of pi: "
+         + (f"max distance {symmetry:.1e} "
+            f"({'within' if symmetry <= symmetry_bound else 'EXCEEDS'} bound "
+            f"{symmetry_bound:.0e})" if symmetry == symmetry else
+            "not checked (the window needs one of them only)")),
         f"check vs DOP853 stable manifold: max distance {disc:.1e} "
         f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e}); "
         f"polyline error {float(ds.attrs['polyline_error']):.1e}; "
@@ -840,7 +853,8 @@ def summary(ds: xr.Dataset) -> list[str]:
         "uncertified (left out, never counted as either side)",
     ]
     inside = ds["crossing_in_window"].values if "crossing_in_window" in ds else None
-    cross = [f"{v:+.10f} ({int(lo)}|{int(hi)}){'' if inside is None or inside[i] else '*'}"
+    cross = [f"{v:+.10f} ({_basin_name(lo)}|{_basin_name(hi)})"
+             f"{'' if inside is None or inside[i] else '*'}"
              for i, (v, lo, hi) in enumerate(zip(ds["crossing_theta_dot"].values,
                                                  ds["k_below"].values, ds["k_above"].values,
                                                  strict=True))]
@@ -849,3 +863,233 @@ def summary(ds: xr.Dataset) -> list[str]:
                  "* outside the window)")
     lines += [f"warning: {w}" for w in warnings(ds)]
     return lines
+
+
+# --------------------------------------------------------------------------- torque
+
+
+class _RunningLabeller(_Labeller):
+    """Certified labels with torque: well k, :data:`atlas.tilted.RUNNING_SIDE` for an orbit in
+    the running barrier, ``NO_LABEL`` for neither."""
+
+    def __init__(self, p: Pendulum, dt: float, t_max: float, barrier, backend: str = "cpu"):
+        super().__init__(p, dt, t_max, backend)
+        self.barrier = barrier
+
+    def __call__(self, theta: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
+        from .kernels import RUNNING
+        from .tilted import RUNNING_SIDE
+
+        res = label(theta, theta_dot, alpha=self.p.alpha, omega0=self.p.omega0,
+                    torque=self.p.torque, dt=self.dt, t_max=self.t_max, backend=self.backend,
+                    running=self.barrier)
+        k, status = res.attractor.astype(np.int64), res.status
+        self.orbits += theta.size
+        self.unresolved += int(np.sum(status == UNRESOLVED))
+        self.nonfinite += int(np.sum((status != TRAPPED) & (status != UNRESOLVED)
+                                     & (status != RUNNING)))
+        return np.where(status == TRAPPED, k, np.where(status == RUNNING, RUNNING_SIDE,
+                                                       NO_LABEL))
+
+
+def _bisect_between(labels, base, normal, below, above, *, tol: float, half_width: float):
+    """Plain vectorised bisection of labels along base + s·normal between basin ``below``
+    (s < 0 side) and ``above`` (s > 0), from the bracket ±half_width: returns (s_lo, s_hi,
+    ok), ``ok`` False where an end or a midpoint carries neither label (the bracket is then
+    left as it was: its width says how far it got)."""
+    n = base.shape[0]
+    lo, hi = np.full(n, -half_width), np.full(n, half_width)
+    ends = labels(np.concatenate([base[:, 0] + lo * normal[:, 0], base[:, 0] + hi * normal[:, 0]]),
+                  np.concatenate([base[:, 1] + lo * normal[:, 1], base[:, 1] + hi * normal[:, 1]]))
+    ok = (ends[:n] == below) & (ends[n:] == above)
+    active = ok.copy()
+    while True:
+        idx = np.flatnonzero(active & (hi - lo >= tol))
+        if not idx.size:
+            return lo, hi, ok
+        mid = 0.5 * (lo[idx] + hi[idx])
+        lab = labels(base[idx, 0] + mid * normal[idx, 0], base[idx, 1] + mid * normal[idx, 1])
+        is_below, is_above = lab == below[idx], lab == above[idx]
+        lo[idx[is_below]] = mid[is_below]
+        hi[idx[is_above]] = mid[is_above]
+        lost = idx[~(is_below | is_above)]
+        ok[lost] = active[lost] = False
+
+
+def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
+                 tol: float = defaults.SEPARATRIX_TOL, max_spacing: float = defaults.MAX_SPACING,
+                 dt: float = defaults.DT, t_max: float = defaults.T_MAX,
+                 backend: str = "cpu") -> xr.Dataset:
+    """The basin boundaries of the RK4 map for a pendulum with torque 0 < |τ| < ω0², the
+    counterpart of :func:`trace` (same arguments; ``t_max`` [s] the atlas's, to which the
+    lingering time at a saddle is added).
+
+    The exact boundaries are :class:`atlas.tilted.TiltedBoundaries` (the stable branches of
+    the tilted saddles, DOP853): they are the predictor. Vertices are taken along each branch
+    in the window at most ``max_spacing`` apart (none closer than 1e-3 to its saddle, where
+    the vector field that gives the normal vanishes); across each, along the normal of the
+    vector field, the exact sides are read on either side (well k or the running basin) and
+    certified RK4 labels (:func:`atlas.labels.label` with the tilted trap and the running
+    barrier) are bisected from ±1e-3 until the bracket is narrower than ``tol``. Nothing is
+    copied: every branch in the window is located on its own labels, so the 2π shift, the
+    symmetry that holds with torque, is checked, not assumed: ``shift_error`` is the largest
+    distance between a located point and the located point of the same source vertex on the
+    neighbouring copy, shifted by 2π (the point reflection of the untilted pendulum does not
+    hold: ``symmetry_error`` is NaN). ``discrepancy`` is the largest distance of the located
+    points from the exact boundaries (:meth:`TiltedBoundaries.distance`): the RK4 map's
+    boundary shift, which sets d_cert. Crossings of the axis θ0 = 0 are located the same way
+    along θ̇, from the exact polylines' crossings; a running side is stored as
+    :data:`atlas.tilted.RUNNING_SIDE` in ``k_below``/``k_above``.
+
+    Same schema as :func:`trace` (``saddle_n`` = 2j + 1 for the saddle π − θ* + 2πj, the
+    one near (2j + 1)π), plus the attributes ``torque``, ``shift_error`` and
+    ``reference_error`` (the exact boundaries' own error: chord + DOP853).
+    """
+    from .running import running_barrier
+    from .tilted import RUNNING_SIDE, TiltedBoundaries
+
+    p = pendulum
+    _require_damping(p)
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
+    check_separatrix_settings(theta_window, theta_dot_window, tol, max_spacing)
+    window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
+    exact = TiltedBoundaries(p, window.theta, window.theta_dot)
+    barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.cycle, dt=dt) \
+        if exact.cycle is not None else None
+    labels = _RunningLabeller(p, dt, t_max + _linger(p, tol), barrier, backend)
+
+    rows = []  # (saddle j, branch, vertex index, θ, θ̇)
+    for j, name, theta, theta_dot in exact.curves(clip=False):
+        step = np.hypot(np.diff(theta), np.diff(theta_dot))
+        along = np.concatenate([[0.0], np.cumsum(step)])
+        picks = np.unique(np.searchsorted(along, np.arange(1e-3, along[-1], max_spacing)))
+        picks = picks[picks < theta.size]
+        inside = window.margin(theta[picks], theta_dot[picks]) >= 0
+        for i in picks[inside]:
+            rows.append((j, BRANCHES.index(name), int(i), theta[i], theta_dot[i]))
+    saddle_j = np.array([r[0] for r in rows], np.int64)
+    branch = np.array([r[1] for r in rows], np.int8)
+    vertex = np.array([r[2] for r in rows], np.int32)
+    base = np.array([(r[3], r[4]) for r in rows], float).reshape(-1, 2)
+    normal = np.column_stack(_normal(p, base[:, 0], base[:, 1])) if rows else base.copy()
+    probe = 1e-3
+    below = exact.side(base[:, 0] - probe * normal[:, 0], base[:, 1] - probe * normal[:, 1])
+    above = exact.side(base[:, 0] + probe * normal[:, 0], base[:, 1] + probe * normal[:, 1])
+    lo, hi, ok = _bisect_between(labels, base, normal, below, above, tol=tol,
+                                 half_width=probe)
+    point = base + 0.5 * (lo + hi)[:, None] * normal
+    dist, _ = exact.distance(point[:, 0], point[:, 1]) if rows else (np.zeros(0), None)
+    discrepancy = float(dist[ok].max(initial=0.0))
+    # the 2π shift: every 8th located vertex, shifted by 2π and located again on its own
+    # labels (the next well's side), must land on the shifted point
+    pick = np.flatnonzero(ok)[::_SHIFT_STRIDE]
+    shifted = base[pick] + np.array([2.0 * math.pi, 0.0])
+
+    def next_well(side):
+        return np.where(side == RUNNING_SIDE, side, side + 1)
+
+    s_lo, s_hi, s_ok = _bisect_between(labels, shifted, normal[pick], next_well(below[pick]),
+                                       next_well(above[pick]), tol=tol, half_width=probe)
+    moved = shifted + 0.5 * (s_lo + s_hi)[:, None] * normal[pick]
+    gap = np.hypot(*(moved - point[pick] - np.array([2.0 * math.pi, 0.0])).T)
+    shift_error, shift_pairs = float(gap[s_ok].max(initial=0.0)), int(s_ok.sum())
+
+    crossing, crossing_width, k_below, k_above = _tilted_crossings(exact, labels, window, tol)
+    problems = []
+    if not ok.all():
+        problems.append(f"{int((~ok).sum())} of {ok.size} vertices could not be bisected to "
+                        f"tol = {tol:g} on certified labels (unresolved orbits or a third "
+                        "basin within 1e-3); they are kept with their bracket_width")
+    if discrepancy > DISCREPANCY_BOUND:
+        problems.append(f"separatrix points are up to {discrepancy:.2e} from the DOP853 "
+                        f"stable manifolds (bound {DISCREPANCY_BOUND:.0e}): lower dt")
+    stored_n = (2 * saddle_j + 1).astype(np.int32)
+    order = np.lexsort((vertex, branch, stored_n))
+    saddle_theta = np.array([exact.saddle_theta(int(j)) for j in saddle_j])
+    flags = np.array([0, 1], np.int8)
+    return xr.Dataset(
+        data_vars={
+            "theta": ("point", point[order, 0], {"units": "rad", "long_name": "angle theta"}),
+            "theta_dot": ("point", point[order, 1],
+                          {"units": "rad s-1", "long_name": "angular velocity theta_dot"}),
+            "bracket_width": ("point", (hi - lo)[order], {
+                "units": "1", "long_name": "final bisection bracket width across the curve "
+                "(phase-plane distance, rad and rad s-1 mixed)"}),
+            "crossing_theta_dot": ("crossing", crossing, {
+                "units": "rad s-1", "long_name": "theta_dot0 where the label changes on the "
+                "axis theta0 = 0"}),
+            "k_below": ("crossing", k_below.astype(np.int16), {
+                "units": "1", "long_name": "attractor k just below the crossing",
+                "comment": f"{RUNNING_SIDE}: the running basin"}),
+            "k_above": ("crossing", k_above.astype(np.int16), {
+                "units": "1", "long_name": "attractor k just above the crossing",
+                "comment": f"{RUNNING_SIDE}: the running basin"}),
+            "crossing_bracket_width": ("crossing", crossing_width, {
+                "units": "rad s-1", "long_name": "final bisection bracket width"}),
+            "crossing_in_window": ("crossing", np.ones(crossing.size, np.int8), {
+                "long_name": "whether the crossing (0, theta_dot0) lies in the window",
+                "flag_values": flags, "flag_meanings": "outside inside"}),
+        },
+        coords={
+            "saddle_theta": ("point", saddle_theta[order], {
+                "units": "rad", "long_name": "theta of the saddle (pi - asin(torque/omega0^2) "
+                "+ 2 pi j, 0)"}),
+            "saddle_n": ("point", stored_n[order], {
+                "units": "1", "long_name": "index n = 2j + 1 of the saddle near n*pi"}),
+            "branch": ("point", branch[order], {
+                "long_name": "branch of the stable manifold", "flag_values": flags,
+                "flag_meanings": "left right",
+                "comment": "left: arrives with theta_dot > 0 from the left; right: arrives "
+                           "with theta_dot < 0 from the right"}),
+            "vertex": ("point", vertex[order], {
+                "units": "1", "long_name": "index of the vertex along the exact polyline"}),
+        },
+        attrs={
+            "alpha": p.alpha, "omega0": p.omega0, "torque": p.torque,
+            "theta_window": np.array(window.theta),
+            "theta_dot_window": np.array(window.theta_dot),
+            "tol": float(tol), "max_spacing": float(max_spacing), "dt": float(dt),
+            "t_max": labels.t_max,
+            "n_boundaries": int(np.unique(stored_n).size),
+            "symmetry_error": math.nan, "symmetry_bound": SYMMETRY_BOUND * tol,
+            "shift_error": shift_error, "shift_pairs": np.int64(shift_pairs),
+            "discrepancy": discrepancy, "discrepancy_bound": DISCREPANCY_BOUND,
+            "polyline_error": exact.chord_error,
+            "reference_error": exact.reference_error + exact.chord_error,
+            "n_orbits": labels.orbits, "n_unresolved": labels.unresolved,
+            "warnings": "\n".join(problems),
+            "method": (
+                "basin boundaries of the RK4 map (step dt) with torque: vertices on the exact "
+                "stable branches of the tilted saddles (atlas.tilted: DOP853 in reversed time, "
+                "rtol = atol = 1e-13), at most max_spacing apart; each located by bisection "
+                "across the curve on certified RK4 labels (tilted trap, running barrier) "
+                "until the bracket is narrower than tol; every copy located on its own "
+                "labels (shift_error: the 2 pi shift between copies); discrepancy = max "
+                "distance of the points to the exact boundaries"),
+        },
+    )
+
+
+def _tilted_crossings(exact, labels, window: Window, tol: float):
+    """Where the label changes along the axis θ0 = 0 in the window: the exact polylines'
+    crossings of θ = 0, each bisected along θ̇ on certified RK4 labels. Returns (θ̇0, bracket
+    width, basin below, basin above)."""
+    speeds = []
+    for _, _, theta, theta_dot in exact.curves(clip=True):
+        s = np.sign(theta)
+        for i in np.flatnonzero(s[:-1] * s[1:] < 0):
+            f = theta[i] / (theta[i] - theta[i + 1])
+            speeds.append(theta_dot[i] + f * (theta_dot[i + 1] - theta_dot[i]))
+    speeds = np.sort(np.array([v for v in speeds
+                               if window.theta_dot[0] < v < window.theta_dot[1]]))
+    empty = np.zeros(0)
+    if (window.theta[0] > 0.0 or window.theta[1] < 0.0) or not speeds.size:
+        return empty, empty, empty.astype(np.int64), empty.astype(np.int64)
+    base = np.column_stack([np.zeros(speeds.size), speeds])
+    up = np.column_stack([np.zeros(speeds.size), np.ones(speeds.size)])
+    probe = 1e-3
+    below = exact.side(np.zeros(speeds.size), speeds - probe)
+    above = exact.side(np.zeros(speeds.size), speeds + probe)
+    lo, hi, _ = _bisect_between(labels, base, up, below, above, tol=tol, half_width=probe)
+    return speeds + 0.5 * (lo + hi), hi - lo, below, above

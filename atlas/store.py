@@ -51,13 +51,16 @@ from .tiles import (
 __all__ = ["finalize", "open_atlas", "partial_path", "describe", "FILLS",
            "DamagedTile", "summary_dataset"]
 
-STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3, 4], np.int8),
-                "flag_meanings": "trapped unresolved nonfinite near_boundary running",
+STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3, 4, 5], np.int8),
+                "flag_meanings": "trapped unresolved nonfinite near_boundary running "
+                                 "running_near_boundary",
                 "comment": "trapped: certified for the exact equation (energy trap of the RK4 "
                            "map, and farther than d_cert from every basin boundary); "
-                           "near_boundary: trapped, certified for the RK4 map only; running: "
-                           "in the running barrier (torque), certified for the RK4 map to "
-                           "converge to the running limit cycle"}
+                           "near_boundary: trapped, certified for the RK4 map only; running "
+                           "(torque): in the running barrier of the RK4 map and farther than "
+                           "d_cert from every basin boundary, certified for the exact equation "
+                           "to converge to the running limit cycle; running_near_boundary: "
+                           "running, certified for the RK4 map only"}
 _COMPRESSION = {"compression": "gzip", "compression_opts": DEFLATE_LEVEL, "shuffle": True}
 SCHEMA = "atlas-basin-map/1"
 #: Fill values of the label variables (also the padding of a tile's edge chunk).
@@ -137,8 +140,11 @@ POINT_VARIABLES = {
     "running_fraction": {"long_name": "fraction of the grid labelled running (a count, not "
                                       "an area)"},
     "running_fraction_exact": {"long_name": "area fraction of the window in the running "
-                                            "basin, from the exact basin boundaries",
-                               "comment": "NaN: not computed"},
+                                            "basin, from the exact basin boundaries"},
+    "running_fraction_exact_error": {"long_name": "error estimate of "
+                                                  "running_fraction_exact"},
+    "running_fraction_grid_error_bound": {"long_name": "bound on |running_fraction - "
+                                                       "running_fraction_exact|"},
     "d_cert": {"long_name": "distance to the basin boundaries beyond which RK4 labels are "
                             "certified for the exact equation",
                "comment": "10 x (boundary shift + bisection tol + reference error); NaN: "

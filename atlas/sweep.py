@@ -191,9 +191,12 @@ def _trace_separatrices(cfg: Config, pendulums: list[Pendulum]) -> list[xr.Datas
 
     g = cfg.grid
     window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
-    return [separatrices.trace(p, *window, tol=cfg.separatrices.tol,
-                               max_spacing=cfg.separatrices.max_spacing, dt=cfg.integrator.dt)
-            if p.torque == 0.0 else None for p in pendulums]
+    settings = {"tol": cfg.separatrices.tol, "max_spacing": cfg.separatrices.max_spacing,
+                "dt": cfg.integrator.dt}
+    return [separatrices.trace(p, *window, **settings) if p.torque == 0.0 else
+            separatrices.trace_tilted(p, *window, t_max=cfg.integrator.t_max, **settings)
+            if p.has_rest_states else None  # |torque| >= omega0^2: no saddle, no boundary
+            for p in pendulums]
 
 
 def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]

@@ -47,10 +47,11 @@ MAP_VARIABLES = {"attractor": np.int16, "status": np.int8, "t_trap": np.float32,
                  "boundary_distance": np.float32}
 #: What atlas means by each status flag value.
 STATUS_MEANINGS = {0: "trapped", 1: "unresolved", 2: "nonfinite", 3: "near_boundary",
-                   4: "running"}
+                   4: "running", 5: "running_near_boundary"}
 _BASIN = ("basin_fraction_exact", "basin_fraction_exact_error", "basin_fraction",
           "basin_fraction_grid_error_bound", "basin_fraction_grid_error")
 _POINT = ("unresolved_fraction", "running_fraction", "running_fraction_exact",
+          "running_fraction_exact_error", "running_fraction_grid_error_bound",
           "certified_fraction", "d_cert",
           "boundary_shift", "boundary_reference_error", "trap_margin", "side_mismatches")
 

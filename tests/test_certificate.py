@@ -67,7 +67,7 @@ def test_certified_labels_are_the_exact_equations(traced):
     """Points on either side of the exact boundaries at 10·d_cert: every label atlas certifies
     is DOP853's; at 0.1·d_cert none is certified, so the flag is not vacuous."""
     p, _, cert = traced
-    manifold = cert._index(1.0).manifold
+    manifold = cert.exact._index(1.0).manifold
     rng = np.random.default_rng(11)
     # points on the exact boundaries through saddles in and outside the window
     picks = rng.choice(manifold.theta.size, 12, replace=False)

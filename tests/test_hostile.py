@@ -127,7 +127,8 @@ def _decreasing_theta0(f):
 
 
 def _flags(f):
-    f["status"].attrs["flag_meanings"] = "unresolved trapped nonfinite near_boundary running"
+    f["status"].attrs["flag_meanings"] = ("unresolved trapped nonfinite near_boundary running "
+                                          "running_near_boundary")
 
 
 BROKEN = [

@@ -33,9 +33,9 @@ def test_root_schema_with_plain_xarray(written):
     assert ds["theta0"].attrs["units"] == "rad"
     assert ds["theta_dot0"].attrs["units"] == "rad s-1"
     assert ds["t_trap"].attrs["units"] == "s" and ds["t_trap"].dtype == np.float32
-    assert list(ds["status"].attrs["flag_values"]) == [0, 1, 2, 3, 4]
+    assert list(ds["status"].attrs["flag_values"]) == [0, 1, 2, 3, 4, 5]
     assert ds["status"].attrs["flag_meanings"] == \
-        "trapped unresolved nonfinite near_boundary running"
+        "trapped unresolved nonfinite near_boundary running running_near_boundary"
     assert ds["boundary_distance"].dims == ("theta_dot0", "theta0")
     assert ds["boundary_distance"].dtype == np.float32
     for name in ("attractor", "status", "t_trap", "boundary_distance", "basin_fraction",

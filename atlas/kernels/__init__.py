@@ -70,6 +70,9 @@ NEAR_BOUNDARY = 3
 #: certificate's forward-invariant region (contract above). ``attractor`` stays at its fill
 #: value; the direction of rotation is sign(τ) (:class:`atlas.labels.LabelResult`).
 RUNNING = 4
+#: Status set after labelling (never by a kernel): running, but not certified for the exact
+#: equation (closer than d_cert to a basin boundary, or on another basin's side).
+RUNNING_NEAR_BOUNDARY = 5
 #: Attractor index where status ≠ trapped in a label result (int16; also the file's
 #: _FillValue), the counterpart of the status codes above.
 ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
