@@ -8,9 +8,8 @@ certificates (the formulas of :mod:`atlas.kernels.rk4` with ``math.sin``, tested
 the running certificate; it keeps the whole trajectory. The label itself is also taken from
 :func:`atlas.label` and the two must agree. :func:`report` adds the certificate for the exact
 equation: the distance to the exact basin boundaries from :class:`atlas.certificate.Certifier`
-(DOP853 stable manifolds) compared with the file's ``d_cert`` (τ = 0 only: for τ ≠ 0 the
-exact boundaries are not computed and the label is certified for the RK4 map), and the file's
-stored values at the nearest grid point.
+(DOP853 stable manifolds, tilted by the torque where it has one) and the exact side, compared
+with the file's ``d_cert``, and the file's stored values at the nearest grid point.
 """
 
 from __future__ import annotations
@@ -332,13 +331,17 @@ def _nearest(point, theta0: float, theta_dot0: float) -> dict:
 
 
 def _exact(orbit: Orbit, window, shift: float, tol: float):
-    """(distance to the nearest exact basin boundary, the exact side k, d_cert) by
-    :class:`atlas.certificate.Certifier` over ``window`` (τ = 0)."""
-    from .certificate import Certifier
+    """(distance to the nearest exact basin boundary, the exact side: k or RUNNING_SIDE,
+    d_cert) by :class:`atlas.certificate.Certifier` over ``window``; (inf, RUNNING_SIDE, 0)
+    for a pendulum without rest states (|τ| ≥ ω0²: no boundary, every orbit runs)."""
+    from .certificate import RUNNING_SIDE, Certifier
     from .model import Pendulum
 
+    p = Pendulum(orbit.alpha, orbit.omega0, orbit.torque)
+    if p.torque != 0.0 and not p.has_rest_states:
+        return math.inf, RUNNING_SIDE, 0.0
     (t0, t1), (v0, v1) = window
-    cert = Certifier(Pendulum(orbit.alpha, orbit.omega0), [t0, t1], [v0, v1], shift, tol)
+    cert = Certifier(p, [t0, t1], [v0, v1], shift, tol)
     k = np.array([orbit.k if orbit.k is not None else 0])
     status = np.array([orbit.status], np.int8)
     _, dist, side, _ = cert.certify(np.array([orbit.theta0]), np.array([orbit.theta_dot0]),
@@ -346,9 +349,10 @@ def _exact(orbit: Orbit, window, shift: float, tol: float):
     return float(dist[0]), int(side[0]), cert.d_cert
 
 
-#: What ``atlas orbit`` says of the exact equation for τ ≠ 0.
-TILTED_EXACT = ("exact boundaries for torque ≠ 0 not computed: certified for the RK4 map "
-                "only")
+def _basin_name(side: int) -> str:
+    from .certificate import RUNNING_SIDE
+
+    return "the running basin" if side == RUNNING_SIDE else f"k = {side:+d}"
 
 
 def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
@@ -428,11 +432,7 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
                "not trapped by t_max")
         lines += [f"label        none: {STATUS_NAMES[orbit.status]} ({why}) ({agree})"]
 
-    if orbit.status == TRAPPED and torque != 0.0:
-        lines.append(f"exact        {TILTED_EXACT}")
-    elif orbit.status == RUNNING:
-        lines.append(f"exact        {TILTED_EXACT}")
-    elif orbit.status == TRAPPED:
+    if orbit.status in (TRAPPED, RUNNING):
         if nearest is not None:
             window = ((float(point["theta0"][0]), float(point["theta0"][-1])),
                       (float(point["theta_dot0"][0]), float(point["theta_dot0"][-1])))
@@ -442,10 +442,13 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
             window = _around(orbit, None)
         dist, side, d_cert = _exact(orbit, window, shift, tol)
         where = ("Certifier: distance to the exact basin boundaries, the DOP853 stable "
-                 "manifolds")
-        if side != orbit.k:
-            verdict = (f"the exact equation's side of the boundaries is k = {side:+d}, not the "
-                       "RK4 label: certified for the RK4 map only")
+                 "manifolds" + (" of the tilted saddles" if torque else ""))
+        from .certificate import RUNNING_SIDE
+
+        own = RUNNING_SIDE if orbit.status == RUNNING else orbit.k
+        if side != own:
+            verdict = (f"the exact equation's side of the boundaries is {_basin_name(side)}, "
+                       "not the RK4 label's: certified for the RK4 map only")
         elif d_cert == d_cert:
             verdict = (f"{'>' if dist > d_cert else '<='} d_cert = {d_cert:.2g}: "
                        + ("certified for the exact equation" if dist > d_cert else

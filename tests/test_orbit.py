@@ -171,18 +171,19 @@ def test_integrate_with_torque_gives_the_kernels_labels(torque):
 def test_orbit_on_a_torque_file(swing_file, tmp_path, capsys):
     """The orbit takes τ and the running barrier from the file: a point the file labels
     running is certified running by the barrier, a trapped one in the file's well, each the
-    same as atlas.label; the exact check is said not to exist for τ ≠ 0."""
+    same as atlas.label; both certified for the exact equation by the tilted boundaries, as
+    the file's statuses say."""
     ds = atlas.open(swing_file).to_dataset(inherit=False)
     status = ds["status"].values
-    for code in (4, 3):  # running; trapped (near_boundary: no d_cert without separatrices)
+    for code in (4, 0):  # running, trapped: both certified for the exact equation
         j, i = np.argwhere(status == code)[np.sum(status == code) // 2]
         th, v = float(ds["theta0"][i]), float(ds["theta_dot0"][j])
         out = tmp_path / f"o{code}.png"
         assert main(["orbit", str(swing_file), repr(th), repr(v), "-o", str(out)]) == 0
         text = capsys.readouterr().out
         assert "torque = 0.5 rad/s^2" in text and "the same as atlas.label" in text
-        assert "exact boundaries for torque ≠ 0 not computed: certified for the RK4 map only" \
-            in text
+        assert "stable manifolds of the tilted saddles" in text
+        assert "> d_cert" in text and "certified for the exact equation" in text
         if code == 4:
             assert "label        running" in text and "status running" in text
             assert "certificate  running barrier" in text
