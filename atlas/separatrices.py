@@ -966,8 +966,9 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
         picks = np.unique(np.searchsorted(along, np.arange(1e-3, along[-1], max_spacing)))
         picks = picks[picks < theta.size]
         inside = window.margin(theta[picks], theta_dot[picks]) >= 0
-        for i in picks[inside]:
-            rows.append((j, BRANCHES.index(name), int(i), theta[i], theta_dot[i]))
+        for number in np.flatnonzero(inside):  # numbered along the branch: gaps outside
+            i = picks[number]
+            rows.append((j, BRANCHES.index(name), int(number), theta[i], theta_dot[i]))
     saddle_j = np.array([r[0] for r in rows], np.int64)
     branch = np.array([r[1] for r in rows], np.int8)
     vertex = np.array([r[2] for r in rows], np.int32)
@@ -1043,7 +1044,8 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
                 "comment": "left: arrives with theta_dot > 0 from the left; right: arrives "
                            "with theta_dot < 0 from the right"}),
             "vertex": ("point", vertex[order], {
-                "units": "1", "long_name": "index of the vertex along the exact polyline"}),
+                "units": "1", "long_name": "index along the branch, 0 nearest the saddle",
+                "comment": "gaps where the branch leaves the window and comes back"}),
         },
         attrs={
             "alpha": p.alpha, "omega0": p.omega0, "torque": p.torque,

@@ -1,0 +1,172 @@
+"""The pendulum with constant torque (the swing equation) as an atlas: files, certificates
+and exact fractions, end to end, against independent references (DOP853 runs classified by
+the same certificates, the untilted atlas, the published basin stability of bSTAB)."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import atlas
+from atlas.kernels import RUNNING, TRAPPED
+from atlas.layout import at_point, point_group, points
+from atlas.model import Pendulum
+from atlas.running import contains
+from tests.helpers import run_cli
+
+MAP = ("attractor", "status", "t_trap", "boundary_distance")
+
+
+def _run(tmp_path, name, pendulum, *, theta=("-5pi/6", "7pi/6"), speed=(-6.0, 6.0),
+         num=(36, 30), t_max=400.0, separatrices=True):
+    cfg = atlas.Config.model_validate({
+        "name": name, "pendulum": pendulum,
+        "grid": {"theta0": {"start": theta[0], "stop": theta[1], "num": num[0]},
+                 "theta_dot0": {"start": speed[0], "stop": speed[1], "num": num[1]}},
+        "integrator": {"dt": 0.01, "t_max": t_max},
+        "separatrices": {"enabled": separatrices},
+        "output": str(tmp_path / f"{name}.h5")})
+    return atlas.run(cfg, quiet=True)
+
+
+@pytest.mark.slow
+def test_zero_torque_is_the_untilted_atlas(tmp_path):
+    """τ = 0, given or not, and the τ = 0 point of a sweep over τ: the same arrays, bit for
+    bit, as the untilted atlas; the sweep's other point is tilted and has its own node."""
+    untilted = {"alpha": 0.1, "omega0": 1.0}
+    window = {"theta": ("-3pi", "3pi"), "speed": (-4.0, 4.0), "num": (40, 32),
+              "t_max": 200.0, "separatrices": False}
+    plain = _run(tmp_path, "plain", untilted, **window).to_dataset(inherit=False)
+    zero = _run(tmp_path, "zero", {**untilted, "torque": 0.0}, **window)
+    swept = _run(tmp_path, "swept", {**untilted, "torque": [0.0, 0.3]}, **window)
+    sweep_root = swept.to_dataset(inherit=False)
+    assert sweep_root["attractor"].dims == ("torque", "theta_dot0", "theta0")
+    first = at_point(sweep_root, {"alpha": 0.1, "omega0": 1.0, "torque": 0.0})
+    for other in (zero.to_dataset(inherit=False), first):
+        for name in (*MAP, "basin_fraction_exact", "basin_fraction", "d_cert"):
+            np.testing.assert_array_equal(plain[name].values, other[name].values)
+    tilted = point_group(swept, "critical_points", {"alpha": 0.1, "omega0": 1.0, "torque": 0.3})
+    np.testing.assert_allclose(tilted["theta"].values[tilted["n"].values == 0],
+                               math.asin(0.3))
+
+
+def _dop853_label(p: Pendulum, theta0, theta_dot0, barrier, t_end):
+    """The exact equation's fate by the same certificates, applied along a DOP853 orbit
+    (rtol 1e-12): the first sample at which the orbit is inside a well's energy trap (below
+    the lower saddle's energy, between the well's saddles) gives its k; the first inside the
+    running barrier, 'running'; None if neither by t_end."""
+    def rhs(_, y):
+        return [y[1], p.torque - p.omega0**2 * math.sin(y[0]) - 2 * p.alpha * y[1]]
+
+    sol = solve_ivp(rhs, (0.0, t_end), [theta0, theta_dot0], method="DOP853", rtol=1e-12,
+                    atol=1e-12, dense_output=True)
+    t = np.arange(0.0, sol.t[-1], 0.05)
+    theta, theta_dot = sol.sol(t)
+    k = np.array([p.well(x) for x in theta])
+    energy = np.array([p.energy(x, v, kk) for x, v, kk in zip(theta, theta_dot, k)])
+    trapped = energy < p.saddle_energy
+    running = contains(barrier, theta, theta_dot) if barrier is not None else np.zeros_like(
+        trapped)
+    first_trap = np.argmax(trapped) if trapped.any() else t.size
+    first_run = np.argmax(running) if running.any() else t.size
+    if first_trap < first_run:
+        return int(k[first_trap])
+    return "running" if first_run < t.size else None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("alpha, omega0, torque", [(0.05, 1.0, 0.5), (0.1, 1.0, 0.4),
+                                                   (0.2, 1.5, -1.0)])
+def test_certified_labels_are_the_exact_equations(tmp_path, alpha, omega0, torque):
+    """Bistable swing pendulums (a running cycle and rest states): grid points certified for
+    the exact equation (status trapped or running, farther than 10·d_cert from every
+    boundary) get the same fate from DOP853 runs classified by the same certificates."""
+    from atlas.running import running_barrier
+
+    p = Pendulum(alpha, omega0, torque)
+    tree = _run(tmp_path, "b", {"alpha": alpha, "omega0": omega0, "torque": torque},
+                speed=(-8.0, 8.0))
+    ds = tree.to_dataset(inherit=False)
+    status, d = ds["status"].values, ds["boundary_distance"].values
+    d_cert = float(ds["d_cert"])
+    assert 0 < d_cert < 1e-6
+    assert (status == RUNNING).any() and (status == TRAPPED).any()  # both kinds certified
+    far = np.argwhere(np.isin(status, (TRAPPED, RUNNING)) & (d > 10 * d_cert))
+    rng = np.random.default_rng(7)
+    barrier = running_barrier(alpha, omega0, torque)
+    for j, i in far[rng.choice(len(far), 24, replace=False)]:
+        theta0, theta_dot0 = float(ds["theta0"][i]), float(ds["theta_dot0"][j])
+        fate = _dop853_label(p, theta0, theta_dot0, barrier, 400.0)
+        stored = "running" if status[j, i] == RUNNING else int(ds["attractor"].values[j, i])
+        assert fate == stored, (theta0, theta_dot0, fate, stored)
+
+
+@pytest.mark.slow
+def test_without_rest_states_every_orbit_runs(tmp_path):
+    """|τ| ≥ ω0²: no critical point, no boundary; every orbit is certified running, the
+    running basin is the whole window, and atlas info says so plainly."""
+    tree = _run(tmp_path, "runs", {"alpha": 0.1, "omega0": 1.0, "torque": 1.5},
+                speed=(-4.0, 4.0), t_max=200.0)
+    ds = tree.to_dataset(inherit=False)
+    assert np.all(ds["status"].values == RUNNING)
+    assert float(ds["running_fraction_exact"]) == 1.0 and float(ds["running_fraction"]) == 1.0
+    assert np.all(np.isinf(ds["boundary_distance"].values))
+    assert tree["critical_points"].sizes["point"] == 0
+    assert float(tree["limit_cycle"].attrs["period"]) > 0
+    info = run_cli("info", tmp_path / "runs.h5")
+    assert info.returncode == 0, info.stderr
+    assert "none: |torque| >= omega0^2, every orbit runs" in info.stdout
+
+
+@pytest.mark.slow
+def test_the_published_basin_stability_of_the_torque_pendulum(tmp_path):
+    """bSTAB's pendulum case (M. Stender and N. Hoffmann, "bSTAB: an open-source software for
+    computing the basin stability of multi-stable dynamical systems", Nonlinear Dynamics 107,
+    1451-1468 (2022), doi:10.1007/s11071-021-06786-5): theta'' = -0.1 theta' + T - sin(theta),
+    sampled over theta in [-pi + asin 0.5, pi + asin 0.5] x theta' in [-10, 10] with
+    N = 10,000 random initial conditions. Published: S_B(rest state) = 0.152 at T = 0.5
+    (standard error 0.0036), and over their T-sweep (same window) 0.483 at T = 0.16, 0.2756
+    at T = 0.31, 0.0391 at T = 0.81, each with a binomial error sqrt(S(1 - S)/N). atlas's
+    exact fractions (all wells together) must lie within three of those standard errors;
+    the running basin takes the rest."""
+    published = {0.16: 0.483, 0.31: 0.2756, 0.5: 0.152, 0.81: 0.0391}
+    tree = _run(tmp_path, "bstab", {"alpha": 0.05, "omega0": 1.0,
+                                    "torque": list(published)},
+                speed=(-10.0, 10.0), num=(24, 24), separatrices=False)
+    ds = tree.to_dataset(inherit=False)
+    for point in points(ds):
+        one = at_point(ds, point)
+        rest = float(one["basin_fraction_exact"].sum("k"))
+        error = float(one["basin_fraction_exact_error"].sum("k"))
+        running = float(one["running_fraction_exact"])
+        s = published[point["torque"]]
+        sigma = 0.0036 if point["torque"] == 0.5 else math.sqrt(s * (1 - s) / 1e4)
+        assert abs(rest - s) < 3 * sigma, (point, rest, s)
+        assert abs(rest + running - 1.0) < 1e-9 and error < 1e-6
+    # and the grid counts of the same atlas sit within their own error bounds
+    grid = ds["basin_fraction"].sum("k")
+    bound = ds["basin_fraction_grid_error_bound"].sum("k")
+    exact = ds["basin_fraction_exact"].sum("k")
+    assert np.all(np.abs(grid - exact) <= bound)
+
+
+@pytest.mark.slow
+def test_swing_plot_draws_the_running_basin_and_the_limit_cycle(tmp_path):
+    from atlas.plotting import basin_map, basin_stability
+
+    tree = _run(tmp_path, "s", {"alpha": 0.05, "omega0": 1.0, "torque": [0.3, 0.5]},
+                num=(30, 24), separatrices=False)
+    ax = basin_map(tree, torque=1)
+    labels = [line.get_label() for line in ax.lines]
+    assert any(label.startswith("limit cycle (period") for label in labels)
+    cycle = point_group(tree, "limit_cycle", {"alpha": 0.05, "omega0": 1.0, "torque": 0.5})
+    line = next(ln for ln in ax.lines if ln.get_label().startswith("limit cycle"))
+    np.testing.assert_array_equal(np.sort(line.get_ydata()), np.sort(cycle["theta_dot"].values))
+    names = [t.get_text() for t in ax.figure.axes[-1].get_yticklabels()]
+    assert "running" in names
+    ax = basin_stability(tree)
+    rest = next(ln for ln in ax.lines if ln.get_label() == "rest states, exact area")
+    np.testing.assert_array_equal(rest.get_xdata(), [0.3, 0.5])
+    np.testing.assert_allclose(
+        rest.get_ydata(), tree["basin_fraction_exact"].sum("k").values, rtol=0, atol=0)
