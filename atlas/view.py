@@ -41,7 +41,7 @@ import numpy as np
 import xarray as xr
 
 from .errors import AtlasError, InputFileError
-from .kernels import NEAR_BOUNDARY, RUNNING, TRAPPED
+from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
 from .labels import CHECK_EVERY, energy_cap, trap_margin
 from .layout import at_point, point_group
 from .layout import points as parameter_points
@@ -100,7 +100,7 @@ def _map_png(attractor: np.ndarray, status: np.ndarray) -> str:
 
     labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
     index = np.where(labelled, np.mod(attractor.astype(np.int64), 10), 10).astype(np.uint8)
-    index[status == RUNNING] = 11
+    index[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = 11
     image = Image.fromarray(index[::-1], mode="P")
     palette = ([int(c[i:i + 2], 16) for c in TAB10 for i in (1, 3, 5)] + [255, 255, 255]
                + list(RUNNING_RGB))

@@ -302,11 +302,14 @@
       (P.d_cert === null ? ")" : " = " + sci(P.d_cert) + ")");
     else if (g.status === "near_boundary") cert = "certified for the RK4 map only (closer " +
       "than d_cert" + (P.d_cert === null ? " or d_cert not measured)" : " = " + sci(P.d_cert) + ")");
-    else if (g.status === "running") cert = "certified for the RK4 map (running barrier)";
+    else if (g.status === "running") cert = "certified for the exact equation (running " +
+      "barrier, distance > d_cert" + (P.d_cert === null ? ")" : " = " + sci(P.d_cert) + ")");
+    else if (g.status === "running_near_boundary") cert = "certified for the RK4 map only " +
+      "(running barrier; closer than d_cert or d_cert not measured)";
     const grid = [
       ["grid point", "θ0 = " + fix(g.theta, 4) + ", θ̇0 = " + fix(g.theta_dot, 4)],
-      ["stored label", g.k !== null ? wellText(g.k) : g.status === "running" && P.barrier
-        ? runText(P.barrier.direction) : "none (" + g.status + ")"],
+      ["stored label", g.k !== null ? wellText(g.k) : g.status.startsWith("running") &&
+        P.barrier ? runText(P.barrier.direction) : "none (" + g.status + ")"],
       ["status", g.status], ["certificate", cert],
       ["t_trap", g.t_trap === null ? "—" : g.t_trap.toFixed(2) + " s"],
       ["boundary distance", g.distance === null ? "—" : "≈ " + sci(g.distance)],
@@ -332,10 +335,10 @@
     if (g.k !== null && r.k !== null) {
       orbit.push(g.k === r.k ? ["agreement", "same well as the stored label", "agree"]
         : ["agreement", "a different well from the nearest grid point's: the click is near a basin boundary", "differ"]);
-    } else if (g.status === "running" && r.status === "running") {
+    } else if (g.status.startsWith("running") && r.status === "running") {
       orbit.push(["agreement", "running, as the stored label", "agree"]);
-    } else if ((g.status === "running") !== (r.status === "running") &&
-               (g.k !== null || g.status === "running") && r.status !== "unresolved") {
+    } else if (g.status.startsWith("running") !== (r.status === "running") &&
+               (g.k !== null || g.status.startsWith("running")) && r.status !== "unresolved") {
       orbit.push(["agreement", "a different label from the nearest grid point's: the click is near a basin boundary", "differ"]);
     }
     const box = $("readout");
