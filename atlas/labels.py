@@ -271,6 +271,19 @@ def _check_inputs(theta0: np.ndarray, theta_dot0: np.ndarray, alpha: float,
                          "index")
 
 
+def check_running(running, torque: float) -> None:
+    """A running certificate must be a :class:`RunningBarrier` (or None) of direction
+    sign(τ), and τ ≠ 0: TypeError, ValueError otherwise."""
+    if running is None:
+        return
+    if not isinstance(running, RunningBarrier):
+        raise TypeError(f"running must be a RunningBarrier or None, got "
+                        f"{type(running).__name__}")
+    if torque == 0.0 or running.direction != (1 if torque > 0 else -1):
+        raise ValueError(f"running barrier of direction {running.direction:+d} given for "
+                         f"torque = {torque:g}: it must be sign(torque)")
+
+
 def label(
     theta0,
     theta_dot0,
@@ -308,13 +321,7 @@ def label(
     """
     torque = float(torque)
     check_integration(alpha, omega0, dt, t_max, check_every, torque)
-    if running is not None:
-        if not isinstance(running, RunningBarrier):
-            raise TypeError(f"running must be a RunningBarrier or None, got "
-                            f"{type(running).__name__}")
-        if torque == 0.0 or running.direction != (1 if torque > 0 else -1):
-            raise ValueError(f"running barrier of direction {running.direction:+d} given for "
-                             f"torque = {torque:g}: it must be sign(torque)")
+    check_running(running, torque)
     run = _kernel(backend, kernel, method)
     theta0, theta_dot0 = np.broadcast_arrays(
         np.asarray(theta0, dtype=np.float64), np.asarray(theta_dot0, dtype=np.float64)

@@ -28,6 +28,7 @@ from .labels import (
     CHECK_EVERY,
     RunningBarrier,
     check_integration,
+    check_running,
     energy_cap,
     n_checks_for,
     trap_margin,
@@ -158,13 +159,7 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
     direction is not sign(τ), TypeError for a ``running`` that is not a RunningBarrier."""
     torque = float(torque)
     check_integration(alpha, omega0, dt, t_max, check_every, torque)
-    if running is not None:
-        if not isinstance(running, RunningBarrier):
-            raise TypeError(f"running must be a RunningBarrier or None, got "
-                            f"{type(running).__name__}")
-        if torque == 0.0 or running.direction != (1 if torque > 0 else -1):
-            raise ValueError(f"running barrier of direction {running.direction:+d} given for "
-                             f"torque = {torque:g}: it must be sign(torque)")
+    check_running(running, torque)
     theta0, theta_dot0 = float(theta0), float(theta_dot0)
     w2, a2 = omega0 * omega0, 2.0 * alpha
     margin = trap_margin(dt, alpha, omega0)

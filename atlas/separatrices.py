@@ -626,6 +626,49 @@ def _place(run: np.ndarray, point: np.ndarray, window: Window):
     return np.concatenate(picks), np.concatenate(copy)
 
 
+def _group(*, theta, theta_dot, width, crossing, crossing_width, k_below, k_above, in_window,
+           saddle_theta, saddle_n, branch, vertex, saddle_name: str, branch_comment: str,
+           attrs: dict, k_comment: str | None = None) -> xr.Dataset:
+    """The ``/separatrices`` node of one parameter point: per ``point`` the located boundary
+    points with their saddle, branch and vertex; per ``crossing`` of the axis θ0 = 0 the
+    speed, its bracket and the basins on either side (module docstring, :func:`trace`)."""
+    flags = np.array([0, 1], np.int8)
+    k_attrs = {"units": "1", **({"comment": k_comment} if k_comment else {})}
+    return xr.Dataset(
+        data_vars={
+            "theta": ("point", theta, {"units": "rad", "long_name": "angle theta"}),
+            "theta_dot": ("point", theta_dot,
+                          {"units": "rad s-1", "long_name": "angular velocity theta_dot"}),
+            "bracket_width": ("point", width, {
+                "units": "1", "long_name": "final bisection bracket width across the curve "
+                "(phase-plane distance, rad and rad s-1 mixed)"}),
+            "crossing_theta_dot": ("crossing", crossing, {
+                "units": "rad s-1", "long_name": "theta_dot0 where the label changes on the "
+                "axis theta0 = 0"}),
+            "k_below": ("crossing", np.asarray(k_below).astype(np.int16),
+                        {**k_attrs, "long_name": "attractor k just below the crossing"}),
+            "k_above": ("crossing", np.asarray(k_above).astype(np.int16),
+                        {**k_attrs, "long_name": "attractor k just above the crossing"}),
+            "crossing_bracket_width": ("crossing", crossing_width, {
+                "units": "rad s-1", "long_name": "final bisection bracket width"}),
+            "crossing_in_window": ("crossing", in_window, {
+                "long_name": "whether the crossing (0, theta_dot0) lies in the window",
+                "flag_values": flags, "flag_meanings": "outside inside"}),
+        },
+        coords={
+            "saddle_theta": ("point", saddle_theta, {"units": "rad", "long_name": saddle_name}),
+            "saddle_n": ("point", saddle_n, {"units": "1", "long_name": "saddle at n*pi"}),
+            "branch": ("point", branch, {
+                "long_name": "branch of the stable manifold", "flag_values": flags,
+                "flag_meanings": "left right", "comment": branch_comment}),
+            "vertex": ("point", vertex, {
+                "units": "1", "long_name": "index along the branch, 0 nearest the saddle",
+                "comment": "gaps where the branch leaves the window and comes back"}),
+        },
+        attrs=attrs,
+    )
+
+
 def trace(
     pendulum: Pendulum,
     theta_window,
@@ -724,41 +767,14 @@ def trace(
                         f"DOP853 stable manifold (bound {DISCREPANCY_BOUND:.0e}): lower "
                         + ("tol" if tol > DISCREPANCY_BOUND else "dt"))
 
-    return xr.Dataset(
-        data_vars={
-            "theta": ("point", stored_theta,
-                      {"units": "rad", "long_name": "angle theta"}),
-            "theta_dot": ("point", point[source, 1],
-                          {"units": "rad s-1", "long_name": "angular velocity theta_dot"}),
-            "bracket_width": ("point", (hi - lo)[source], {
-                "units": "1", "long_name": "final bisection bracket width across the curve "
-                "(phase-plane distance, rad and rad s-1 mixed)"}),
-            "crossing_theta_dot": ("crossing", crossing, {
-                "units": "rad s-1", "long_name": "theta_dot0 where the label changes on the "
-                "axis theta0 = 0"}),
-            "k_below": ("crossing", (k_above - 1).astype(np.int16),
-                        {"units": "1", "long_name": "attractor k just below the crossing"}),
-            "k_above": ("crossing", k_above.astype(np.int16),
-                        {"units": "1", "long_name": "attractor k just above the crossing"}),
-            "crossing_bracket_width": ("crossing", crossing_width, {
-                "units": "rad s-1", "long_name": "final bisection bracket width"}),
-            "crossing_in_window": ("crossing", crossing_in_window, {
-                "long_name": "whether the crossing (0, theta_dot0) lies in the window",
-                "flag_values": np.array([0, 1], np.int8), "flag_meanings": "outside inside"}),
-        },
-        coords={
-            "saddle_theta": ("point", stored_n * np.pi,
-                             {"units": "rad", "long_name": "theta of the saddle (n*pi, 0)"}),
-            "saddle_n": ("point", stored_n, {"units": "1", "long_name": "saddle at n*pi"}),
-            "branch": ("point", branch[source], {
-                "long_name": "branch of the stable manifold",
-                "flag_values": np.array([0, 1], np.int8), "flag_meanings": "left right",
-                "comment": "left: arrives with theta_dot > 0 from theta < n*pi; right: "
-                           "arrives with theta_dot < 0 from theta > n*pi"}),
-            "vertex": ("point", vertex[source], {
-                "units": "1", "long_name": "index along the branch, 0 nearest the saddle",
-                "comment": "gaps where the branch leaves the window and comes back"}),
-        },
+    return _group(
+        theta=stored_theta, theta_dot=point[source, 1], width=(hi - lo)[source],
+        crossing=crossing, crossing_width=crossing_width, k_below=k_above - 1,
+        k_above=k_above, in_window=crossing_in_window, saddle_theta=stored_n * np.pi,
+        saddle_n=stored_n, branch=branch[source], vertex=vertex[source],
+        saddle_name="theta of the saddle (n*pi, 0)",
+        branch_comment="left: arrives with theta_dot > 0 from theta < n*pi; right: arrives "
+                       "with theta_dot < 0 from theta > n*pi",
         attrs={
             "alpha": p.alpha,
             "omega0": p.omega0,
@@ -1008,45 +1024,15 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
     stored_n = (2 * saddle_j + 1).astype(np.int32)
     order = np.lexsort((vertex, branch, stored_n))
     saddle_theta = np.array([exact.saddle_theta(int(j)) for j in saddle_j])
-    flags = np.array([0, 1], np.int8)
-    return xr.Dataset(
-        data_vars={
-            "theta": ("point", point[order, 0], {"units": "rad", "long_name": "angle theta"}),
-            "theta_dot": ("point", point[order, 1],
-                          {"units": "rad s-1", "long_name": "angular velocity theta_dot"}),
-            "bracket_width": ("point", (hi - lo)[order], {
-                "units": "1", "long_name": "final bisection bracket width across the curve "
-                "(phase-plane distance, rad and rad s-1 mixed)"}),
-            "crossing_theta_dot": ("crossing", crossing, {
-                "units": "rad s-1", "long_name": "theta_dot0 where the label changes on the "
-                "axis theta0 = 0"}),
-            "k_below": ("crossing", k_below.astype(np.int16), {
-                "units": "1", "long_name": "attractor k just below the crossing",
-                "comment": f"{RUNNING_SIDE}: the running basin"}),
-            "k_above": ("crossing", k_above.astype(np.int16), {
-                "units": "1", "long_name": "attractor k just above the crossing",
-                "comment": f"{RUNNING_SIDE}: the running basin"}),
-            "crossing_bracket_width": ("crossing", crossing_width, {
-                "units": "rad s-1", "long_name": "final bisection bracket width"}),
-            "crossing_in_window": ("crossing", np.ones(crossing.size, np.int8), {
-                "long_name": "whether the crossing (0, theta_dot0) lies in the window",
-                "flag_values": flags, "flag_meanings": "outside inside"}),
-        },
-        coords={
-            "saddle_theta": ("point", saddle_theta[order], {
-                "units": "rad", "long_name": "theta of the saddle (pi - asin(torque/omega0^2) "
-                "+ 2 pi j, 0)"}),
-            "saddle_n": ("point", stored_n[order], {
-                "units": "1", "long_name": "index n = 2j + 1 of the saddle near n*pi"}),
-            "branch": ("point", branch[order], {
-                "long_name": "branch of the stable manifold", "flag_values": flags,
-                "flag_meanings": "left right",
-                "comment": "left: arrives with theta_dot > 0 from the left; right: arrives "
-                           "with theta_dot < 0 from the right"}),
-            "vertex": ("point", vertex[order], {
-                "units": "1", "long_name": "index along the branch, 0 nearest the saddle",
-                "comment": "gaps where the branch leaves the window and comes back"}),
-        },
+    return _group(
+        theta=point[order, 0], theta_dot=point[order, 1], width=(hi - lo)[order],
+        crossing=crossing, crossing_width=crossing_width, k_below=k_below, k_above=k_above,
+        in_window=np.ones(crossing.size, np.int8), saddle_theta=saddle_theta[order],
+        saddle_n=stored_n[order], branch=branch[order], vertex=vertex[order],
+        saddle_name="theta of the saddle (pi - asin(torque/omega0^2) + 2 pi j, 0), n = 2j + 1",
+        branch_comment="left: arrives with theta_dot > 0 from the left; right: arrives with "
+                       "theta_dot < 0 from the right",
+        k_comment=f"{RUNNING_SIDE}: the running basin",
         attrs={
             "alpha": p.alpha, "omega0": p.omega0, "torque": p.torque,
             "theta_window": np.array(window.theta),
