@@ -257,7 +257,7 @@ def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.D
     tallies = [[] for _ in certifiers]
     for index in range(layout.n_tiles):
         try:
-            tallies[index // layout.bands].append(tiles.read_tile(index).tally)
+            tallies[index // layout.bands].append(tiles.read_tally(index))
         except Exception as exc:  # a damaged record: OSError, ValueError, BadZipFile
             raise store.DamagedTile(index, exc.__class__.__name__) from None
     points = []

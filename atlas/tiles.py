@@ -237,6 +237,12 @@ class TileStore:
                         tally={name[6:]: z[name] for name in z.files
                                if name.startswith("tally_")})
 
+    def read_tally(self, index: int) -> dict[str, np.ndarray]:
+        """Only the tally of a finished tile (a few numbers: the label chunks are not read);
+        OSError/ValueError/BadZipFile if its file is damaged."""
+        with np.load(self._tile_path(index)) as z:
+            return {name[6:]: z[name] for name in z.files if name.startswith("tally_")}
+
     def set_aside(self, index: int) -> None:
         """Move a damaged tile file to ``damaged/`` (kept for inspection, no longer done)."""
         (self.path / "damaged").mkdir(exist_ok=True)
