@@ -45,9 +45,10 @@ on along R_k (at s_k the well's unstable branch leaves to the lower left).
 distance of the dense output at the middle of each segment's time interval from its chord,
 which for short segments is the largest distance of the arc from the chord to leading order
 (κh²/8) — is at most ``CHORD_TOL`` (segments also at most ``MAX_SEGMENT`` long);
-``chord_error`` records the largest measured. The first vertex of every branch is its saddle itself. ``reference_error``
-is the largest distance of the rtol 1e-12 polyline (sampled at the same reversed times) from
-the 1e-13 one: the DOP853 reference's own error, overestimated about tenfold.
+``chord_error`` records the largest measured. The first vertex of every branch is its saddle
+itself. ``reference_error`` is the largest distance of the rtol 1e-12 polyline (sampled at the
+same reversed times) from the 1e-13 one: the DOP853 reference's own error, overestimated
+about tenfold.
 
 **Side** (:meth:`TiltedBoundaries.side`): by the parity of crossings of the upward vertical ray
 with each Γ_k (with their parts beyond the band: a branch that leaves at the top continues
@@ -56,8 +57,10 @@ bottom stays below every point in the band). Odd parity puts the point on the ri
 in well k's tongue (bistable) or in a well ≤ k (monostable). Exact for the polylines.
 
 **Distances** (:meth:`TiltedBoundaries.distance`): Euclidean distance to the nearest polyline
-of all branch translates, by a k-d tree over the vertices and exact point-to-segment
-distances, with a test that no unexamined segment can be nearer. Accuracy: ``chord_error`` +
+of all branch translates: a k-d tree over a coarse polyline (every few vertices) finds the
+chords near the point, whose distance bounds the fine one to the chords' own deviation, and
+exact point-to-segment distances are taken over the fine segments those bounds cannot
+exclude (``_Segments``). Exact for the polylines; their error: ``chord_error`` +
 ``reference_error``.
 
 **Areas** (:meth:`TiltedBoundaries.areas`): each well's closed polygon (a tongue closed along
@@ -92,7 +95,8 @@ __all__ = ["TiltedBoundaries", "TiltedAreas", "RUNNING_SIDE", "CHORD_TOL", "MAX_
 RUNNING_SIDE = ATTRACTOR_FILL
 #: Largest distance [rad-ish] of a branch from its polyline's chords, aimed for.
 CHORD_TOL = 1e-8
-#: Longest polyline segment [rad-ish] (keeps the nearest-vertex search local).
+#: Longest polyline segment [rad-ish] (keeps the coarse chords of the distance search short:
+#: their length enters its pruning bound).
 MAX_SEGMENT = 0.004
 #: Default clearance [rad-ish] of the integrated band beyond the window's θ̇ range (and of the
 #: boundary search beyond its θ range).
@@ -209,11 +213,9 @@ class _Fundamental:
             self.times.append(t)
             self.ends.append(end)
             parts.append(np.concatenate([saddle, xy], axis=1))
-        left, right = parts
-        self.saddle_index = left.shape[1] - 1
-        xy = np.concatenate([left[:, ::-1], right[:, 1:]], axis=1)
-        self.theta, self.theta_dot = xy
-        self.left, self.right = left, right
+        self.left, self.right = parts
+        self.theta, self.theta_dot = np.concatenate([self.left[:, ::-1], self.right[:, 1:]],
+                                                    axis=1)
 
     @property
     def bistable(self) -> bool:
@@ -237,28 +239,31 @@ class _Segments:
     polylines (those of fewer than two vertices are dropped).
 
     The *coarse* polyline keeps every ``_STRIDE``-th vertex of each run, one at least every
-    ``_CHORD`` of arc length, and its last. Each
-    coarse chord c stands for the fine vertices between its ends, which lie within δ_c of it
-    (the largest of their distances from it; a fine segment's distance from the chord is
-    largest at an end); the two polylines are within δ = max δ_c of each other (Hausdorff: a
-    point of a chord is the projection of some fine point, as the fine run goes from one end
-    to the other). So the fine distance lies within δ of the coarse one, d_C, and the nearest
-    fine segment belongs to a chord at most r = d_C + 2δ away. Those chords are among the
-    chords at the k nearest coarse vertices (a k-d tree) when the k-th is farther than
-    √(r² + Λ²/4), Λ the longest chord (a chord at distance r has an end within that);
-    otherwise they are found by a ball query of that radius.
+    ``_CHORD`` of arc length, and its last. Each coarse chord c stands for the fine segments
+    between its ends, which lie within δ_c of it (the largest distance of their vertices from
+    it: a segment's distance from the chord is largest at an end), and every point of the
+    chord lies within δ_c of them (it is the projection on the chord's line of some fine
+    point, as the fine run goes from one end to the other). So the fine distance is at most
+    D = min_c (d_c + δ_c) over any chords c at distances d_c, and only chords with
+    d_c − δ_c ≤ D can hold the nearest fine segment. All those have an end within
+    √((D + δ)² + Λ²/4) of the point (δ = max δ_c, Λ the longest chord: a chord at distance r
+    has an end within √(r² + Λ²/4)): they are the chords at the k nearest coarse vertices (a
+    k-d tree) when the k-th is farther than that, and are found by a ball query of that radius
+    otherwise.
 
-    Within a chord of length ℓ, a fine point whose projection on the chord's line lies ℓ·|s − s*|
-    from the point's (s the parameter along the chord) is at least √((ℓ(s − s*))² + h²) − δ
+    Within chord c (length ℓ), a fine point whose projection on the chord's line lies ℓ|s − s*|
+    from the point's (s the parameter along the chord) is at least √((ℓ(s − s*))² + h²) − δ_c
     away, h the point's distance from the line; so only the fine segments with
-    ℓ|s − s*| ≤ √((d_C + 2δ)² − h²) can be the nearest, and only those are measured (all of
-    a chord's when its fine vertices do not project in order). Exact for the fine
-    polylines."""
+    ℓ|s − s*| ≤ √((D + δ_c)² − h²) can be the nearest, and only those are measured (all of a
+    chord's when its fine vertices do not project in order). Exact for the fine polylines."""
 
     def __init__(self, runs):
         from scipy.spatial import cKDTree
 
         runs = [r for r in runs if r[0].size >= 2]
+        self.empty = not runs
+        if self.empty:
+            return
         sizes = np.array([r[0].size for r in runs], np.int64)
         first = np.cumsum(sizes) - sizes
         self.x = np.concatenate([r[0] for r in runs])
@@ -302,7 +307,9 @@ class _Segments:
         np.logical_and.at(self.ordered, owner[1:][step & (owner[1:] == owner[:-1])], False)
         off = _segment_distance(self.x[fine], self.y[fine], ax[owner], ay[owner],
                                 self.x[self.stop][owner], self.y[self.stop][owner])
-        self.delta = float(off.max(initial=0.0))
+        self.deviation = np.zeros(chord.size)  # δ_c
+        np.maximum.at(self.deviation, owner, off)
+        self.delta = float(self.deviation.max(initial=0.0))
         self.vertex = vertex
         self.tree = cKDTree(np.column_stack([self.x[vertex], self.y[vertex]]))
 
@@ -324,17 +331,20 @@ class _Segments:
 
     def nearest(self, px, py):
         """(distance, tag of the nearest segment) for points (px, py): exact for the fine
-        polylines (class docstring)."""
+        polylines (class docstring); (inf, 0) when there are none."""
         n = px.size
+        if self.empty:
+            return np.full(n, np.inf), np.zeros(n, np.int64)
         k = min(_NEIGHBOURS, self.vertex.size)
         pts = np.column_stack([px, py])
         dk, idx = self.tree.query(pts, k=k)
         dk, idx = dk.reshape(n, k), idx.reshape(n, k)
         who, chords = self._pairs(np.concatenate([self.before[idx], self.after[idx]], axis=1))
         d = self._chord_distance(px[who], py[who], chords)
-        reach = np.minimum.reduceat(d, np.flatnonzero(np.r_[True, who[1:] != who[:-1]]))
-        reach += 2.0 * self.delta
-        radius = np.sqrt(reach**2 + 0.25 * self.longest**2) * (1 + 1e-12) + 1e-15
+        first = np.flatnonzero(np.r_[True, who[1:] != who[:-1]])
+        bound = np.minimum.reduceat(d + self.deviation[chords], first)  # ≥ the fine distance
+        radius = np.sqrt((bound + self.delta)**2 + 0.25 * self.longest**2) * (1 + 1e-12) \
+            + 1e-15
         doubt = np.flatnonzero(dk[:, -1] <= radius) if k < self.vertex.size else []
         if len(doubt):  # all chords with an end within the radius, instead
             found = self.tree.query_ball_point(pts[doubt], radius[doubt])
@@ -350,15 +360,16 @@ class _Segments:
             chords = np.concatenate([chords[keep], extra])
             d = np.concatenate([d[keep], self._chord_distance(px[doubt[rows]],
                                                               py[doubt[rows]], extra)])
-        ok = d <= reach[who]
-        return self._fine(px, py, who[ok], chords[ok], reach)
+        ok = d - self.deviation[chords] <= bound[who]
+        return self._fine(px, py, who[ok], chords[ok], bound)
 
     def _chord_distance(self, px, py, chords):
         s, e = self.start[chords], self.stop[chords]
         return _segment_distance(px, py, self.x[s], self.y[s], self.x[e], self.y[e])
 
-    def _fine(self, px, py, who, chords, reach):
-        """Distances to the fine segments of the candidate chords that can be nearest."""
+    def _fine(self, px, py, who, chords, bound):
+        """Distances to the fine segments of the candidate chords that can be nearer than
+        ``bound``."""
         s, e = self.start[chords], self.stop[chords]
         ax, ay = self.x[s], self.y[s]
         dx, dy = self.x[e] - ax, self.y[e] - ay
@@ -366,7 +377,8 @@ class _Segments:
         qx, qy = px[who] - ax, py[who] - ay
         along = (qx * dx + qy * dy) / ll  # ℓ·s*
         h = np.abs(qx * dy - qy * dx) / ll
-        width = np.sqrt(np.maximum(reach[who] ** 2 - h * h, 0.0)) * (1 + 1e-9) + 1e-15
+        reach = bound[who] + self.deviation[chords]
+        width = np.sqrt(np.maximum(reach**2 - h * h, 0.0)) * (1 + 1e-9) + 1e-15
         lo = np.searchsorted(self.key, chords + (along - width) / ll, "right") - 1
         hi = np.searchsorted(self.key, chords + (along + width) / ll, "left")
         whole = ~self.ordered[chords]
@@ -638,24 +650,26 @@ class TiltedBoundaries:
 
         The boundaries within θ ± ``margin`` of the points are searched first, then, for
         points farther than that from all of them, those within θ ± the distance found (no
-        nearer boundary can lie beyond). Exact for the polylines wherever the distance is at
-        most the point's clearance from the band's edges beyond which the boundaries
-        continue (the bottom, and the top when the branches leave there: ``bistable`` false);
-        for points of the window that is at least ``margin``. The error: ``chord_error`` +
-        ``reference_error``."""
+        nearer boundary can lie beyond), and so on. Exact for the polylines wherever the
+        distance is at most the point's clearance from the band's edges beyond which the
+        boundaries continue (the bottom, and the top when the branches leave there:
+        ``bistable`` false); for points of the window that is at least ``margin``. The
+        error: ``chord_error`` + ``reference_error``."""
         x, v = self._canonical(theta, theta_dot)
         shape = x.shape
         x, v = x.ravel(), v.ravel()
         if x.size == 0:
             return np.zeros(shape), np.zeros(shape, np.int64)
-        lo, hi = float(x.min()), float(x.max())
-        reach = self.margin
-        dist, k = self._index(lo - reach - MAX_SEGMENT, hi + reach + MAX_SEGMENT).nearest(x, v)
-        far = np.flatnonzero(dist > reach)
-        if far.size:
-            reach = float(dist[far].max())
+        dist, k = np.full(x.size, np.inf), np.zeros(x.size, np.int64)
+        todo, reach = np.arange(x.size), self.margin
+        while todo.size:
+            lo, hi = float(x[todo].min()), float(x[todo].max())
             index = self._index(lo - reach - MAX_SEGMENT, hi + reach + MAX_SEGMENT)
-            dist[far], k[far] = index.nearest(x[far], v[far])
+            dist[todo], k[todo] = index.nearest(x[todo], v[todo])
+            todo = todo[dist[todo] > reach]
+            # none nearer than the distance found lies beyond it (a whole turn if none found)
+            reach = float(dist[todo].max(initial=reach + _TWO_PI)) \
+                if np.all(np.isfinite(dist[todo])) else reach + _TWO_PI
         return dist.reshape(shape), self._saddle(k).reshape(shape)
 
     # ------------------------------------------------------------------ areas
