@@ -453,7 +453,8 @@ class TiltedBoundaries:
     Attributes: ``pendulum``; ``window``; ``bistable`` (a running limit cycle exists, checked
     against :func:`atlas.running.limit_cycle`); ``cycle`` (that limit cycle, or None);
     ``band`` (bottom, top) [rad s⁻¹] in the actual frame; ``chord_error`` and
-    ``reference_error`` [rad-ish] (module docstring).
+    ``reference_error`` [rad-ish] (module docstring). It pickles without its distance
+    search indices, which are rebuilt on first use.
     """
 
     def __init__(self, pendulum: Pendulum, theta_window, theta_dot_window, *,
@@ -492,6 +493,9 @@ class TiltedBoundaries:
         self.reference_error = self._reference_error()
         self._pieces = self._monotone_pieces()
         self._indices = {}
+
+    def __getstate__(self):  # sent to workers without the distance indices (rebuilt there)
+        return {**self.__dict__, "_indices": {}}
 
     # ------------------------------------------------------------------ frames
     def _canonical(self, theta, theta_dot):
@@ -719,8 +723,8 @@ class TiltedBoundaries:
         running = running_error = 0.0
         if self.bistable:
             running = 1.0 - float(fine.sum())
-            running_error = (abs(float(fine.sum() - coarse.sum()))
-                             + scale * float(length.sum()) + 4 * np.finfo(float).eps)
+            running_error = float(abs(fine.sum() - coarse.sum()) + scale * length.sum()
+                                  + 4 * np.finfo(float).eps)
         keep = fine > 0.0
         k = self.sign * np.array(ks, np.int64)[keep]
         order = np.argsort(k)
