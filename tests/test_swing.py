@@ -91,6 +91,11 @@ def test_certified_labels_are_the_exact_equations(tmp_path, alpha, omega0, torqu
     status, d = ds["status"].values, ds["boundary_distance"].values
     d_cert = float(ds["d_cert"])
     assert 0 < d_cert < 1e-6
+    # the 2π shift holds for the RK4 map's boundaries: copies located on their own labels
+    sep = tree["separatrices"]
+    assert int(sep.attrs["shift_pairs"]) > 0
+    assert float(sep.attrs["shift_error"]) <= 4 * float(sep.attrs["tol"])
+    assert np.isnan(float(sep.attrs["symmetry_error"]))  # the point reflection is broken
     assert (status == RUNNING).any() and (status == TRAPPED).any()  # both kinds certified
     far = np.argwhere(np.isin(status, (TRAPPED, RUNNING)) & (d > 10 * d_cert))
     rng = np.random.default_rng(7)
