@@ -41,7 +41,8 @@ for θ̈ = −ω0² sin θ − 2αθ̇ + τ (τ = ``torque`` [rad s⁻²]).
 
 Methods (the discretisation, :data:`METHODS`): ``"rk4"`` (the default; classical RK4 on
 (θ, θ̇) with a sin per stage, :mod:`atlas.kernels.rk4`; the CUDA kernels' method) and
-``"rk4-trigfree"`` (classical RK4 on (θ, θ̇, cos θ, sin θ), :mod:`atlas.kernels.trigfree`). Both are of order 4; their trajectories differ by O(dt⁴), so labels differ only on
+``"rk4-trigfree"`` (classical RK4 on (θ, θ̇, cos θ, sin θ), :mod:`atlas.kernels.trigfree`).
+Both are of order 4; their trajectories differ by O(dt⁴), so labels differ only on
 basin-boundary cells.
 
 Checks before any step and after a non-finite state are part of the contract: an initial

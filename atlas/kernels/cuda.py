@@ -146,20 +146,21 @@ class Kernels(NamedTuple):
     propagate_block: int
 
 
-def _device_functions(cuda, variant: str):
-    """The variant's (step, well_energy) as CUDA device functions built by the rk4 factories.
+def _device(cuda, jitted):
+    """``jitted`` (a factory's CPU dispatcher, or a plain function) compiled as a CUDA device
+    function from its Python source (``py_func``), with CUDA's own floating-point options
+    (called directly, numba would retarget it with the CPU fast-math set, which the CUDA
+    compiler turns into fastmath=True: all fast flags, nnan included, and approximate
+    division)."""
+    return cuda.jit(device=True)(getattr(jitted, "py_func", jitted))
 
-    The factories return CPU dispatchers; their Python source (``py_func``) is compiled for
-    the device with CUDA's own floating-point options (called directly, numba would retarget
-    them with the CPU fast-math set, which the CUDA compiler turns into fastmath=True: all
-    fast flags, nnan included, and approximate division).
-    ``reduce`` is given as the identity so that the step calls ``sin_near(θ, δ) = sin(θ + δ)``,
-    a device function here, instead of the factory's CPU helper.
-    """
 
-    def device(jitted):
-        return cuda.jit(device=True)(getattr(jitted, "py_func", jitted))
-
+def _device_sin(cuda, variant: str):
+    """The variant's ``(sin, sin_near, identity)`` as CUDA device functions: sin (libdevice's
+    for "straightforward", Cody–Waite by π and the polynomial for "fast"),
+    sin_near(θ, δ) = sin(θ + δ) and the identity, given to the rk4 step factories as
+    ``sin`` and ``reduce`` so that the step calls these device functions instead of the
+    factory's CPU helper."""
     if variant == "straightforward":
 
         @cuda.jit(device=True)
@@ -167,7 +168,7 @@ def _device_functions(cuda, variant: str):
             return math.sin(x)
 
     else:
-        poly = device(sin_poly)
+        poly = _device(cuda, sin_poly)
 
         # Cody–Waite by π as in fastsin.reduce_pi, restated because numba-cuda has no device
         # lowering of np.floor (reduce_pi's): q is rounded with _ROUND_MAGIC instead.
@@ -186,46 +187,28 @@ def _device_functions(cuda, variant: str):
     def identity(theta):
         return theta
 
-    return device(make_rk4_step(sin_near, reduce=identity)), device(make_well_energy(sin))
+    return sin, sin_near, identity
+
+
+def _device_functions(cuda, variant: str):
+    """The variant's (step, well_energy) as CUDA device functions built by the rk4 factories
+    (:func:`_device`, :func:`_device_sin`)."""
+    sin, sin_near, identity = _device_sin(cuda, variant)
+    return (_device(cuda, make_rk4_step(sin_near, reduce=identity)),
+            _device(cuda, make_well_energy(sin)))
 
 
 def _device_functions_torque(cuda, variant: str):
     """The variant's (step, well_energy, running) for τ ≠ 0 as CUDA device functions, built
     like :func:`_device_functions` from the τ ≠ 0 factories."""
-
-    def device(jitted):
-        return cuda.jit(device=True)(getattr(jitted, "py_func", jitted))
-
-    if variant == "straightforward":
-
-        @cuda.jit(device=True)
-        def sin(x):
-            return math.sin(x)
-
-    else:
-        poly = device(sin_poly)
-
-        @cuda.jit(device=True)
-        def sin(x):
-            q = (x * INV_PI + _ROUND_MAGIC) - _ROUND_MAGIC
-            r = ((x - q * PI_1) - q * PI_2) - q * PI_3
-            parity = math.fabs(q - 2.0 * ((0.5 * q + _ROUND_MAGIC) - _ROUND_MAGIC))
-            return (1.0 - 2.0 * parity) * poly(r)
-
-    @cuda.jit(device=True)
-    def sin_near(theta, delta):
-        return sin(theta + delta)
-
-    @cuda.jit(device=True)
-    def identity(theta):
-        return theta
+    sin, sin_near, identity = _device_sin(cuda, variant)
 
     @cuda.jit(device=True)
     def floor(x):  # a float floor (numba-cuda lowers math.floor, not np.floor)
         return float(math.floor(x))
 
-    return (device(make_rk4_step_torque(sin_near, reduce=identity)),
-            device(make_well_energy_torque(sin)), device(make_running_test(floor)))
+    return (_device(cuda, make_rk4_step_torque(sin_near, reduce=identity)),
+            _device(cuda, make_well_energy_torque(sin)), _device(cuda, make_running_test(floor)))
 
 
 def _block_size(cuda, kernel) -> int:
@@ -351,6 +334,9 @@ def _compile_torque(variant: str) -> TorqueKernel:
     sig = (f"void({f8}[::1], {f8}[::1], {f8}, {f8}, {f8}, {i8}, {i8}, {f8}, {f8}, {f8}, {f8}, "
            f"{f8}, {f8}, {f8}[::1], {f8}, {i4}[::1], {i1}[::1], {i4}[::1])")
 
+    # Written out beside _compile's label, not shared with it: that τ = 0 kernel stays the code
+    # of earlier versions, and a loop shared through a device function over a model tuple
+    # would restructure it, which only a real GPU (not the simulator) could check.
     @cuda.jit(sig)
     def label(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, energy_cap, torque,
               shift, vers_shift, sign, running_theta0, running_g, running_top, attractor,

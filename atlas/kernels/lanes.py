@@ -435,6 +435,8 @@ def _label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, e
     return counts
 
 
+# The four parallel kernels are written out, not made by a factory: Numba's on-disk cache
+# misses a closure over dispatchers in every new process (its key pickles them).
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
 def _label_lanes_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
                         energy_cap, model, attractor, status, n_trap, n_chunks):

@@ -4,9 +4,10 @@ The RK4 step and the trap test are built by factories that close over a ``sin``
 implementation, so the straightforward kernel (``math.sin``) and the lane-blocked kernel
 (polynomial sin, :mod:`atlas.kernels.lanes`) share one definition of the method.
 
-With a torque τ the step, the tilted trap and the running certificate come from their own
-factories (``make_rk4_step_torque``, ``make_well_energy_torque``, ``make_running_test``), so
-that the τ = 0 code stays that of earlier versions; :func:`label_straightforward` dispatches.
+With a torque τ the step (the τ = 0 step's source in its τ ≠ 0 form, ``make_rk4_step_torque``),
+the tilted trap and the running certificate (``make_well_energy_torque``,
+``make_running_test``) are separate specialisations, so that the τ = 0 code stays that of
+earlier versions; :func:`label_straightforward` dispatches.
 
 Reference: Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1 (classical 4th-order
 Runge–Kutta, local error O(dt⁵), global error O(dt⁴)).
@@ -14,6 +15,7 @@ Runge–Kutta, local error O(dt⁵), global error O(dt⁴)).
 
 from __future__ import annotations
 
+import linecache
 import math
 
 import numba as nb
@@ -34,13 +36,55 @@ def _identity(x):
     return x
 
 
-def make_rk4_step(sin, reduce=None):
+# The RK4 step is written once, as source text with two holes, and compiled in two forms
+# (:func:`_specialise`): the τ = 0 form, θ̇' = −ω0² sin θ − 2αθ̇ exactly as earlier versions
+# wrote it (adding a zero torque under fast-math may be reassociated and change the last bit
+# of a trajectory), and the τ ≠ 0 form, θ̇' = τ − ω0² sin θ − 2αθ̇ with τ the last argument.
+_RK4_STEP = """
+def step(theta, theta_dot, alpha, omega0, dt{torque}):
+    w2 = omega0 * omega0
+    a2 = 2.0 * alpha
+    h2 = 0.5 * dt
+    p = reduce(theta)
+    k1t = theta_dot
+    k1v = {force}w2 * sin_near(p, 0.0) - a2 * theta_dot
+    k2t = theta_dot + h2 * k1v
+    k2v = {force}w2 * sin_near(p, h2 * k1t) - a2 * k2t
+    k3t = theta_dot + h2 * k2v
+    k3v = {force}w2 * sin_near(p, h2 * k2t) - a2 * k3t
+    k4t = theta_dot + dt * k3v
+    k4v = {force}w2 * sin_near(p, dt * k3t) - a2 * k4t
+    h6 = dt / 6.0
+    return (
+        theta + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
+        theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
+    )
+"""
+
+
+def _specialise(source, name, torque, **env):
+    """The plain Python function ``name`` defined by ``source`` in its τ = 0 form
+    (``{torque}`` → nothing, ``{force}`` → ``-``: the acceleration starts −ω0²…) or its τ ≠ 0
+    form (``{torque}`` → ``, torque``: one more argument; ``{force}`` → ``torque - ``), with
+    ``env`` (the callables it calls) as its globals. Plain, so that the caller jits it for the
+    CPU or (its ``py_func``) for CUDA, as with every factory here."""
+    code = source.format(torque=", torque" if torque else "",
+                         force="torque - " if torque else "-")
+    filename = f"<atlas.kernels.rk4 {name}{' (torque)' if torque else ''}>"
+    linecache.cache[filename] = (len(code), None, code.splitlines(True), filename)  # tracebacks
+    namespace = {"__name__": __name__, **env}
+    exec(compile(code, filename, "exec"), namespace)
+    return namespace[name]
+
+
+def make_rk4_step(sin, reduce=None, *, torque=False):
     """Return a jitted ``step(theta, theta_dot, alpha, omega0, dt) -> (theta, theta_dot)``.
 
     One classical RK4 step of θ' = θ̇, θ̇' = −ω0² sin θ − 2αθ̇ using the given ``sin``.
     With ``reduce`` given, the four stage angles θ + δ (δ = 0, ½dt·k1θ, ½dt·k2θ, dt·k3θ) share
     one argument reduction: ``sin`` is then called as ``sin(reduce(θ), δ)`` = sin(θ + δ)
-    (:mod:`atlas.kernels.lanes` uses this with a polynomial sin).
+    (:mod:`atlas.kernels.lanes` uses this with a polynomial sin). With ``torque`` the step of
+    θ̇' = −ω0² sin θ − 2αθ̇ + τ, τ its last argument (:func:`make_rk4_step_torque`).
     """
     if reduce is None:
         reduce = _identity
@@ -52,27 +96,8 @@ def make_rk4_step(sin, reduce=None):
     else:
         sin_near = sin
 
-    @nb.njit(inline="always", fastmath=FASTMATH)
-    def step(theta, theta_dot, alpha, omega0, dt):
-        w2 = omega0 * omega0
-        a2 = 2.0 * alpha
-        h2 = 0.5 * dt
-        p = reduce(theta)
-        k1t = theta_dot
-        k1v = -w2 * sin_near(p, 0.0) - a2 * theta_dot
-        k2t = theta_dot + h2 * k1v
-        k2v = -w2 * sin_near(p, h2 * k1t) - a2 * k2t
-        k3t = theta_dot + h2 * k2v
-        k3v = -w2 * sin_near(p, h2 * k2t) - a2 * k3t
-        k4t = theta_dot + dt * k3v
-        k4v = -w2 * sin_near(p, dt * k3t) - a2 * k4t
-        h6 = dt / 6.0
-        return (
-            theta + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
-            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
-        )
-
-    return step
+    step = _specialise(_RK4_STEP, "step", torque, sin_near=sin_near, reduce=reduce)
+    return nb.njit(inline="always", fastmath=FASTMATH)(step)
 
 
 def make_well_energy(sin):
@@ -102,46 +127,17 @@ well_energy = make_well_energy(_libm_sin)
 
 
 # ------------------------------------------------------------------------- torque τ ≠ 0
-# The τ ≠ 0 kernels are separate specialisations built by their own factories, so that the
-# τ = 0 kernels above stay exactly the code of earlier versions (adding 0.0 to the
-# acceleration under fast-math may be reassociated and change the last bit of a trajectory).
+# The τ ≠ 0 kernels are separate specialisations (the step from the same source as the τ = 0
+# one, :data:`_RK4_STEP`), so that the τ = 0 kernels above stay exactly the code of earlier
+# versions (adding 0.0 to the acceleration under fast-math may be reassociated and change the
+# last bit of a trajectory).
 
 
 def make_rk4_step_torque(sin, reduce=None):
     """Return a jitted ``step(theta, theta_dot, alpha, omega0, dt, torque) -> (θ, θ̇)``: one
     classical RK4 step of θ' = θ̇, θ̇' = −ω0² sin θ − 2αθ̇ + τ (``sin`` and ``reduce`` as in
     :func:`make_rk4_step`)."""
-    if reduce is None:
-        reduce = _identity
-
-        @nb.njit(inline="always", fastmath=FASTMATH)
-        def sin_near(theta, delta):
-            return sin(theta + delta)
-
-    else:
-        sin_near = sin
-
-    @nb.njit(inline="always", fastmath=FASTMATH)
-    def step(theta, theta_dot, alpha, omega0, dt, torque):
-        w2 = omega0 * omega0
-        a2 = 2.0 * alpha
-        h2 = 0.5 * dt
-        p = reduce(theta)
-        k1t = theta_dot
-        k1v = torque - w2 * sin_near(p, 0.0) - a2 * theta_dot
-        k2t = theta_dot + h2 * k1v
-        k2v = torque - w2 * sin_near(p, h2 * k1t) - a2 * k2t
-        k3t = theta_dot + h2 * k2v
-        k3v = torque - w2 * sin_near(p, h2 * k2t) - a2 * k3t
-        k4t = theta_dot + dt * k3v
-        k4v = torque - w2 * sin_near(p, dt * k3t) - a2 * k4t
-        h6 = dt / 6.0
-        return (
-            theta + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
-            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
-        )
-
-    return step
+    return make_rk4_step(sin, reduce, torque=True)
 
 
 def make_well_energy_torque(sin):
@@ -253,27 +249,53 @@ def _label_straightforward(
             attractor[i] = np.int32(k)
 
 
-@nb.njit(nogil=True, fastmath=FASTMATH)
-def label_orbit_torque(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap,
-                       model):
-    """Label one orbit of the tilted pendulum with ``math.sin`` (kernel contract in
-    :mod:`atlas.kernels`; ``model`` from :func:`torque_model`): the energy trap of the tilted
-    wells, then the running certificate, at every check. Returns (status, k, n_trap), k
-    meaningful only when trapped."""
-    torque, shift, vers, sign, r_theta0, r_g, r_top, _ = model
-    for j in range(n_checks + 1):
-        if not (math.isfinite(theta) and math.isfinite(theta_dot)):
-            return NONFINITE, 0, -1
-        k, energy = well_energy_torque(theta, theta_dot, omega0, torque, shift, vers)
-        if energy < energy_cap:
-            return TRAPPED, k, j * check_every
-        if running_test(theta, theta_dot, sign, r_theta0, r_g, r_top):
-            return RUNNING, 0, j * check_every
-        if j == n_checks:
-            break
-        for _ in range(check_every):
-            theta, theta_dot = rk4_step_torque(theta, theta_dot, alpha, omega0, dt, torque)
-    return UNRESOLVED, 0, -1
+def make_label_orbit_torque(sync, step, fastmath):
+    """Return a jitted ``label_orbit(theta, theta_dot, alpha, omega0, dt, n_checks,
+    check_every, energy_cap, model) -> (status, k, n_trap)`` for the tilted pendulum, one
+    method's scalar labeller: ``sync(θ, θ̇, ω0, τ, θ*, 1 − cos θ*) -> (c, s, k, E_k)`` is the
+    tilted trap (with the trig-free method's re-synchronised c, s; unused otherwise),
+    ``step(θ, θ̇, c, s, α, ω0, dt, τ) -> (θ, θ̇, c, s)`` one step."""
+
+    @nb.njit(nogil=True, fastmath=fastmath)
+    def label_orbit(theta, theta_dot, alpha, omega0, dt, n_checks, check_every, energy_cap,
+                    model):
+        """Label one orbit of the tilted pendulum (kernel contract in :mod:`atlas.kernels`;
+        ``model`` from :func:`torque_model`): the energy trap of the tilted wells, then the
+        running certificate, at every check. Returns (status, k, n_trap), k meaningful only
+        when trapped."""
+        torque, shift, vers, sign, r_theta0, r_g, r_top, _ = model
+        for j in range(n_checks + 1):
+            if not (math.isfinite(theta) and math.isfinite(theta_dot)):
+                return NONFINITE, 0, -1
+            c, s, k, energy = sync(theta, theta_dot, omega0, torque, shift, vers)
+            if energy < energy_cap:
+                return TRAPPED, k, j * check_every
+            if running_test(theta, theta_dot, sign, r_theta0, r_g, r_top):
+                return RUNNING, 0, j * check_every
+            if j == n_checks:
+                break
+            for _ in range(check_every):
+                theta, theta_dot, c, s = step(theta, theta_dot, c, s, alpha, omega0, dt,
+                                              torque)
+        return UNRESOLVED, 0, -1
+
+    return label_orbit
+
+
+@nb.njit(inline="always", fastmath=FASTMATH)
+def _sync_torque(theta, theta_dot, omega0, torque, shift, vers_shift):
+    k, energy = well_energy_torque(theta, theta_dot, omega0, torque, shift, vers_shift)
+    return 0.0, 0.0, k, energy
+
+
+@nb.njit(inline="always", fastmath=FASTMATH)
+def _step_cs_torque(theta, theta_dot, c, s, alpha, omega0, dt, torque):
+    theta, theta_dot = rk4_step_torque(theta, theta_dot, alpha, omega0, dt, torque)
+    return theta, theta_dot, c, s
+
+
+#: The tilted pendulum's scalar labeller with ``math.sin`` (:func:`make_label_orbit_torque`).
+label_orbit_torque = make_label_orbit_torque(_sync_torque, _step_cs_torque, FASTMATH)
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=FASTMATH)

@@ -34,54 +34,66 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
+from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit, uses_torque
 from .fastsin import SIN_FASTMATH, sin_cos_vers
-from .rk4 import INV_TWO_PI, TWO_PI, running_test, torque_model
+from .rk4 import (
+    INV_TWO_PI,
+    TWO_PI,
+    _specialise,
+    make_label_orbit_torque,
+    torque_model,
+)
 
 #: Steps between two re-synchronisations of (c, s) in the fixed-steps kernels (the labelling
 #: kernels re-synchronise at every trap test instead, the default ``check_every`` = 16).
 SYNC_EVERY = 16
 
 
-def make_trigfree_step():
+# One source for the step of both specialisations (τ = 0 as in earlier versions, τ ≠ 0 with
+# θ̇' = τ − ω0² s − 2αθ̇), as :data:`atlas.kernels.rk4._RK4_STEP`. Its four stages are written
+# out (they repeat one shape): the τ = 0 form must keep the earlier versions' exact code.
+_TRIGFREE_STEP = """
+def step(theta, theta_dot, c, s, alpha, omega0, dt{torque}):
+    w2 = omega0 * omega0
+    a2 = 2.0 * alpha
+    h2 = 0.5 * dt
+    k1v = {force}w2 * s - a2 * theta_dot
+    k1c = -s * theta_dot
+    k1s = c * theta_dot
+    v2 = theta_dot + h2 * k1v
+    c2 = c + h2 * k1c
+    s2 = s + h2 * k1s
+    k2v = {force}w2 * s2 - a2 * v2
+    k2c = -s2 * v2
+    k2s = c2 * v2
+    v3 = theta_dot + h2 * k2v
+    c3 = c + h2 * k2c
+    s3 = s + h2 * k2s
+    k3v = {force}w2 * s3 - a2 * v3
+    k3c = -s3 * v3
+    k3s = c3 * v3
+    v4 = theta_dot + dt * k3v
+    c4 = c + dt * k3c
+    s4 = s + dt * k3s
+    k4v = {force}w2 * s4 - a2 * v4
+    k4c = -s4 * v4
+    k4s = c4 * v4
+    h6 = dt / 6.0
+    return (
+        theta + h6 * (theta_dot + 2.0 * (v2 + v3) + v4),
+        theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
+        c + h6 * (k1c + 2.0 * (k2c + k3c) + k4c),
+        s + h6 * (k1s + 2.0 * (k2s + k3s) + k4s),
+    )
+"""
+
+
+def make_trigfree_step(*, torque=False):
     """Return a jitted ``step(theta, theta_dot, c, s, alpha, omega0, dt) -> (θ, θ̇, c, s)``:
-    one classical RK4 step of the extended system (module docstring)."""
-
-    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-    def step(theta, theta_dot, c, s, alpha, omega0, dt):
-        w2 = omega0 * omega0
-        a2 = 2.0 * alpha
-        h2 = 0.5 * dt
-        k1v = -w2 * s - a2 * theta_dot
-        k1c = -s * theta_dot
-        k1s = c * theta_dot
-        v2 = theta_dot + h2 * k1v
-        c2 = c + h2 * k1c
-        s2 = s + h2 * k1s
-        k2v = -w2 * s2 - a2 * v2
-        k2c = -s2 * v2
-        k2s = c2 * v2
-        v3 = theta_dot + h2 * k2v
-        c3 = c + h2 * k2c
-        s3 = s + h2 * k2s
-        k3v = -w2 * s3 - a2 * v3
-        k3c = -s3 * v3
-        k3s = c3 * v3
-        v4 = theta_dot + dt * k3v
-        c4 = c + dt * k3c
-        s4 = s + dt * k3s
-        k4v = -w2 * s4 - a2 * v4
-        k4c = -s4 * v4
-        k4s = c4 * v4
-        h6 = dt / 6.0
-        return (
-            theta + h6 * (theta_dot + 2.0 * (v2 + v3) + v4),
-            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
-            c + h6 * (k1c + 2.0 * (k2c + k3c) + k4c),
-            s + h6 * (k1s + 2.0 * (k2s + k3s) + k4s),
-        )
-
-    return step
+    one classical RK4 step of the extended system (module docstring); with ``torque`` the
+    step of θ̇' = −ω0² s − 2αθ̇ + τ, τ its last argument (:func:`make_trigfree_step_torque`)."""
+    step = _specialise(_TRIGFREE_STEP, "step", torque)
+    return nb.njit(inline="always", fastmath=SIN_FASTMATH)(step)
 
 
 def make_sync(sin_cos_vers_impl):
@@ -111,48 +123,13 @@ sync_libm = make_sync(_libm_sin_cos_vers)
 
 # ------------------------------------------------------------------------- torque τ ≠ 0
 # Separate specialisations (as in :mod:`atlas.kernels.rk4`): the τ = 0 code above is that of
-# earlier versions, unchanged.
+# earlier versions, unchanged (the step: the same source, :data:`_TRIGFREE_STEP`).
 
 
 def make_trigfree_step_torque():
     """Return a jitted ``step(theta, theta_dot, c, s, alpha, omega0, dt, torque)``: one RK4
     step of the extended system with θ̇' = −ω0² s − 2αθ̇ + τ."""
-
-    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-    def step(theta, theta_dot, c, s, alpha, omega0, dt, torque):
-        w2 = omega0 * omega0
-        a2 = 2.0 * alpha
-        h2 = 0.5 * dt
-        k1v = torque - w2 * s - a2 * theta_dot
-        k1c = -s * theta_dot
-        k1s = c * theta_dot
-        v2 = theta_dot + h2 * k1v
-        c2 = c + h2 * k1c
-        s2 = s + h2 * k1s
-        k2v = torque - w2 * s2 - a2 * v2
-        k2c = -s2 * v2
-        k2s = c2 * v2
-        v3 = theta_dot + h2 * k2v
-        c3 = c + h2 * k2c
-        s3 = s + h2 * k2s
-        k3v = torque - w2 * s3 - a2 * v3
-        k3c = -s3 * v3
-        k3s = c3 * v3
-        v4 = theta_dot + dt * k3v
-        c4 = c + dt * k3c
-        s4 = s + dt * k3s
-        k4v = torque - w2 * s4 - a2 * v4
-        k4c = -s4 * v4
-        k4s = c4 * v4
-        h6 = dt / 6.0
-        return (
-            theta + h6 * (theta_dot + 2.0 * (v2 + v3) + v4),
-            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
-            c + h6 * (k1c + 2.0 * (k2c + k3c) + k4c),
-            s + h6 * (k1s + 2.0 * (k2s + k3s) + k4s),
-        )
-
-    return step
+    return make_trigfree_step(torque=True)
 
 
 def make_sync_torque(sin_cos_vers_impl):
@@ -195,27 +172,10 @@ def label_orbit_trigfree(theta, theta_dot, alpha, omega0, dt, n_checks, check_ev
     return UNRESOLVED, 0, -1
 
 
-@nb.njit(nogil=True, fastmath=SIN_FASTMATH)
-def label_orbit_trigfree_torque(theta, theta_dot, alpha, omega0, dt, n_checks, check_every,
-                                energy_cap, model):
-    """Label one orbit of the tilted pendulum with the trig-free method, libm sin/cos at the
-    re-synchronisation (kernel contract in :mod:`atlas.kernels`; ``model`` from
-    :func:`atlas.kernels.rk4.torque_model`); returns (status, k, n_trap)."""
-    torque, shift, vers, sign, r_theta0, r_g, r_top, _ = model
-    for j in range(n_checks + 1):
-        if not (math.isfinite(theta) and math.isfinite(theta_dot)):
-            return NONFINITE, 0, -1
-        c, s, k, energy = sync_libm_torque(theta, theta_dot, omega0, torque, shift, vers)
-        if energy < energy_cap:
-            return TRAPPED, k, j * check_every
-        if running_test(theta, theta_dot, sign, r_theta0, r_g, r_top):
-            return RUNNING, 0, j * check_every
-        if j == n_checks:
-            break
-        for _ in range(check_every):
-            theta, theta_dot, c, s = trigfree_step_torque(theta, theta_dot, c, s, alpha,
-                                                          omega0, dt, torque)
-    return UNRESOLVED, 0, -1
+#: Label one orbit of the tilted pendulum with the trig-free method, libm sin/cos at the
+#: re-synchronisation (:func:`atlas.kernels.rk4.make_label_orbit_torque`).
+label_orbit_trigfree_torque = make_label_orbit_torque(sync_libm_torque, trigfree_step_torque,
+                                                      SIN_FASTMATH)
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
