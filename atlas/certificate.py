@@ -81,8 +81,9 @@ class _Untilted:
     for :class:`Certifier`."""
 
     running_possible = False
-    #: A boundary of saddle n separates the wells (n − 1)/2 and (n − 1)/2 + upper_well.
-    upper_well = 1
+    #: The wells a boundary of saddle n (odd) separates: (n − 1)/2 + lower_well to
+    #: (n − 1)/2 + upper_well (here the wells on either side of the saddle nπ).
+    lower_well, upper_well = 0, 1
 
     def __init__(self, pendulum: Pendulum, window):
         self.pendulum, self.window = pendulum, window
@@ -152,9 +153,14 @@ class _Tilted:
 
         self.exact = TiltedBoundaries(pendulum, *window)
         self.running_possible = self.exact.bistable
-        # bistable: the boundary of s_j separates well j from the running basin; otherwise
-        # wells j and j + 1
-        self.upper_well = 0 if self.exact.bistable else 1
+        # the wells a boundary of saddle n = 2j + 1 separates: bistable, one well from the
+        # running basin — well j for τ > 0, and for τ < 0 (the mirror of canonical saddle
+        # −j − 1, whose tongue holds canonical well −j − 1, i.e. actual well j + 1) well j + 1;
+        # monostable, wells j and j + 1
+        if not self.exact.bistable:
+            self.lower_well, self.upper_well = 0, 1
+        else:
+            self.lower_well = self.upper_well = 0 if pendulum.torque > 0 else 1
         areas = self.exact.areas()
         self.k, self.fraction, self.error = areas.k, areas.fraction, areas.error
         self.running, self.running_error = areas.running, areas.running_error
@@ -196,7 +202,7 @@ class _Tilted:
 def exact_boundaries(pendulum: Pendulum, window):
     """The exact basin boundaries of ``pendulum`` over ``window`` ((θmin, θmax) [rad],
     (θ̇min, θ̇max) [rad s⁻¹]); None where atlas has none (|τ| ≥ ω0²: no rest state, no
-    boundary)."""
+    boundary; see :class:`NoBoundaries`)."""
     if pendulum.torque == 0.0:
         return _Untilted(pendulum, window)
     if pendulum.has_rest_states:
@@ -277,7 +283,9 @@ class Certifier:
         basin = _basin(attractor, status)
         k = attractor.astype(np.int64)
         agree = (has_label | running) & (basin == side)
-        clean = agree & (dist > self.half_diagonal)
+        # the cell is wholly in its basin when the exact boundary, within reference_error of
+        # the one measured, cannot cut it
+        clean = agree & (dist > self.half_diagonal + self.reference_error)
         side_well = side != RUNNING_SIDE
         # the wells this tile can touch: its labels, its sides and their neighbours
         k_lo, k_hi, worst, may_run = self._doubt(rows, k, has_label, side, clean,
@@ -320,8 +328,9 @@ class Certifier:
         hi_n = np.where(hi_n == 0, near, np.maximum(hi_n, near))
         own_side = side[doubt]
         side_well = own_side != RUNNING_SIDE
+        bottom = (lo_n - 1) // 2 + self.exact.lower_well
         top = (hi_n - 1) // 2 + self.exact.upper_well
-        k_lo = np.where(side_well, np.minimum((lo_n - 1) // 2, own_side), (lo_n - 1) // 2)
+        k_lo = np.where(side_well, np.minimum(bottom, own_side), bottom)
         k_hi = np.where(side_well, np.maximum(top, own_side), top)
         own = has_label[doubt]
         k_lo = np.where(own, np.minimum(k_lo, k[doubt]), k_lo)
@@ -395,7 +404,7 @@ def _unlabelled(status) -> dict:
 
 
 class NoBoundaries:
-    """The certifier of a pendulum without rest states (|τ| ≥ ω0²): the running limit cycle
+    """The certifier of a pendulum without rest states (|τ| > ω0²): the running limit cycle
     is its only attractor, so its basin is the whole plane, there is no basin boundary
     (``boundary_distance`` is +inf, d_cert 0) and every running label is certified for the
     exact equation; an orbit not yet in the running barrier stays unresolved. Same
@@ -432,10 +441,13 @@ class NoBoundaries:
 
 def certifier_for(pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float):
     """The certifier of one parameter point: :class:`Certifier` (exact boundaries) where the
-    pendulum has rest states, :class:`NoBoundaries` where it has none (|τ| ≥ ω0²)."""
+    pendulum has rest states, :class:`NoBoundaries` where it has none (|τ| > ω0²). At the
+    saddle-node |τ| = ω0² neither argument holds: ValueError (configs refuse it)."""
     if pendulum.torque == 0.0 or pendulum.has_rest_states:
         return Certifier(pendulum, theta0, theta_dot0, shift, tol)
-    return NoBoundaries(pendulum, theta0, theta_dot0)
+    if abs(pendulum.torque) > pendulum.omega0**2:
+        return NoBoundaries(pendulum, theta0, theta_dot0)
+    raise ValueError("|torque| = omega0^2: the saddle-node, whose basin atlas does not certify")
 
 
 def _edge_weights(num: int) -> np.ndarray:

@@ -279,17 +279,30 @@ class Config(_Strict):
     @model_validator(mode="after")
     def _runnable(self):
         """Checks across sections, so that a valid config never fails after work began."""
-        from .labels import check_integration
+        from .labels import CHECK_EVERY, check_integration, check_torque_reach
         from .limits import check_reach, check_separatrix_settings
 
         dt, t_max = self.integrator.dt, self.integrator.t_max
-        for a in self.pendulum.alphas:
-            for w in self.pendulum.omega0s:
-                try:
-                    check_integration(a, w, dt, t_max)
-                except ValueError as exc:
-                    raise ValueError(f"integrator.{exc}") from None
         g = self.grid
+        theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))
+        speed_abs = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))
+        for point in self.pendulum.points:
+            a, w, t = point["alpha"], point["omega0"], point["torque"]
+            if abs(t) == w * w:
+                raise ValueError(
+                    f"pendulum.torque: |torque| = omega0^2 = {w * w:g} is the saddle-node "
+                    "bifurcation, where the rest state (pi/2, 0) is degenerate and atlas "
+                    "certifies no basin; take |torque| below or above omega0^2")
+            try:
+                check_integration(a, w, dt, t_max, torque=t)
+            except ValueError as exc:
+                raise ValueError(f"integrator.{exc}") from None
+            if t:
+                try:
+                    check_torque_reach(theta_abs, speed_abs, a, w, t,
+                                       t_max + CHECK_EVERY * dt)
+                except ValueError as exc:
+                    raise ValueError(f"grid: {exc}") from None
         try:
             check_reach(max(abs(g.theta0.start), abs(g.theta0.stop)),
                         max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop)),

@@ -83,7 +83,7 @@ def _torque_lines(tree: xr.DataTree, point: dict) -> list[str]:
     lines = []
     cp = point_group(tree, "critical_points", point)
     if cp is not None and cp.sizes.get("point", 0) == 0:
-        lines.append("critical  none: |torque| >= omega0^2, every orbit runs")
+        lines.append("critical  none: |torque| > omega0^2, every orbit runs")
     elif cp is not None:
         kinds = sorted(set(cp["kind"].values.tolist()))
         lines.append(f"critical  {cp.sizes['point']} in the window (" + ", ".join(kinds)

@@ -261,6 +261,14 @@ def _check_inputs(theta0: np.ndarray, theta_dot0: np.ndarray, alpha: float,
     if torque == 0.0:
         check_reach(theta_abs, speed_abs, alpha)
         return
+    check_torque_reach(theta_abs, speed_abs, alpha, omega0, torque, span)
+
+
+def check_torque_reach(theta_abs: float, speed_abs: float, alpha: float, omega0: float,
+                       torque: float, span: float) -> None:
+    """Raise ValueError (one line) if orbits from |θ0| ≤ ``theta_abs`` [rad], |θ̇0| ≤
+    ``speed_abs`` [rad s⁻¹] of the pendulum with torque may travel, within ``span`` [s], to
+    wells beyond |k| ≤ MAX_WELL."""
     # with τ the speed stays within max(|θ̇0|, (ω0² + |τ|)/2α) (above it θ̈ points back), so
     # an orbit travels at most that times the run's length
     bound = theta_abs + max(speed_abs, (omega0**2 + abs(torque)) / (2.0 * alpha)) * span

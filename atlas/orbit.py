@@ -328,13 +328,17 @@ def _nearest(point, theta0: float, theta_dot0: float) -> dict:
 def _exact(orbit: Orbit, window, shift: float, tol: float):
     """(distance to the nearest exact basin boundary, the exact side: k or RUNNING_SIDE,
     d_cert) by :class:`atlas.certificate.Certifier` over ``window``; (inf, RUNNING_SIDE, 0)
-    for a pendulum without rest states (|τ| ≥ ω0²: no boundary, every orbit runs)."""
+    for a pendulum without rest states (|τ| > ω0²: no boundary, every orbit runs);
+    AtlasError at the saddle-node |τ| = ω0²."""
     from .certificate import RUNNING_SIDE, Certifier
     from .model import Pendulum
 
     p = Pendulum(orbit.alpha, orbit.omega0, orbit.torque)
-    if p.torque != 0.0 and not p.has_rest_states:
+    if abs(p.torque) > p.omega0**2:
         return math.inf, RUNNING_SIDE, 0.0
+    if p.torque != 0.0 and not p.has_rest_states:
+        raise AtlasError("|torque| = omega0^2 is the saddle-node bifurcation: atlas certifies "
+                         "no basin there; take |torque| below or above omega0^2")
     (t0, t1), (v0, v1) = window
     cert = Certifier(p, [t0, t1], [v0, v1], shift, tol)
     k = np.array([orbit.k if orbit.k is not None else 0])

@@ -213,26 +213,36 @@ def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
     return out
 
 
-def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, cycles: list,
-                dt: float) -> list[tuple]:
+def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list,
+                barriers: list) -> list[tuple]:
     """(certifier, running barrier) of every parameter point: the certifier with the boundary
     shift its separatrices measured (NaN without them: then no label is certified for the
-    exact equation; :func:`atlas.certificate.certifier_for`), the barrier around its running
-    limit cycle, with the margins RK4 at step ``dt`` needs (None without one)."""
+    exact equation; :func:`atlas.certificate.certifier_for`) and the barrier of
+    :func:`_running_certificates`."""
     out = []
-    for p, sep, cycle in zip(pendulums, traced, cycles):
+    for p, sep, barrier in zip(pendulums, traced, barriers):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
-        barrier = (None if cycle is None else
-                   running.running_barrier(p.alpha, p.omega0, p.torque, cycle, dt=dt))
         out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol), barrier))
     return out
 
 
-def _limit_cycles(pendulums: list[Pendulum]) -> list:
-    """The running limit cycle of every parameter point (None where there is none)."""
-    return [running.limit_cycle(p.alpha, p.omega0, p.torque) if p.torque else None
-            for p in pendulums]
+def _running_certificates(pendulums: list[Pendulum], dt: float) -> tuple[list, list]:
+    """The running limit cycle of every parameter point and the barrier around it, with the
+    margins RK4 at step ``dt`` needs (None each where there is no cycle). Built before
+    anything is written: a dt too coarse for the running speeds is bad input (AtlasError,
+    one line naming integrator.dt)."""
+    cycles, barriers = [], []
+    for p in pendulums:
+        cycle = running.limit_cycle(p.alpha, p.omega0, p.torque) if p.torque else None
+        try:
+            barrier = (None if cycle is None else
+                       running.running_barrier(p.alpha, p.omega0, p.torque, cycle, dt=dt))
+        except ValueError as exc:
+            raise AtlasError(f"integrator.dt: {exc} (torque = {p.torque:g})") from None
+        cycles.append(cycle)
+        barriers.append(barrier)
+    return cycles, barriers
 
 
 def limit_cycle_dataset(cycle) -> xr.Dataset:
@@ -438,7 +448,8 @@ class _Phases:
         self.last = now
 
 
-def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float) -> None:
+def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float,
+            running_certificates: tuple[list, list]) -> None:
     """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
     and certify what is missing, then assemble the file. A tile file found damaged is set
     aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``)."""
@@ -446,8 +457,8 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     pendulums = _pendulums(tiles.layout)
     traced = _trace_separatrices(cfg, pendulums)
     phase.done("separatrices")
-    cycles = _limit_cycles(pendulums)
-    certifiers = _certifiers(tiles.layout, pendulums, traced, cycles, cfg.integrator.dt)
+    cycles, barriers = running_certificates
+    certifiers = _certifiers(tiles.layout, pendulums, traced, barriers)
     groups = _groups(tiles.layout, pendulums, traced, cycles)
     phase.done("exact boundaries and areas")
     for _ in range(3):
@@ -495,6 +506,7 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
     identity = run_identity(cfg, backend)
     if not restart:
         _check_partial(partial, identity)
+    running_certificates = _running_certificates(_pendulums(layout), cfg.integrator.dt)
     _make_output_folder(cfg.output)
     start = time.perf_counter()
     age = _process_age()
@@ -503,7 +515,7 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
     with output_lock(cfg.output):
         try:
             tiles = _open_tiles(cfg, layout, identity, restart)
-            _finish(tiles, cfg, backend, quiet, start)
+            _finish(tiles, cfg, backend, quiet, start, running_certificates)
         except OverflowError as exc:
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:

@@ -16,13 +16,15 @@ the CLI). What is checked, from the metadata only (the arrays are not read):
   every parameter (``alpha`` > 0, ``omega0`` > 0, ``torque``): a float64 coordinate, scalar
   or 1-D (swept), finite;
 * ``status``'s CF flags: ``flag_values`` and ``flag_meanings`` pair up and each value means
-  what atlas means by it (0 trapped, 1 unresolved, 2 nonfinite, 3 near_boundary);
+  what atlas means by it (0 trapped, 1 unresolved, 2 nonfinite, 3 near_boundary, 4 running,
+  5 running_near_boundary);
 * the summary ``atlas info`` prints: the per-basin variables over ``k`` and the per-point
   figures, floating point, on the parameter dims;
 * the attributes the readers use: ``dt`` and ``t_max`` (finite, > 0), ``check_every`` (a
   positive integer), and ``config``, which must be a JSON object (:func:`parse_config`);
-* the per-point groups (``/critical_points``, ``/separatrices``): each node names its
-  parameter point in its attributes, and holds the vectors the readers draw from.
+* the per-point groups (``/critical_points``, ``/separatrices``, ``/limit_cycle``): each node
+  names its parameter point in its attributes, and holds the vectors and attributes the
+  readers draw from.
 """
 
 from __future__ import annotations
@@ -212,6 +214,16 @@ def check_tree(tree, path) -> None:
     for node in point_nodes(tree, "separatrices"):
         _point_attrs(node, path)
         _check_separatrices(node.to_dataset(inherit=False), node.path, path)
+    for node in point_nodes(tree, "limit_cycle"):
+        _point_attrs(node, path)
+        cycle = node.to_dataset(inherit=False)
+        for name in ("theta", "theta_dot", "time"):
+            _vector(cycle, node.path, name, "f", path, dim="sample")
+        _number(node.attrs, "period", path, positive=True, where=f"{node.path} ")
+        _number(node.attrs, "mean_theta_dot", path, where=f"{node.path} ")
+        direction = _number(node.attrs, "direction", path, where=f"{node.path} ")
+        if direction not in (1.0, -1.0):
+            _refuse(path, f"{node.path} attribute direction = {direction:g} is not +1 or -1")
 
 
 def _point_attrs(node, path) -> None:

@@ -121,7 +121,7 @@ def test_without_rest_states_every_orbit_runs(tmp_path):
     assert float(tree["limit_cycle"].attrs["period"]) > 0
     info = run_cli("info", tmp_path / "runs.h5")
     assert info.returncode == 0, info.stderr
-    assert "none: |torque| >= omega0^2, every orbit runs" in info.stdout
+    assert "none: |torque| > omega0^2, every orbit runs" in info.stdout
 
 
 @pytest.mark.slow
@@ -175,3 +175,32 @@ def test_swing_plot_draws_the_running_basin_and_the_limit_cycle(tmp_path):
     np.testing.assert_array_equal(rest.get_xdata(), [0.3, 0.5])
     np.testing.assert_allclose(
         rest.get_ydata(), tree["basin_fraction_exact"].sum("k").values, rtol=0, atol=0)
+
+
+def test_the_saddle_node_torque_is_refused(tmp_path):
+    """|τ| = ω0² exactly: the rest state (π/2, 0) is a degenerate saddle-node whose basin atlas
+    does not certify (no rest state is not the same as every orbit running): one line, exit
+    2, nothing written."""
+    cfg = tmp_path / "sn.yaml"
+    cfg.write_text(f"pendulum: {{alpha: 0.05, omega0: 1.0, torque: [0.5, -1.0]}}\n"
+                   f"output: {tmp_path / 'sn.h5'}\n")
+    proc = run_cli("run", cfg)
+    assert proc.returncode == 2 and "saddle-node" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sn.yaml"]
+
+
+def test_a_step_too_coarse_for_the_running_barrier_is_refused_before_work(tmp_path):
+    """dt = 0.1 is fine without torque but too coarse for the running speeds of the swing
+    pendulum (RK4's local error would exceed the barrier's margins): one line naming
+    integrator.dt, exit 2, nothing written."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("pendulum: {alpha: 0.05, omega0: 1.0, torque: 0.5}\n"
+                   "grid: {theta0: {start: -5pi/6, stop: 7pi/6, num: 8},\n"
+                   "       theta_dot0: {start: -10, stop: 10, num: 8}}\n"
+                   "integrator: {dt: 0.1, t_max: 400}\n"
+                   f"output: {tmp_path / 'c.h5'}\n")
+    proc = run_cli("run", cfg)
+    assert proc.returncode == 2 and proc.stderr.startswith("atlas: error: integrator.dt:")
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
