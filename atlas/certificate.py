@@ -24,6 +24,16 @@ traced branches are exact images of them (the RK4 map commutes with θ → θ + 
 (θ, θ̇) → (−θ, −θ̇) up to the rounding of θ, ≈ 1e-15). Trapped labels that fail either test
 get the status ``near_boundary``: certified for the RK4 map only.
 
+With a torque τ the same argument holds with the tilted boundaries of :mod:`atlas.tilted`
+(their reference error includes the polylines' chord error) and the running basin as one more
+basin: a ``running`` label (the RK4 map's orbit entered the running barrier,
+:mod:`atlas.running`) on the running side and beyond d_cert is certified for the exact
+equation, otherwise it becomes ``running_near_boundary``. The RK4 map commutes with the 2π
+shift (checked: :func:`atlas.separatrices.trace_tilted`'s ``shift_error``); there is no point
+reflection, so every copy of a boundary is located on its own labels. Without rest states
+(|τ| > ω0²) there is no boundary and the running cycle attracts everything
+(:class:`NoBoundaries`).
+
 A grid count is not an area. The grid fraction f_k = (points labelled k)/N differs from the
 exact area fraction F_k = Σ_cells area(cell ∩ basin k)/A by the sum over cells of
 1{label = k}/N − area(cell ∩ basin k)/A. A cell (the part of the window nearest its grid
