@@ -86,6 +86,11 @@ The crossing of every boundary in the window with the axis θ0 = 0 (the initial 
 the label changes there, inside the window or not) is located by the same bisection along the
 θ̇0 axis, from the exact value of L at θ = −(|n| − 1)π (:func:`_axis_crossings`).
 
+With a torque τ (0 < |τ| < ω0²) the point reflection is gone and the branches fold, so
+:func:`trace_tilted` takes its vertices from the exact tilted boundaries of
+:mod:`atlas.tilted` and bisects every copy in the window on its own labels (the 2π shift is
+checked on relocated copies); the schema is the same.
+
 References: Nusse & Yorke, "A procedure for finding numerical trajectories on chaotic saddles",
 Physica D 36 (1989) 137 (straddle orbits: bisection between initial conditions of different
 fate); Krauskopf et al., "A survey of methods for computing (un)stable manifolds of vector
