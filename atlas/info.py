@@ -61,7 +61,12 @@ def _basin_lines(ds: xr.Dataset) -> list[str]:
     d_cert = float(ds["d_cert"])
     n = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
     certified = int(round(float(ds["certified_fraction"]) * n))
-    if d_cert == d_cert:  # not NaN
+    if d_cert == 0.0:  # no rest state, no boundary (|torque| > omega0^2)
+        lines.append(f"certified {certified:,} of {n:,} labels ({certified / n:.2%}) hold for "
+                     "the exact equation: without rest states there is no basin boundary and "
+                     "the running cycle attracts every orbit (status running); the others "
+                     "are unresolved")
+    elif d_cert == d_cert:  # not NaN
         lines.append(f"certified {certified:,} of {n:,} labels ({certified / n:.2%}) hold for "
                      f"the exact equation: farther than d_cert = {d_cert:.1e} from every "
                      "basin boundary (status trapped or running); the others for the RK4 "
