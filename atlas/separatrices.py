@@ -494,6 +494,16 @@ def _require_damping(p: Pendulum) -> None:
             "settles, so there are no basins of attraction to bound")
 
 
+def _checked(p: Pendulum, theta_window, theta_dot_window, tol: float, max_spacing: float,
+             dt: float) -> Window:
+    """The window of a trace, once its settings are checked (ValueError, one line)."""
+    _require_damping(p)
+    if not (math.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
+    check_separatrix_settings(theta_window, theta_dot_window, tol, max_spacing)
+    return Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
+
+
 def _linger(p: Pendulum, tol: float) -> float:
     """Time [s] an orbit within δ of a stable manifold lingers at its saddle, ≈ ln(1/δ)/u1,
     with room for δ down to ≈ tol² and the fall into the well after it."""
@@ -711,11 +721,7 @@ def trace(
     cannot be certified during the run.
     """
     p = pendulum
-    _require_damping(p)
-    if not (math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
-    check_separatrix_settings(theta_window, theta_dot_window, tol, max_spacing)
-    window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
+    window = _checked(p, theta_window, theta_dot_window, tol, max_spacing, dt)
 
     # the two source branches, over the stretch their copies in the window use: vertices on
     # the exact left branch of π, and their reflections for the right branch of −π
@@ -993,11 +999,7 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
     from .tilted import RUNNING_SIDE, TiltedBoundaries
 
     p = pendulum
-    _require_damping(p)
-    if not (math.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
-    check_separatrix_settings(theta_window, theta_dot_window, tol, max_spacing)
-    window = Window(tuple(map(float, theta_window)), tuple(map(float, theta_dot_window)))
+    window = _checked(p, theta_window, theta_dot_window, tol, max_spacing, dt)
     exact = TiltedBoundaries(p, window.theta, window.theta_dot)
     barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.cycle, dt=dt) \
         if exact.cycle is not None else None
