@@ -28,6 +28,13 @@ meaningful even where absolute times drift (the best of the repeats is kept in t
 * scaling: the atlas map at 256² … 4096² (the same window, finer grids).
 * JIT: a subprocess with ``NUMBA_CACHE_DIR`` pointed at a fresh directory times import and the
   first call (compilation), then a second subprocess with the same directory (cache hit).
+* plotting: ``atlas plot`` of the default config's atlas at 512² and 4096² (1536² in a quick
+  run; written first by :func:`atlas.run`, separatrices on): in process
+  (:func:`~atlas.plotting.plot_atlas` of the file opened lazily, as the CLI opens it; median
+  of the repeats), and the whole command in a subprocess (wall and peak RSS, one run). The
+  maps are read band by band and coarsened to at most ``MAX_PIXELS`` per axis; the row also
+  gives the peak memory (tracemalloc) of reading and coarsening them that way against
+  loading each whole and coarsening it in memory as float64, as ``atlas plot`` did before.
 """
 
 from __future__ import annotations
@@ -59,6 +66,11 @@ SCALING = (256, 512, 1024, 2048, 4096)
 QUICK_SCALING = (256, 512, 1024)
 #: Grid side of the torque rows in a quick run.
 QUICK_TORQUE = 128
+#: Grid sides of the plotting rows (a quick run: the second is smaller).
+PLOT_SIDES = (512, 4096)
+QUICK_PLOT_SIDES = (512, 1536)
+#: Target of the plotting rows: ``atlas plot`` of the default 512² atlas, the whole command.
+PLOT_TARGET_S = 1.0
 #: Targets on the 2-core development machine.
 TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
            "bulk_vs_lanes": 1.5, "jit_cold_s": 5.0, "jit_warm_s": 1.0}
@@ -182,11 +194,12 @@ def _row(variant, steps_s, orbits_s, map_s, atlas_map_s, note=""):
 
 
 def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = True,
-              lsoda_sample: int | None = None) -> dict:
+              lsoda_sample: int | None = None, plots: bool = True) -> dict:
     """Run the CPU benchmark (module docstring) and return a JSON-ready dict.
 
     ``sizes``: grid sides of the scaling rows (default 256…4096; ``quick`` stops at 1024 and
     uses at most 2 repeats, shorter numpy/straightforward runs and a smaller LSODA sample).
+    ``plots``: the plotting rows (``atlas plot``; they compute their atlases first).
     """
     p = defaults.problem()
     if quick:
@@ -258,6 +271,7 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
                         "ns_per_orbit": s / th.size * 1e9})
 
     torque = _torque_rows(QUICK_TORQUE if quick else MAP_N, repeats)
+    plot = _plot_rows(QUICK_PLOT_SIDES if quick else PLOT_SIDES, repeats) if plots else None
 
     result = {
         "machine": machine_info(), "problem": {**p, "grid": MAP_N, "check_every": CHECK_EVERY},
@@ -283,6 +297,8 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
                     "bulk_vs_lanes": rates["atlas trig-free lanes propagate"]
                     / rates["rk4 lanes propagate"]},
     }
+    if plot is not None:
+        result["plot"] = plot
     if jit:
         cold, warm = _jit_times()
         result["jit"] = {"cold": cold, "warm_cache": warm}
@@ -315,6 +331,129 @@ def _torque_rows(side: int, repeats: int) -> dict:
                      {"variant": "torque tau = 0.5, tilted trap + running barrier",
                       "wall_s": t["torque"][0], "orbits_per_s": n / t["torque"][0],
                       "ratio": t["torque"][0] / t["untilted"][0]}]}
+
+
+_PLOT_CONFIG = """\
+name: plot{side}
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: {side}}}
+  theta_dot0: {{start: -4.0, stop: 4.0, num: {side}}}
+output: {output}
+"""
+
+
+def _whole_array_maps(path) -> None:
+    """The maps of the atlas at ``path`` as ``atlas plot`` read them before streaming: every
+    map loaded whole, then each converted to float64 and coarsened in memory."""
+    from .kernels import NEAR_BOUNDARY
+    from .plotting import _coarsen
+    from .store import open_atlas
+
+    tree = open_atlas(path)
+    try:
+        ds = tree.to_dataset(inherit=False).load()
+    finally:
+        tree.close()
+    k = ds["attractor"].values.astype(float)
+    k[~np.isin(ds["status"].values, (TRAPPED, NEAR_BOUNDARY))] = np.nan
+    _coarsen(k, "mode")
+    del k
+    t = ds["t_trap"].values.astype(float)
+    _coarsen(np.where(t > 0, t, 1.0), "max")
+    del t
+    _coarsen(ds["boundary_distance"].values.astype(float), "min")
+
+
+def _streamed_maps(path) -> None:
+    """The maps of the atlas at ``path`` as ``atlas plot`` reads them: band by band."""
+    from .plotting import read_maps
+    from .store import open_atlas
+
+    tree = open_atlas(path)
+    try:
+        read_maps(tree)
+    finally:
+        tree.close()
+
+
+def _peak_bytes(run, *args) -> int:
+    """Peak memory traced (tracemalloc: Python and numpy allocations) while ``run(*args)``
+    runs."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        run(*args)
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+_CLI_PLOT = """
+import sys
+from atlas.cli import main
+code = main(["plot", sys.argv[1]])
+try:  # the high-water mark of this process's own memory (ru_maxrss would count its parent's)
+    with open("/proc/self/status") as status:
+        hwm = next(line.split()[1] for line in status if line.startswith("VmHWM:"))
+except (OSError, StopIteration):
+    hwm = "nan"
+print(code, hwm)
+"""
+
+
+def _cli_plot(path) -> tuple[float, float | None]:
+    """(wall s, peak RSS in bytes, None where unknown) of ``atlas plot path`` in a subprocess
+    (the CLI's main in a fresh interpreter)."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [
+        str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")])))
+    t0 = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", _CLI_PLOT, str(path)], env=env, check=True,
+                         capture_output=True, text=True, timeout=600)
+    wall = time.perf_counter() - t0
+    code, hwm = out.stdout.split()[-2:]
+    if code != "0":
+        raise RuntimeError(f"atlas plot {path}: {out.stderr.strip()}")
+    return wall, None if hwm == "nan" else float(hwm) * 1024
+
+
+def _plot_rows(sides, repeats: int) -> dict:
+    """``atlas plot`` of generated atlases (module docstring)."""
+    from .config import load_config
+    from .plotting import MAX_PIXELS, plot_atlas
+    from .store import open_atlas
+    from .sweep import run
+
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="atlas-bench-plot-") as tmp:
+        for side in sides:
+            path = Path(tmp) / f"plot{side}.h5"
+            cfg = Path(tmp) / f"plot{side}.yaml"
+            cfg.write_text(_PLOT_CONFIG.format(side=side, output=path))
+            t0 = time.perf_counter()
+            run(load_config(cfg), quiet=True)
+            run_s = time.perf_counter() - t0
+
+            def plot(path=path):
+                tree = open_atlas(path)
+                try:
+                    plot_atlas(tree, path)
+                finally:
+                    tree.close()
+
+            t = _median_times({"plot": plot}, repeats if side <= 1024 else min(repeats, 3))
+            cli_s, cli_rss = _cli_plot(path)
+            rows.append({"n": side, "orbits": side * side, "run_s": run_s,
+                         "plot_s": t["plot"][0], "plot_best_s": t["plot"][1],
+                         "cli_s": cli_s, "cli_peak_rss_bytes": cli_rss,
+                         "streamed_peak_bytes": _peak_bytes(_streamed_maps, path),
+                         "whole_peak_bytes": _peak_bytes(_whole_array_maps, path),
+                         "image": [-(-side // -(-side // MAX_PIXELS))] * 2})
+    return {"rows": rows, "max_pixels": MAX_PIXELS, "target_cli_512_s": PLOT_TARGET_S}
+
+
+def _fmt_bytes(b) -> str:
+    return "n/a" if b is None else f"{b / 2**20:.0f} MB" if b < 2**30 else f"{b / 2**30:.2f} GB"
 
 
 def _same_labels(a, b) -> bool:
@@ -363,6 +502,20 @@ def format_table(result: dict) -> str:
     for r in result["scaling"]:
         lines.append(f"  {r['n']:5d}² {r['orbits']:9d} orbits {_fmt_s(r['wall_s']):>9s} "
                      f"{r['orbits_per_s']:10.3g} orbits/s {r['ns_per_orbit']:8.1f} ns/orbit")
+    if "plot" in result:
+        pl = result["plot"]
+        lines.append(f"Plotting: atlas plot of the default atlas at n² (3 PNGs; maps read band by "
+                     f"band, coarsened to ≤ {pl['max_pixels']} px; in process: plot_atlas of the "
+                     f"file opened lazily; CLI: the whole command, target ≤ "
+                     f"{pl['target_cli_512_s']:g} s at 512²; memory of the maps: tracemalloc "
+                     f"peak, streamed against whole float64 arrays as before)")
+        for r in pl["rows"]:
+            lines.append(f"  {r['n']:5d}² {r['orbits']:9d} orbits  in process "
+                         f"{_fmt_s(r['plot_s']):>7s}  CLI {_fmt_s(r['cli_s']):>7s}, peak RSS "
+                         f"{_fmt_bytes(r['cli_peak_rss_bytes']):>7s}  maps "
+                         f"{_fmt_bytes(r['streamed_peak_bytes']):>7s} streamed vs "
+                         f"{_fmt_bytes(r['whole_peak_bytes']):>7s} whole "
+                         f"({r['image'][0]}² image; atlas run {_fmt_s(r['run_s'])})")
     if "jit" in result:
         for k, j in result["jit"].items():
             lines.append(f"JIT {k:10s}: import {j['import_s']:.2f} s, first call "

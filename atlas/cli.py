@@ -75,9 +75,8 @@ def _cmd_plot(args) -> int:
     from .store import open_atlas
 
     tree = open_atlas(args.file)
-    try:
-        tree.load()  # every array read (and found readable) before the first PNG is written
-        paths = plot_atlas(tree, args.file)
+    try:  # plot_atlas reads everything it draws before it writes the first PNG, the maps
+        paths = plot_atlas(tree, args.file)  # band by band (bounded memory)
     finally:
         tree.close()
     for path in paths:

@@ -8,10 +8,19 @@
   RK4 map only;
 * :func:`fraction_curves` — exact basin fractions against a swept parameter, with the grid
   counts and their error bounds.
+
+The maps are drawn as images of at most MAX_PIXELS per axis: a larger map is read band by band
+(:func:`read_maps`; from the file, for a tree opened lazily) and each band reduced to blocks
+(labels by their mode, t_trap by the block max, boundary_distance by the block min), so that
+the memory a figure needs does not grow with the map (a 16384² atlas: about 0.5 GB).
 """
 
 from __future__ import annotations
 
+import functools
+import math
+import os
+import sys
 import warnings
 from pathlib import Path
 
@@ -27,7 +36,7 @@ from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED  # n
 from .layout import PARAMETERS, first_point, point_group, point_label, point_of  # noqa: E402
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curves",
-           "plot_atlas", "pi_ticks", "critical_point_markers", "STYLE"]
+           "plot_atlas", "read_maps", "pi_ticks", "critical_point_markers", "STYLE"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
@@ -115,12 +124,25 @@ def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
 #: Largest image drawn per axis [pixels]: a figure is 8 in wide at 150 dpi. Larger maps are
 #: coarsened to it first (labels by their mode, never averaged into a k that no orbit reached).
 MAX_PIXELS = 1200
+#: Cells read at once when a map is drawn: a map is read in bands of whole rows (whole blocks
+#: of the coarsening, aligned to the file's chunks where that costs little), so the memory a
+#: figure needs is bounded by this and by MAX_PIXELS², not by the size of the map.
+BAND_CELLS = 1 << 22
+
+
+def _factors(shape: tuple[int, int]) -> tuple[int, int]:
+    """Rows and columns of a coarsening block: at most MAX_PIXELS blocks along each axis."""
+    return -(-shape[0] // MAX_PIXELS), -(-shape[1] // MAX_PIXELS)
 
 
 def _coarsen(values: np.ndarray, how: str) -> np.ndarray:
     """Block-reduce ``values`` (rows × columns, NaN = no value) to at most MAX_PIXELS per axis:
-    ``mode`` for labels, ``min`` or ``max`` for continuous maps (keeping their extremes)."""
-    fr, fc = (-(-n // MAX_PIXELS) for n in values.shape)
+    ``mode`` for labels, ``min`` or ``max`` for continuous maps (keeping their extremes).
+
+    The definition, on a whole array in memory; the figures read their maps band by band
+    and reduce each band with compiled kernels (:func:`_read_labels`,
+    :func:`_read_extreme`), which compute the same."""
+    fr, fc = _factors(values.shape)
     if fr == fc == 1:
         return values
     rows, cols = -(-values.shape[0] // fr), -(-values.shape[1] // fc)
@@ -142,13 +164,389 @@ def _coarsen(values: np.ndarray, how: str) -> np.ndarray:
     return np.where(counts.max(axis=0) > 0, mode, np.nan)
 
 
-def _grid_image(ax, ds: xr.Dataset, values: np.ndarray, how: str, **kwargs):
+# --------------------------------------------------------------------------- streamed maps
+
+def _point_index(ds: xr.Dataset, index: dict) -> dict[str, int]:
+    """The parameter point that ``_single(ds, **index)`` selects, as an index (≥ 0) into each
+    swept dim."""
+    return {name: range(ds.sizes[name])[index.get(name, 0)] for name in PARAMETERS
+            if name in ds.dims}
+
+
+def _chunk_rows(da: xr.DataArray) -> int:
+    """Rows of one stored chunk of ``da`` (1 if unknown)."""
+    if da.chunks:  # dask
+        return int(da.chunks[0][0])
+    preferred = da.encoding.get("preferred_chunks") or {}
+    if "theta_dot0" in preferred:
+        return int(preferred["theta_dot0"])
+    sizes = da.encoding.get("chunksizes") or da.encoding.get("chunks")
+    return int(sizes[-2]) if sizes and len(sizes) >= 2 else 1
+
+
+class _MapRows:
+    """One map of one parameter point (rows θ̇0, columns θ0), read a range of rows at a time:
+    through xarray (from memory, or the file's own decoding for a lazy tree), or for a map
+    that is coarsened and stored as an atlas file stores it (deflated, shuffled, chunks of
+    whole rows), as its stored chunks inflated here (:class:`_RawChunks`)."""
+
+    def __init__(self, ds: xr.Dataset, name: str, point: dict[str, int], coarsened=False):
+        self.da = ds[name].isel(point).transpose("theta_dot0", "theta0")
+        self.shape = self.da.shape
+        self.raw = _RawChunks.of(ds, name, point) if coarsened else None
+        self.chunk_rows = self.raw.rows if self.raw else _chunk_rows(self.da)
+
+    def read(self, r0: int, r1: int) -> np.ndarray:
+        if self.raw is not None:
+            rows = self.raw.read(r0, r1)
+            if rows is not None:
+                return rows
+        return np.asarray(self.da.isel(theta_dot0=slice(r0, r1)).values)
+
+    def close(self) -> None:
+        if self.raw is not None:
+            self.raw.file.close()
+
+
+class _RawChunks:
+    """A map's chunks read as stored and inflated here. HDF5 inflates under its global lock,
+    one chunk at a time; zlib (and the unshuffle kernel) release the GIL, so the bands of a
+    map are inflated on every core. Only for a variable filtered by deflate (after shuffle)
+    alone, chunked by whole rows of one parameter point, and read lazily from the file
+    whose coordinates the dataset has; anything unexpected (a chunk stored unfiltered, one
+    that does not inflate to its size) reads the band through xarray instead, which reports
+    a damaged chunk as it always has."""
+
+    def __init__(self, file, dset, lead: tuple[int, ...], shuffle: bool):
+        self.file, self.dset, self.lead, self.shuffle = file, dset, lead, shuffle
+        self.rows, self.cols = dset.chunks[-2], dset.shape[-1]
+        self.dtype = dset.dtype
+
+    @classmethod
+    def of(cls, ds: xr.Dataset, name: str, point: dict[str, int]) -> _RawChunks | None:
+        da = ds[name]
+        source = da.encoding.get("source")
+        if (not source or da.chunks is not None or getattr(da.variable, "_in_memory", True)
+                or da.dims[-2:] != ("theta_dot0", "theta0")
+                or any(key in da.encoding for key in ("scale_factor", "add_offset"))):
+            return None
+        import h5py
+
+        try:
+            file = h5py.File(source, "r")
+        except (OSError, ValueError):
+            return None
+        try:
+            dset = file.get(name)
+            if cls._same(file, dset, ds, da):
+                plist = dset.id.get_create_plist()
+                filters = [plist.get_filter(i)[0] for i in range(plist.get_nfilters())]
+                if filters in ([h5py.h5z.FILTER_DEFLATE],
+                               [h5py.h5z.FILTER_SHUFFLE, h5py.h5z.FILTER_DEFLATE]):
+                    return cls(file, dset, tuple(point[d] for d in da.dims[:-2]),
+                               filters[0] == h5py.h5z.FILTER_SHUFFLE)
+        except (OSError, ValueError, KeyError, TypeError):
+            pass
+        file.close()
+        return None
+
+    @staticmethod
+    def _same(file, dset, ds: xr.Dataset, da: xr.DataArray) -> bool:
+        """Whether ``dset`` holds ``da`` (same shape, type and coordinates), chunked by whole
+        rows of one parameter point."""
+        import h5py
+
+        if not isinstance(dset, h5py.Dataset) or dset.chunks is None:
+            return False
+        if dset.shape != da.shape or dset.dtype != da.dtype:
+            return False
+        if any(c != 1 for c in dset.chunks[:-2]) or dset.chunks[-1] != dset.shape[-1]:
+            return False
+        for dim in da.dims:
+            stored = file.get(dim)
+            if not isinstance(stored, h5py.Dataset) or stored.shape != (ds.sizes[dim],):
+                return False
+            if not np.array_equal(stored[()], ds[dim].values):
+                return False
+        return True
+
+    def read(self, r0: int, r1: int) -> np.ndarray | None:
+        """Rows [r0, r1), or None if a chunk is not as expected."""
+        import zlib
+
+        out = np.empty((r1 - r0, self.cols), self.dtype)
+        try:
+            for c0 in range(r0 - r0 % self.rows, r1, self.rows):
+                mask, raw = self.dset.id.read_direct_chunk((*self.lead, c0, 0))
+                if mask:
+                    return None
+                self._inflate(raw, c0, r0, out)
+        except (OSError, ValueError, KeyError, RuntimeError, zlib.error):
+            return None
+        return out
+
+    def _inflate(self, raw: bytes, c0: int, r0: int, out: np.ndarray) -> None:
+        """Inflate the chunk of rows [c0, c0 + rows) into ``out``, the rows [r0, …)."""
+        import zlib
+
+        data = np.frombuffer(zlib.decompress(raw), np.uint8)
+        if data.size != self.rows * self.cols * self.dtype.itemsize:
+            raise ValueError("a chunk of the wrong size")
+        lo, hi = max(c0, r0), min(c0 + self.rows, r0 + out.shape[0])
+        whole = lo == c0 and hi == c0 + self.rows
+        target = out[c0 - r0:hi - r0] if whole else np.empty((self.rows, self.cols), self.dtype)
+        if self.shuffle:
+            _kernels()[2](data, target.reshape(-1).view(np.uint8), self.dtype.itemsize,
+                          sys.byteorder == "little")
+        else:
+            target.reshape(-1).view(np.uint8)[:] = data
+        if not whole:
+            out[lo - r0:hi - r0] = target[lo - c0:hi - c0]
+
+
+def _row_bands(rows: int, cols: int, fr: int, chunk_rows: int) -> list[tuple[int, int]]:
+    """Row ranges [r0, r1) covering a map: whole blocks of ``fr`` rows (only the last band
+    may end inside a block), about BAND_CELLS cells each, aligned to the stored chunks unless
+    that would make a band much larger."""
+    step = math.lcm(fr, chunk_rows)
+    if step * cols > 4 * BAND_CELLS:
+        step = fr
+    step *= max(1, BAND_CELLS // (step * cols))
+    return [(r0, min(r0 + step, rows)) for r0 in range(0, rows, step)]
+
+
+def _read_rows(source: _MapRows, r0: int, r1: int) -> np.ndarray:
+    """Rows [r0, r1) of a map, read (from its file, when the tree is lazy)."""
+    return source.read(r0, r1)
+
+
+def _workers() -> int:
+    """Threads that read and reduce bands at once (each holds one band)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return max(1, min(cores or 1, 8))
+
+
+def _blocks(ds: xr.Dataset) -> tuple[int, int, np.ndarray]:
+    """(fr, fc, an empty image): the block of the coarsening of the maps of ``ds``, and an
+    image of one pixel per block."""
+    rows, cols = ds.sizes["theta_dot0"], ds.sizes["theta0"]
+    fr, fc = _factors((rows, cols))
+    return fr, fc, np.empty((-(-rows // fr), -(-cols // fc)))
+
+
+def _reduce_bands(ds: xr.Dataset, names: list[str], point: dict[str, int], fr: int, fc: int,
+                  reduce) -> list:
+    """Read the maps ``names`` at ``point`` band by band (whole blocks of fr × fc cells), the
+    rows [r0, r1) of each at once, and call ``reduce(r0, r1, arrays)`` on every band;
+    returns the results in the order of the bands. Coarsened maps are read and reduced by
+    :func:`_workers` threads at once (the kernels and zlib release the GIL), each holding
+    one band."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    if fr * fc > 1:
+        _kernels()  # compiled (or loaded) once, before the threads need them
+    sources = []
+    try:
+        for name in names:
+            sources.append(_MapRows(ds, name, point, coarsened=fr * fc > 1))
+        bands = _row_bands(*sources[0].shape, fr, sources[0].chunk_rows)
+
+        def work(band):
+            return reduce(*band, [_read_rows(source, *band) for source in sources])
+
+        if fr * fc == 1 or len(bands) == 1:
+            return [work(band) for band in bands]
+        with ThreadPoolExecutor(_workers()) as pool:
+            return list(pool.map(work, bands))
+    finally:
+        for source in sources:
+            source.close()
+
+
+@functools.cache
+def _kernels():
+    """The Numba kernels of the streamed coarsening (compiled, or loaded from the cache, on
+    the first map that needs coarsening: small maps never import Numba). Each runs on one
+    core without the GIL; bands are reduced in threads."""
+    from .kernels import cached_njit
+
+    @cached_njit(nogil=True)
+    def mode_blocks(attractor, status, fr, fc, out, stats):  # pragma: no cover - compiled
+        """out[i, j]: the most frequent well label of block (i, j) of these rows (ties: the
+        smallest k), inf if running cells outnumber every well label, NaN if no cell has a
+        label. stats: the smallest and largest well label, and the number of running cells.
+        """
+        h, w = attractor.shape
+        nr, nc = out.shape
+        counts = np.zeros(65536, np.int64)
+        all_lo, all_hi, all_run = 1 << 20, -(1 << 20), 0
+        for i in range(nr):
+            for j in range(nc):
+                lo, hi, n_run = 1 << 20, -(1 << 20), 0
+                for r in range(i * fr, min(i * fr + fr, h)):
+                    for c in range(j * fc, min(j * fc + fc, w)):
+                        s = status[r, c]
+                        if s == TRAPPED or s == NEAR_BOUNDARY:
+                            k = np.int64(attractor[r, c])
+                            counts[k + 32768] += 1
+                            lo = min(lo, k)
+                            hi = max(hi, k)
+                        elif s == RUNNING or s == RUNNING_NEAR_BOUNDARY:
+                            n_run += 1
+                best, best_k = 0, 0
+                for k in range(lo, hi + 1):
+                    if counts[k + 32768] > best:
+                        best, best_k = counts[k + 32768], k
+                    counts[k + 32768] = 0
+                if n_run > best:  # the running label is the largest: it loses every tie
+                    out[i, j] = np.inf
+                elif best > 0:
+                    out[i, j] = best_k
+                else:
+                    out[i, j] = np.nan
+                all_lo, all_hi, all_run = min(all_lo, lo), max(all_hi, hi), all_run + n_run
+        stats[0], stats[1], stats[2] = all_lo, all_hi, all_run
+
+    @cached_njit(nogil=True)
+    def extreme_blocks(values, fr, fc, want_max, out, stats):  # pragma: no cover - compiled
+        """out[i, j]: the largest (``want_max``) or smallest value of block (i, j), NaNs
+        skipped (NaN if all are); stats: the smallest and largest finite positive value
+        (inf, -inf if none)."""
+        h, w = values.shape
+        nr, nc = out.shape
+        pos_lo, pos_hi = np.inf, -np.inf
+        for i in range(nr):
+            for j in range(nc):
+                best = np.nan
+                for r in range(i * fr, min(i * fr + fr, h)):
+                    for c in range(j * fc, min(j * fc + fc, w)):
+                        v = np.float64(values[r, c])
+                        if v == v:
+                            if best != best or (v > best if want_max else v < best):
+                                best = v
+                            if 0.0 < v < np.inf:
+                                pos_lo, pos_hi = min(pos_lo, v), max(pos_hi, v)
+                out[i, j] = best
+        stats[0], stats[1] = pos_lo, pos_hi
+
+    @cached_njit(nogil=True)
+    def unshuffle(data, out, size, little):  # pragma: no cover - compiled
+        """HDF5's shuffle filter undone: byte b of element i is data[b * n + i]
+        (``little``: this machine is little-endian, elements of 2 and 4 bytes are put
+        together whole, ~30x faster than byte by byte)."""
+        n = out.size // size
+        if little and size == 4:
+            out4 = out.view(np.uint32)
+            for i in range(n):
+                out4[i] = (np.uint32(data[i]) | (np.uint32(data[n + i]) << 8)
+                           | (np.uint32(data[2 * n + i]) << 16)
+                           | (np.uint32(data[3 * n + i]) << 24))
+        elif little and size == 2:
+            out2 = out.view(np.uint16)
+            for i in range(n):
+                out2[i] = np.uint16(data[i]) | (np.uint16(data[n + i]) << 8)
+        else:
+            for i in range(n):
+                for b in range(size):
+                    out[i * size + b] = data[b * n + i]
+
+    return mode_blocks, extreme_blocks, unshuffle
+
+
+def _int16_labels(attractor: np.ndarray, status: np.ndarray) -> np.ndarray:
+    """``attractor`` as int16 (the file's type, which the mode kernel indexes by), or
+    ValueError if a labelled cell holds no int16."""
+    if attractor.dtype == np.int16:
+        return attractor
+    labelled = np.isin(status, (TRAPPED, NEAR_BOUNDARY))
+    k = attractor[labelled]
+    if k.size and not (np.all(k == np.round(k)) and k.min() >= -32768 and k.max() <= 32767):
+        raise ValueError("attractor labels that are not int16")
+    return np.where(labelled, attractor, 0).astype(np.int16)
+
+
+def _read_labels(ds: xr.Dataset, point: dict[str, int] | None = None
+                 ) -> tuple[np.ndarray, int, int, bool]:
+    """The basin map of ``ds`` at ``point`` (indices into the swept dims; none for a dataset
+    of one point), read band by band and coarsened to at most MAX_PIXELS per axis: (image,
+    kmin, kmax, running). The image holds each cell's (block's most frequent) well label k
+    where status is trapped or near_boundary, kmax + 1 for the running basin (status running
+    or running_near_boundary), NaN for no label; kmin and kmax span the well labels of the
+    whole map (0, 0 if none); running: whether any cell runs."""
+    fr, fc, out = _blocks(ds)
+
+    def reduce(r0, r1, arrays):
+        a, s = arrays
+        if fr == fc == 1:
+            k = a.astype(float)
+            k[~np.isin(s, (TRAPPED, NEAR_BOUNDARY))] = np.nan
+            running = (s == RUNNING) | (s == RUNNING_NEAR_BOUNDARY)
+            k[running] = np.inf
+            finite = k[np.isfinite(k)]
+            out[r0:r1] = k
+            lo, hi = (finite.min(), finite.max()) if finite.size else (np.inf, -np.inf)
+            return lo, hi, bool(running.any())
+        stats = np.empty(3, np.int64)
+        _kernels()[0](_int16_labels(a, s), s, fr, fc, out[r0 // fr:-(-r1 // fr)], stats)
+        return stats[0], stats[1], bool(stats[2])
+
+    stats = _reduce_bands(ds, ["attractor", "status"], point or {}, fr, fc, reduce)
+    lo, hi = min(s[0] for s in stats), max(s[1] for s in stats)
+    kmin, kmax = (int(lo), int(hi)) if lo <= hi else (0, 0)
+    out[np.isinf(out)] = kmax + 1
+    return out, kmin, kmax, any(s[2] for s in stats)
+
+
+def _read_extreme(ds: xr.Dataset, name: str, how: str, point: dict[str, int] | None = None
+                  ) -> tuple[np.ndarray, float, float]:
+    """The continuous map ``name`` of ``ds`` at ``point`` (as :func:`_read_labels`), read
+    band by band and coarsened by the block ``how`` ("max" or "min", NaNs skipped): (image
+    as float64, smallest and largest finite positive value of the whole map; NaN, NaN if
+    none)."""
+    fr, fc, out = _blocks(ds)
+
+    def reduce(r0, r1, arrays):
+        v = arrays[0]
+        if fr == fc == 1:
+            out[r0:r1] = v
+            positive = out[r0:r1][np.isfinite(out[r0:r1]) & (out[r0:r1] > 0)]
+            return (positive.min(), positive.max()) if positive.size else (np.inf, -np.inf)
+        stats = np.empty(2)
+        if v.dtype not in (np.float32, np.float64):
+            v = v.astype(float)
+        _kernels()[1](v, fr, fc, how == "max", out[r0 // fr:-(-r1 // fr)], stats)
+        return stats[0], stats[1]
+
+    stats = _reduce_bands(ds, [name], point or {}, fr, fc, reduce)
+    lo, hi = min(s[0] for s in stats), max(s[1] for s in stats)
+    return (out, float(lo), float(hi)) if lo <= hi else (out, np.nan, np.nan)
+
+
+#: The maps that :func:`read_maps` reads: name → reader(dataset, point).
+_MAP_READERS = {
+    "basin": _read_labels,
+    "t_trap": lambda ds, point: _read_extreme(ds, "t_trap", "max", point),
+    "boundary_distance": lambda ds, point: _read_extreme(ds, "boundary_distance", "min", point),
+}
+
+
+def read_maps(tree: xr.DataTree, *names: str, **index) -> dict:
+    """Read the maps ``names`` (default: all three) of one parameter point (``index`` as
+    :func:`basin_map`) band by band, coarsened for drawing: the ``maps`` argument of
+    :func:`basin_map`, :func:`trap_time_map` and :func:`boundary_distance_map`."""
+    ds = tree.to_dataset(inherit=False)
+    point = _point_index(ds, index)
+    return {name: _MAP_READERS[name](ds, point) for name in names or _MAP_READERS}
+
+
+def _grid_image(ax, ds: xr.Dataset, image: np.ndarray, **kwargs):
     """Draw a map over the grid (rows θ̇0, columns θ0) as an image whose pixels are the grid's
-    cells (centred on the grid points), coarsened to the figure's resolution."""
+    cells (centred on the grid points); ``image``: the map already coarsened to the figure's
+    resolution (its blocks then span the same extent)."""
     th, v = ds["theta0"].values, ds["theta_dot0"].values
     half_t = 0.5 * (th[-1] - th[0]) / max(th.size - 1, 1)
     half_v = 0.5 * (v[-1] - v[0]) / max(v.size - 1, 1)
-    image = ax.imshow(np.ma.masked_invalid(_coarsen(values, how)), origin="lower",
+    image = ax.imshow(np.ma.masked_invalid(image), origin="lower",
                       extent=(th[0] - half_t, th[-1] + half_t, v[0] - half_v, v[-1] + half_v),
                       aspect="auto", interpolation="nearest", **kwargs)
     ax.set_xlim(th[0], th[-1])
@@ -159,31 +557,26 @@ def _grid_image(ax, ds: xr.Dataset, values: np.ndarray, how: str, **kwargs):
     return image
 
 
-def basin_map(tree: xr.DataTree, ax=None, **index):
-    """Draw the basin map of ``tree`` (colour by k) with critical points and separatrices."""
+def basin_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
+    """Draw the basin map of ``tree`` (colour by k) with critical points and separatrices;
+    ``maps``: :func:`read_maps` of the same point, if already read."""
     ds = _single(tree.to_dataset(inherit=False), **index)
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4.8))
-    k = ds["attractor"].values.astype(float)
-    status = ds["status"].values
-    k[~np.isin(status, (TRAPPED, NEAR_BOUNDARY))] = np.nan
-    finite = k[np.isfinite(k)]
-    kmin, kmax = (int(finite.min()), int(finite.max())) if finite.size else (0, 0)
+    k, kmin, kmax, running = (maps or read_maps(tree, "basin", **index))["basin"]
     colors = list(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10))
     ticks, names = list(range(kmin, kmax + 1)), [f"{k:+d}" for k in range(kmin, kmax + 1)]
-    running = (status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)
-    if running.any():  # the running basin: one more colour after the wells
-        k[running] = kmax + 1
+    if running:  # the running basin: one more colour after the wells
         colors.append(RUNNING_COLOR)
         ticks.append(kmax + 1)
         names.append("running")
     cmap = ListedColormap(colors).with_extremes(bad="white")
     levels = np.arange(kmin, kmin + len(colors) + 1) - 0.5
-    mesh = _grid_image(ax, ds, k, "mode", cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
+    mesh = _grid_image(ax, ds, k, cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
     cbar.ax.set_yticklabels(names)
     cbar.set_label("attractor k: orbit settles at the rest state of well k"
-                   + ("; running: rotates" if running.any() else ""))
+                   + ("; running: rotates" if running else ""))
     _separatrices(ax, tree, ds)
     _limit_cycle(ax, tree, ds)
     _critical(ax, tree, ds)
@@ -192,38 +585,39 @@ def basin_map(tree: xr.DataTree, ax=None, **index):
     return ax
 
 
-def trap_time_map(tree: xr.DataTree, ax=None, **index):
-    """Draw the certified trapping time t_trap [s] on a log colour scale."""
+def trap_time_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
+    """Draw the certified trapping time t_trap [s] on a log colour scale (``maps`` as
+    :func:`basin_map`)."""
     ds = _single(tree.to_dataset(inherit=False), **index)
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4.8))
-    t = ds["t_trap"].values.astype(float)
-    positive = t[np.isfinite(t) & (t > 0)]
-    lo = positive.min() if positive.size else 1e-2
-    hi = max(positive.max() if positive.size else 1.0, lo * 10)
+    # blocks keep their largest t_trap (the transform below is monotone: the same as the
+    # largest of the transformed cells)
+    t, lo, hi = (maps or read_maps(tree, "t_trap", **index))["t_trap"]
+    lo = lo if lo == lo else 1e-2
+    hi = max(hi if hi == hi else 1.0, lo * 10)
     cmap = plt.get_cmap("magma").with_extremes(under="0.8", bad="white")
     # t_trap = 0 (already inside the trap) is drawn below the scale, in grey
-    mesh = _grid_image(ax, ds, np.where(t > 0, t, lo / 2), "max", cmap=cmap,
-                       norm=LogNorm(lo, hi))
+    mesh = _grid_image(ax, ds, np.where(t > 0, t, lo / 2), cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label("trapping time t_trap [s]")
     _separatrices(ax, tree, ds)
     ax.set_title("Time to certified trapping (grey: trapped at t = 0; white: never)")
     return ax
 
 
-def boundary_distance_map(tree: xr.DataTree, ax=None, **index):
+def boundary_distance_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
     """Draw ``boundary_distance`` on a log colour scale, the separatrices, and in white the
-    states closer than d_cert (labels certified for the RK4 map only)."""
+    states closer than d_cert (labels certified for the RK4 map only); ``maps`` as
+    :func:`basin_map`."""
     ds = _single(tree.to_dataset(inherit=False), **index)
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 4.8))
-    d = ds["boundary_distance"].values.astype(float)
+    d, lo, hi = (maps or read_maps(tree, "boundary_distance", **index))["boundary_distance"]
     d_cert = float(ds["d_cert"])
-    positive = d[np.isfinite(d) & (d > 0)]
-    lo = max(positive.min() if positive.size else 1e-12, d_cert if d_cert > 0 else 0, 1e-12)
-    hi = max(positive.max() if positive.size else 1.0, lo * 10)
+    lo = max(lo if lo == lo else 1e-12, d_cert if d_cert > 0 else 0, 1e-12)
+    hi = max(hi if hi == hi else 1.0, lo * 10)
     cmap = plt.get_cmap("viridis").with_extremes(under="white", bad="0.5")
-    mesh = _grid_image(ax, ds, d, "min", cmap=cmap, norm=LogNorm(lo, hi))
+    mesh = _grid_image(ax, ds, d, cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
         "distance to the nearest basin boundary (rad-ish)")
     _separatrices(ax, tree, ds)
@@ -307,24 +701,49 @@ def basin_stability(tree: xr.DataTree, ax=None, dim: str = "torque"):
     return ax
 
 
+#: The root variables of the basin map (one value per grid point): read band by band.
+MAP_VARIABLES = ("attractor", "status", "t_trap", "boundary_distance")
+
+
+def _load_all_but_the_maps(tree: xr.DataTree) -> None:
+    """Read (in place) every variable of ``tree`` except the root's basin maps: the summary
+    and the groups, each small."""
+    for name, variable in tree.variables.items():
+        if name not in MAP_VARIABLES:
+            variable.load()
+    for child in tree.children.values():
+        child.load()
+
+
 def plot_atlas(tree: xr.DataTree, path: Path) -> list[Path]:
-    """Write the figures of the atlas stored at ``path`` next to it; returns the PNG paths."""
+    """Write the figures of the atlas stored at ``path`` next to it; returns the PNG paths.
+
+    Everything drawn is read before the first PNG is written (a file that cannot be read
+    leaves none): the summary and the groups whole, the maps of the drawn parameter point
+    band by band, coarsened to the figure's pixels (:func:`read_maps`), so that the memory
+    needed is bounded whatever the size of the map."""
     path = Path(path)
     written = []
+    _load_all_but_the_maps(tree)
     ds = tree.to_dataset(inherit=False)
+    maps = read_maps(tree)
     with plt.rc_context(STYLE):
         jobs = [(path.with_suffix(".png"), basin_map),
                 (path.with_name(path.stem + "_t_trap.png"), trap_time_map),
                 (path.with_name(path.stem + "_boundary_distance.png"), boundary_distance_map)]
+        jobs = [(out, functools.partial(draw, maps=maps)) for out, draw in jobs]
         for dim in (name for name in PARAMETERS if name in ds.dims):
             jobs.append((path.with_name(f"{path.stem}_fractions_{dim}.png"),
-                         lambda t, dim=dim: fraction_curves(t, dim=dim)))
+                         functools.partial(fraction_curves, dim=dim)))
             if dim == "torque":
                 jobs.append((path.with_name(f"{path.stem}_basin_stability.png"),
                              basin_stability))
         for out, draw in jobs:
             ax = draw(tree)
             ax.figure.tight_layout()
+            # laid out once: without this, savefig would draw the figure once more first
+            # (for tight_layout's placeholder engine) before drawing it into the PNG
+            ax.figure.set_layout_engine(None)
             ax.figure.savefig(out)
             plt.close(ax.figure)
             written.append(out)

@@ -6,6 +6,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+import xarray as xr  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
 import atlas  # noqa: E402
@@ -65,6 +66,159 @@ def test_big_maps_are_coarsened_by_the_mode_of_their_labels():
     distance = np.arange(rows * cols, dtype=float).reshape(rows, cols)
     assert _coarsen(distance, "min")[1, 1] == distance[3, 3]
     assert _coarsen(distance, "max")[0, 0] == distance[2, 2]
+
+
+def _old_basin_labels(attractor, status):
+    """The image the basin map drew before streaming: k where trapped or near_boundary, the
+    running basin as kmax + 1, NaN for no label."""
+    from atlas.kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
+
+    k = attractor.astype(float)
+    k[~np.isin(status, (TRAPPED, NEAR_BOUNDARY))] = np.nan
+    finite = k[np.isfinite(k)]
+    kmax = int(finite.max()) if finite.size else 0
+    k[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = kmax + 1
+    return k
+
+
+@pytest.mark.parametrize("chunked", ["preferred", "dask", "decoded"])
+def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
+    """The maps are read in bands of whole blocks and reduced by compiled kernels: the result
+    equals ``_coarsen`` of the whole array, edge blocks (53 × 40 cells in blocks of 8 × 6)
+    and ties (the smallest k wins; the running basin, the largest label, loses) included;
+    chunks known from the file's encoding or from dask, and labels decoded to float (NaN
+    where the file has its fill value) as plain xarray would read them."""
+    from atlas import plotting
+    from atlas.plotting import _coarsen, _read_extreme, _read_labels
+
+    monkeypatch.setattr(plotting, "MAX_PIXELS", 7)
+    monkeypatch.setattr(plotting, "BAND_CELLS", 500)
+    rng = np.random.default_rng(14)
+    shape = (53, 40)
+    attractor = rng.integers(-2, 3, shape).astype(np.int16)
+    status = rng.choice(np.array([0, 0, 0, 1, 2, 3, 4, 5], np.int8), shape)
+    status[:8, :6] = 1  # a block without a label
+    status[8:16, :6] = 4  # a running block
+    attractor[status % 3 != 0] = -32768  # the fill where not trapped (status 0 or 3)
+    t = rng.exponential(10.0, shape).astype(np.float32)
+    t[rng.random(shape) < 0.2] = 0.0
+    t[rng.random(shape) < 0.2] = np.nan
+    t[:8, 6:12] = np.nan
+    ds = xr.Dataset({"attractor": (("theta_dot0", "theta0"), attractor),
+                     "status": (("theta_dot0", "theta0"), status),
+                     "t_trap": (("theta_dot0", "theta0"), t)})
+    if chunked == "dask":
+        ds = ds.chunk({"theta_dot0": 5})
+    elif chunked == "decoded":
+        ds["attractor"] = ds["attractor"].where(ds["attractor"] != -32768).astype(np.float32)
+        ds["attractor"].encoding["preferred_chunks"] = {"theta_dot0": 5, "theta0": 40}
+    else:
+        for name in ds.data_vars:
+            ds[name].encoding["preferred_chunks"] = {"theta_dot0": 5, "theta0": 40}
+    reads = []
+    read = plotting._read_rows
+    monkeypatch.setattr(plotting, "_read_rows",
+                        lambda da, r0, r1: reads.append((r0, r1)) or read(da, r0, r1))
+
+    image, kmin, kmax, running = _read_labels(ds)
+    expected = _coarsen(_old_basin_labels(attractor, status), "mode")
+    assert image.shape == expected.shape == (7, 7)
+    np.testing.assert_array_equal(image, expected)
+    assert (kmin, kmax, running) == (-2, 2, True)
+    assert np.isnan(image[0, 0]) and image[1, 0] == kmax + 1
+    assert sorted(set(reads)) == [(0, 40), (40, 53)]  # lcm(8 rows, 5-row chunks) = 40
+    for how in ("max", "min"):
+        image, lo, hi = _read_extreme(ds, "t_trap", how)
+        np.testing.assert_array_equal(image, _coarsen(t.astype(float), how))
+        positive = t[np.isfinite(t) & (t > 0)]
+        assert (lo, hi) == (positive.min(), positive.max())
+
+
+def _whole_maps(point):
+    """The images of the maps of one parameter point (a Dataset loaded whole) coarsened in
+    memory, as the figures drew them before streaming."""
+    from atlas.plotting import _coarsen
+
+    k = _coarsen(_old_basin_labels(point["attractor"].values, point["status"].values), "mode")
+    t = point["t_trap"].values.astype(float)
+    lo = t[np.isfinite(t) & (t > 0)].min()
+    return (np.ma.masked_invalid(k), _coarsen(np.where(t > 0, t, lo / 2), "max"),
+            np.ma.masked_invalid(_coarsen(point["boundary_distance"].values.astype(float),
+                                          "min")))
+
+
+@pytest.mark.parametrize("band_cells,band_rows", [(60, 3), (600, 20)])
+def test_a_big_map_is_drawn_from_bands_never_read_whole(sweep_tree, monkeypatch, tmp_path,
+                                                         band_cells, band_rows):
+    """``plot_atlas`` of an atlas opened lazily, as ``atlas plot`` does: with MAX_PIXELS 8 the
+    30 × 20 maps are coarsened in blocks of 3 × 4 cells, read a band at a time (one block
+    row, or the file's whole 20-row chunk), their stored chunks inflated here, and the images
+    are those of the whole arrays coarsened in memory; the maps are never loaded. Another
+    parameter point reads its own chunks."""
+    from atlas import plotting
+
+    _, path = sweep_tree
+    monkeypatch.setattr(plotting, "MAX_PIXELS", 8)
+    monkeypatch.setattr(plotting, "BAND_CELLS", band_cells)
+    sizes, inflated = [], []
+    read, inflate = plotting._read_rows, plotting._RawChunks._inflate
+    monkeypatch.setattr(plotting, "_read_rows",
+                        lambda source, r0, r1: sizes.append((r1 - r0) * source.shape[1]) or
+                        read(source, r0, r1))
+    monkeypatch.setattr(plotting._RawChunks, "_inflate",
+                        lambda self, *args: inflated.append(1) or inflate(self, *args))
+    figures = []
+    monkeypatch.setattr(plt.Figure, "savefig", lambda fig, *a, **k: figures.append(fig))
+    tree, whole = atlas.open(path), atlas.open(path)
+    try:
+        plotting.plot_atlas(tree, tmp_path / "lazy.h5")
+        assert max(sizes) == band_rows * 30 and len(sizes) == 4 * -(-20 // band_rows)
+        assert inflated  # the stored chunks, inflated here
+        assert not tree["attractor"].variable._in_memory
+        whole = whole.load().to_dataset(inherit=False)
+        drawn = [fig.axes[0].images[0].get_array() for fig in figures[:3]]
+        for image, expected in zip(drawn, _whole_maps(whole.isel(alpha=0, omega0=0))):
+            assert image.shape == (7, 8)
+            np.testing.assert_array_equal(image, expected)
+        maps = plotting.read_maps(tree, alpha=-1, omega0=1)
+        assert not tree["attractor"].variable._in_memory
+    finally:
+        tree.close()
+        whole.close()
+    other = whole.isel(alpha=2, omega0=1)
+    k, _, d = _whole_maps(other)
+    np.testing.assert_array_equal(np.ma.masked_invalid(maps["basin"][0]), k)
+    np.testing.assert_array_equal(np.ma.masked_invalid(maps["boundary_distance"][0]), d)
+    np.testing.assert_array_equal(maps["t_trap"][0],  # t_trap before the figure's log scale
+                                  plotting._coarsen(other["t_trap"].values.astype(float), "max"))
+
+
+def test_a_damaged_chunk_of_a_coarsened_map_is_one_line(sweep_tree, monkeypatch, tmp_path):
+    """A chunk that does not inflate is read again through HDF5, which reports it: `atlas
+    plot` exits 2 with one line and writes no figure."""
+    import io
+    import shutil
+    from contextlib import redirect_stderr
+
+    import h5py
+
+    from atlas import plotting
+    from atlas.cli import main
+
+    _, path = sweep_tree
+    bad = shutil.copyfile(path, tmp_path / "bad.h5")
+    with h5py.File(bad, "r") as f:
+        chunk = f["t_trap"].id.get_chunk_info_by_coord((0, 0, 0, 0))  # the drawn point
+    with open(bad, "r+b") as f:
+        f.seek(chunk.byte_offset + chunk.size // 2)
+        f.write(b"\xff" * 16)
+    monkeypatch.setattr(plotting, "MAX_PIXELS", 8)
+    err = io.StringIO()
+    with redirect_stderr(err):
+        assert main(["plot", str(bad)]) == 2
+    assert err.getvalue().count("\n") == 1 and "damaged data" in err.getvalue()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.h5"]
+    plt.close("all")
 
 
 def test_fraction_curves_one_per_basin_with_error_bars(sweep_tree):
