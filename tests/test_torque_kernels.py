@@ -247,7 +247,8 @@ def test_trapped_orbits_never_leave_their_tilted_well(case, method, recorder):
     worst_rise = 0.0
     for j, i in enumerate(trapped):
         first = n_trap[i] // every
-        thetas, speeds = out[0, first:first + extra // every, j], out[1, first:first + extra // every, j]
+        span = slice(first, first + extra // every)
+        thetas, speeds = out[0, span, j], out[1, span, j]
         phi = thetas - TWO_PI * k[i]
         assert np.all((phi > -math.pi - s) & (phi < math.pi - s)), i
         energy = p.energy(thetas, speeds, k[i])
