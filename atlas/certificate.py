@@ -158,10 +158,11 @@ class _Tilted:
     boundary's saddle s_j is named n = 2j + 1 (the saddle near (2j + 1)π). The reference
     error includes the polylines' chord error (the distances are measured to polylines)."""
 
-    def __init__(self, pendulum: Pendulum, window):
+    def __init__(self, pendulum: Pendulum, window, boundaries=None):
         from .tilted import TiltedBoundaries
 
-        self.exact = TiltedBoundaries(pendulum, *window)
+        self.exact = (TiltedBoundaries(pendulum, *window) if boundaries is None
+                      else boundaries)
         self.running_possible = self.exact.bistable
         # the wells a boundary of saddle n = 2j + 1 separates: bistable, one well from the
         # running basin — well j for τ > 0, and for τ < 0 (the mirror of canonical saddle
@@ -209,14 +210,15 @@ class _Tilted:
         return lo, hi
 
 
-def exact_boundaries(pendulum: Pendulum, window):
+def exact_boundaries(pendulum: Pendulum, window, tilted=None):
     """The exact basin boundaries of ``pendulum`` over ``window`` ((θmin, θmax) [rad],
     (θ̇min, θ̇max) [rad s⁻¹]); None where atlas has none (|τ| ≥ ω0²: no rest state, no
-    boundary; see :class:`NoBoundaries`)."""
+    boundary; see :class:`NoBoundaries`). ``tilted``: the
+    :class:`atlas.tilted.TiltedBoundaries` of this window if the caller already built them."""
     if pendulum.torque == 0.0:
         return _Untilted(pendulum, window)
     if pendulum.has_rest_states:
-        return _Tilted(pendulum, window)
+        return _Tilted(pendulum, window, tilted)
     return None
 
 
@@ -234,12 +236,12 @@ class Certifier:
     boundary indices, which are rebuilt on first use."""
 
     def __init__(self, pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float,
-                 exact=None):
+                 tilted=None):
         self.pendulum = pendulum
         self.theta0, self.theta_dot0 = np.asarray(theta0, float), np.asarray(theta_dot0, float)
         self.window = ((self.theta0[0], self.theta0[-1]), (self.theta_dot0[0],
                                                            self.theta_dot0[-1]))
-        self.exact = exact if exact is not None else exact_boundaries(pendulum, self.window)
+        self.exact = exact_boundaries(pendulum, self.window, tilted)
         self.shift = float(shift)
         self.reference_error = self.exact.reference_error
         self.d_cert = cert_distance(shift, tol, self.reference_error)
@@ -449,12 +451,13 @@ class NoBoundaries:
                 "side_mismatches": 0}
 
 
-def certifier_for(pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float):
+def certifier_for(pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: float,
+                  tilted=None):
     """The certifier of one parameter point: :class:`Certifier` (exact boundaries) where the
     pendulum has rest states, :class:`NoBoundaries` where it has none (|τ| > ω0²). At the
     saddle-node |τ| = ω0² neither argument holds: ValueError (configs refuse it)."""
     if pendulum.torque == 0.0 or pendulum.has_rest_states:
-        return Certifier(pendulum, theta0, theta_dot0, shift, tol)
+        return Certifier(pendulum, theta0, theta_dot0, shift, tol, tilted)
     if abs(pendulum.torque) > pendulum.omega0**2:
         return NoBoundaries(pendulum, theta0, theta_dot0)
     raise ValueError("|torque| = omega0^2: the saddle-node, whose basin atlas does not certify")

@@ -966,7 +966,7 @@ def _bisect_between(labels, base, normal, below, above, *, tol: float, half_widt
 def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
                  tol: float = defaults.SEPARATRIX_TOL, max_spacing: float = defaults.MAX_SPACING,
                  dt: float = defaults.DT, t_max: float = defaults.T_MAX,
-                 backend: str = "cpu") -> xr.Dataset:
+                 backend: str = "cpu", exact=None, barrier=None) -> xr.Dataset:
     """The basin boundaries of the RK4 map for a pendulum with torque 0 < |τ| < ω0², the
     counterpart of :func:`trace` (same arguments; ``t_max`` [s] the atlas's, to which the
     lingering time at a saddle is added).
@@ -991,6 +991,10 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
     along θ̇, from the exact polylines' crossings; a running side is stored as
     :data:`atlas.tilted.RUNNING_SIDE` in ``k_below``/``k_above``.
 
+    ``exact``: the :class:`atlas.tilted.TiltedBoundaries` of this window, with ``barrier``
+    the running barrier to label with (None: none), if the caller built them; both are built
+    here otherwise.
+
     Same schema as :func:`trace` (``saddle_n`` = 2j + 1 for the saddle π − θ* + 2πj, the
     one near (2j + 1)π), plus the attributes ``torque``, ``shift_error`` and
     ``reference_error`` (the exact boundaries' own error: chord + DOP853).
@@ -1000,9 +1004,10 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
 
     p = pendulum
     window = _checked(p, theta_window, theta_dot_window, tol, max_spacing, dt)
-    exact = TiltedBoundaries(p, window.theta, window.theta_dot)
-    barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.cycle, dt=dt) \
-        if exact.cycle is not None else None
+    if exact is None:
+        exact = TiltedBoundaries(p, window.theta, window.theta_dot)
+        barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.cycle, dt=dt) \
+            if exact.cycle is not None else None
     labels = _RunningLabeller(p, dt, t_max + _linger(p, tol), barrier, backend)
 
     rows = []  # (saddle j, branch, vertex index, θ, θ̇)

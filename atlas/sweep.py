@@ -183,20 +183,36 @@ def critical_points_dataset(p: Pendulum, lo: float, hi: float) -> xr.Dataset:
     )
 
 
-def _trace_separatrices(cfg: Config, pendulums: list[Pendulum]) -> list[xr.Dataset | None]:
+def _window(cfg: Config) -> tuple[tuple[float, float], tuple[float, float]]:
+    g = cfg.grid
+    return (g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop)
+
+
+def _tilted_boundaries(cfg: Config, pendulums: list[Pendulum], cycles: list) -> list:
+    """The exact tilted boundaries of every parameter point with a torque and rest states
+    (None elsewhere), built once for both the separatrices and the certifier."""
+    from .tilted import TiltedBoundaries
+
+    return [TiltedBoundaries(p, *_window(cfg), cycle=cycle)
+            if p.torque != 0.0 and p.has_rest_states else None
+            for p, cycle in zip(pendulums, cycles)]
+
+
+def _trace_separatrices(cfg: Config, pendulums: list[Pendulum], tilted: list,
+                        barriers: list) -> list[xr.Dataset | None]:
     """The traced separatrices of every parameter point (None each when disabled)."""
     if not cfg.separatrices.enabled:
         return [None] * len(pendulums)
     from . import separatrices
 
-    g = cfg.grid
-    window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
+    window = _window(cfg)
     settings = {"tol": cfg.separatrices.tol, "max_spacing": cfg.separatrices.max_spacing,
                 "dt": cfg.integrator.dt}
     return [separatrices.trace(p, *window, **settings) if p.torque == 0.0 else
-            separatrices.trace_tilted(p, *window, t_max=cfg.integrator.t_max, **settings)
-            if p.has_rest_states else None  # |torque| >= omega0^2: no saddle, no boundary
-            for p in pendulums]
+            separatrices.trace_tilted(p, *window, t_max=cfg.integrator.t_max, exact=exact,
+                                      barrier=barrier, **settings)
+            if exact is not None else None  # |torque| > omega0^2: no saddle, no boundary
+            for p, exact, barrier in zip(pendulums, tilted, barriers)]
 
 
 def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
@@ -213,17 +229,19 @@ def _per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
     return out
 
 
-def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list,
+def _certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, tilted: list,
                 barriers: list) -> list[tuple]:
     """(certifier, running barrier) of every parameter point: the certifier with the boundary
     shift its separatrices measured (NaN without them: then no label is certified for the
-    exact equation; :func:`atlas.certificate.certifier_for`) and the barrier of
+    exact equation; :func:`atlas.certificate.certifier_for`), on the tilted boundaries of
+    :func:`_tilted_boundaries` where there is a torque, and the barrier of
     :func:`_running_certificates`."""
     out = []
-    for p, sep, barrier in zip(pendulums, traced, barriers):
+    for p, sep, exact, barrier in zip(pendulums, traced, tilted, barriers):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
-        out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol), barrier))
+        out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol, exact),
+                    barrier))
     return out
 
 
@@ -455,10 +473,11 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``)."""
     phase = _Phases()
     pendulums = _pendulums(tiles.layout)
-    traced = _trace_separatrices(cfg, pendulums)
-    phase.done("separatrices")
     cycles, barriers = running_certificates
-    certifiers = _certifiers(tiles.layout, pendulums, traced, barriers)
+    tilted = _tilted_boundaries(cfg, pendulums, cycles)  # timed with the separatrices
+    traced = _trace_separatrices(cfg, pendulums, tilted, barriers)
+    phase.done("separatrices")
+    certifiers = _certifiers(tiles.layout, pendulums, traced, tilted, barriers)
     groups = _groups(tiles.layout, pendulums, traced, cycles)
     phase.done("exact boundaries and areas")
     for _ in range(3):

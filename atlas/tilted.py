@@ -102,6 +102,8 @@ MAX_SEGMENT = 0.004
 #: boundary search beyond its θ range).
 MARGIN = 2.0
 _TWO_PI = 2.0 * math.pi
+#: Default of :class:`TiltedBoundaries`' ``cycle``: find the limit cycle.
+FIND_CYCLE = object()
 _NEIGHBOURS = 8  # coarse vertices examined per point before the exactness test of distances
 _CHUNK = 1 << 20  # fine segments measured at once (bounds the temporaries)
 _STRIDE = 32  # at most this many fine segments per coarse chord in the distance search
@@ -458,7 +460,9 @@ class TiltedBoundaries:
     """
 
     def __init__(self, pendulum: Pendulum, theta_window, theta_dot_window, *,
-                 rtol: float = RTOL, margin: float = MARGIN):
+                 rtol: float = RTOL, margin: float = MARGIN, cycle=FIND_CYCLE):
+        """``cycle``: :func:`atlas.running.limit_cycle`'s result for this pendulum if the
+        caller has it (None: there is none); found here by default."""
         from .running import limit_cycle
 
         p = self.pendulum = pendulum
@@ -485,7 +489,8 @@ class TiltedBoundaries:
             raise RuntimeError(f"unexpected stable branches: ends {self._fine.ends} "
                                f"(rtol {rtol:g}), {self._coarse.ends} ({RTOL_CHECK:g})")
         self.bistable = self._fine.bistable
-        self.cycle = limit_cycle(p.alpha, p.omega0, p.torque)
+        self.cycle = (limit_cycle(p.alpha, p.omega0, p.torque) if cycle is FIND_CYCLE
+                      else cycle)
         if (self.cycle is not None) != self.bistable:
             raise RuntimeError("the stable branch L_0 disagrees with atlas.running about the "
                                "running limit cycle (too close to the homoclinic torque?)")
