@@ -20,7 +20,6 @@ from __future__ import annotations
 import functools
 import math
 import os
-import sys
 import warnings
 from pathlib import Path
 
@@ -34,6 +33,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E40
 
 from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED  # noqa: E402
 from .layout import PARAMETERS, first_point, point_group, point_label, point_of  # noqa: E402
+from .store import StoredRows  # noqa: E402
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curves",
            "plot_atlas", "read_maps", "pi_ticks", "critical_point_markers", "STYLE"]
@@ -188,12 +188,13 @@ class _MapRows:
     """One map of one parameter point (rows θ̇0, columns θ0), read a range of rows at a time:
     through xarray (from memory, or the file's own decoding for a lazy tree), or for a map
     that is coarsened and stored as an atlas file stores it (deflated, shuffled, chunks of
-    whole rows), as its stored chunks inflated here (:class:`_RawChunks`)."""
+    whole rows), as its stored chunks inflated in this process
+    (:class:`atlas.store.StoredRows`)."""
 
     def __init__(self, ds: xr.Dataset, name: str, point: dict[str, int], coarsened=False):
         self.da = ds[name].isel(point).transpose("theta_dot0", "theta0")
         self.shape = self.da.shape
-        self.raw = _RawChunks.of(ds, name, point) if coarsened else None
+        self.raw = StoredRows.of(ds, name, point) if coarsened else None
         self.chunk_rows = self.raw.rows if self.raw else _chunk_rows(self.da)
 
     def read(self, r0: int, r1: int) -> np.ndarray:
@@ -206,102 +207,6 @@ class _MapRows:
     def close(self) -> None:
         if self.raw is not None:
             self.raw.file.close()
-
-
-class _RawChunks:
-    """A map's chunks read as stored and inflated here. HDF5 inflates under its global lock,
-    one chunk at a time; zlib (and the unshuffle kernel) release the GIL, so the bands of a
-    map are inflated on every core. Only for a variable filtered by deflate (after shuffle)
-    alone, chunked by whole rows of one parameter point, and read lazily from the file
-    whose coordinates the dataset has; anything unexpected (a chunk stored unfiltered, one
-    that does not inflate to its size) reads the band through xarray instead, which reports
-    a damaged chunk as it always has."""
-
-    def __init__(self, file, dset, lead: tuple[int, ...], shuffle: bool):
-        self.file, self.dset, self.lead, self.shuffle = file, dset, lead, shuffle
-        self.rows, self.cols = dset.chunks[-2], dset.shape[-1]
-        self.dtype = dset.dtype
-
-    @classmethod
-    def of(cls, ds: xr.Dataset, name: str, point: dict[str, int]) -> _RawChunks | None:
-        da = ds[name]
-        source = da.encoding.get("source")
-        if (not source or da.chunks is not None or getattr(da.variable, "_in_memory", True)
-                or da.dims[-2:] != ("theta_dot0", "theta0")
-                or any(key in da.encoding for key in ("scale_factor", "add_offset"))):
-            return None
-        import h5py
-
-        try:
-            file = h5py.File(source, "r")
-        except (OSError, ValueError):
-            return None
-        try:
-            dset = file.get(name)
-            if cls._same(file, dset, ds, da):
-                plist = dset.id.get_create_plist()
-                filters = [plist.get_filter(i)[0] for i in range(plist.get_nfilters())]
-                if filters in ([h5py.h5z.FILTER_DEFLATE],
-                               [h5py.h5z.FILTER_SHUFFLE, h5py.h5z.FILTER_DEFLATE]):
-                    return cls(file, dset, tuple(point[d] for d in da.dims[:-2]),
-                               filters[0] == h5py.h5z.FILTER_SHUFFLE)
-        except (OSError, ValueError, KeyError, TypeError):
-            pass
-        file.close()
-        return None
-
-    @staticmethod
-    def _same(file, dset, ds: xr.Dataset, da: xr.DataArray) -> bool:
-        """Whether ``dset`` holds ``da`` (same shape, type and coordinates), chunked by whole
-        rows of one parameter point."""
-        import h5py
-
-        if not isinstance(dset, h5py.Dataset) or dset.chunks is None:
-            return False
-        if dset.shape != da.shape or dset.dtype != da.dtype:
-            return False
-        if any(c != 1 for c in dset.chunks[:-2]) or dset.chunks[-1] != dset.shape[-1]:
-            return False
-        for dim in da.dims:
-            stored = file.get(dim)
-            if not isinstance(stored, h5py.Dataset) or stored.shape != (ds.sizes[dim],):
-                return False
-            if not np.array_equal(stored[()], ds[dim].values):
-                return False
-        return True
-
-    def read(self, r0: int, r1: int) -> np.ndarray | None:
-        """Rows [r0, r1), or None if a chunk is not as expected."""
-        import zlib
-
-        out = np.empty((r1 - r0, self.cols), self.dtype)
-        try:
-            for c0 in range(r0 - r0 % self.rows, r1, self.rows):
-                mask, raw = self.dset.id.read_direct_chunk((*self.lead, c0, 0))
-                if mask:
-                    return None
-                self._inflate(raw, c0, r0, out)
-        except (OSError, ValueError, KeyError, RuntimeError, zlib.error):
-            return None
-        return out
-
-    def _inflate(self, raw: bytes, c0: int, r0: int, out: np.ndarray) -> None:
-        """Inflate the chunk of rows [c0, c0 + rows) into ``out``, the rows [r0, …)."""
-        import zlib
-
-        data = np.frombuffer(zlib.decompress(raw), np.uint8)
-        if data.size != self.rows * self.cols * self.dtype.itemsize:
-            raise ValueError("a chunk of the wrong size")
-        lo, hi = max(c0, r0), min(c0 + self.rows, r0 + out.shape[0])
-        whole = lo == c0 and hi == c0 + self.rows
-        target = out[c0 - r0:hi - r0] if whole else np.empty((self.rows, self.cols), self.dtype)
-        if self.shuffle:
-            _kernels()[2](data, target.reshape(-1).view(np.uint8), self.dtype.itemsize,
-                          sys.byteorder == "little")
-        else:
-            target.reshape(-1).view(np.uint8)[:] = data
-        if not whole:
-            out[lo - r0:hi - r0] = target[lo - c0:hi - c0]
 
 
 def _row_bands(rows: int, cols: int, fr: int, chunk_rows: int) -> list[tuple[int, int]]:
@@ -429,28 +334,7 @@ def _kernels():
                 out[i, j] = best
         stats[0], stats[1] = pos_lo, pos_hi
 
-    @cached_njit(nogil=True)
-    def unshuffle(data, out, size, little):  # pragma: no cover - compiled
-        """HDF5's shuffle filter undone: byte b of element i is data[b * n + i]
-        (``little``: this machine is little-endian, elements of 2 and 4 bytes are put
-        together whole, ~30x faster than byte by byte)."""
-        n = out.size // size
-        if little and size == 4:
-            out4 = out.view(np.uint32)
-            for i in range(n):
-                out4[i] = (np.uint32(data[i]) | (np.uint32(data[n + i]) << 8)
-                           | (np.uint32(data[2 * n + i]) << 16)
-                           | (np.uint32(data[3 * n + i]) << 24))
-        elif little and size == 2:
-            out2 = out.view(np.uint16)
-            for i in range(n):
-                out2[i] = np.uint16(data[i]) | (np.uint16(data[n + i]) << 8)
-        else:
-            for i in range(n):
-                for b in range(size):
-                    out[i * size + b] = data[b * n + i]
-
-    return mode_blocks, extreme_blocks, unshuffle
+    return mode_blocks, extreme_blocks
 
 
 def _int16_labels(attractor: np.ndarray, status: np.ndarray) -> np.ndarray:

@@ -29,6 +29,7 @@ import errno
 import os
 import re
 import zipfile
+import zlib
 from pathlib import Path
 
 import h5netcdf
@@ -44,11 +45,12 @@ from .tiles import (
     MANIFEST,
     PartialStoreError,
     TileStore,
+    decode_chunk,
     fsync,
     partial_path,
 )
 
-__all__ = ["finalize", "open_atlas", "partial_path", "describe", "FILLS",
+__all__ = ["finalize", "StoredRows", "open_atlas", "partial_path", "describe", "FILLS",
            "DamagedTile", "summary_dataset"]
 
 STATUS_FLAGS = {"flag_values": np.array([0, 1, 2, 3, 4, 5], np.int8),
@@ -324,6 +326,86 @@ def finalize(tiles: TileStore, output: Path, groups: dict[str, xr.Dataset],
     os.replace(path, output)
     fsync(output.parent)
     tiles.remove()
+
+
+class StoredRows:
+    """Rows of a map of an atlas file, read as stored chunks and decoded in this process
+    (:func:`atlas.tiles.decode_chunk`, the inverse of the encoding the tiles were stored
+    with). HDF5 inflates under its global lock, one chunk at a time; zlib and numpy's copies
+    release the GIL, so the bands of a map are decoded on every core. Only for a variable
+    filtered by deflate (after shuffle) alone, chunked by whole rows of one parameter point,
+    and read lazily from the file whose coordinates the dataset has (:meth:`of` returns None
+    otherwise); anything unexpected (a chunk stored unfiltered, one that does not inflate to
+    its size) makes :meth:`read` return None, and the caller reads the band through xarray,
+    which reports a damaged chunk as it always has."""
+
+    def __init__(self, file, dset, lead: tuple[int, ...], shuffle: bool):
+        self.file, self.dset, self.lead, self.shuffle = file, dset, lead, shuffle
+        self.rows, self.cols = dset.chunks[-2], dset.shape[-1]
+        self.dtype = dset.dtype
+
+    @classmethod
+    def of(cls, ds: xr.Dataset, name: str, point: dict[str, int]) -> StoredRows | None:
+        da = ds[name]
+        source = da.encoding.get("source")
+        if (not source or da.chunks is not None or getattr(da.variable, "_in_memory", True)
+                or da.dims[-2:] != ("theta_dot0", "theta0")
+                or any(key in da.encoding for key in ("scale_factor", "add_offset"))):
+            return None
+        try:
+            file = h5py.File(source, "r")
+        except (OSError, ValueError):
+            return None
+        try:
+            dset = file.get(name)
+            if cls._same(file, dset, ds, da):
+                plist = dset.id.get_create_plist()
+                filters = [plist.get_filter(i)[0] for i in range(plist.get_nfilters())]
+                if filters in ([h5py.h5z.FILTER_DEFLATE],
+                               [h5py.h5z.FILTER_SHUFFLE, h5py.h5z.FILTER_DEFLATE]):
+                    return cls(file, dset, tuple(point[d] for d in da.dims[:-2]),
+                               filters[0] == h5py.h5z.FILTER_SHUFFLE)
+        except (OSError, ValueError, KeyError, TypeError):
+            pass
+        file.close()
+        return None
+
+    @staticmethod
+    def _same(file, dset, ds: xr.Dataset, da: xr.DataArray) -> bool:
+        """Whether ``dset`` holds ``da`` (same shape, type and coordinates), chunked by whole
+        rows of one parameter point."""
+        if not isinstance(dset, h5py.Dataset) or dset.chunks is None:
+            return False
+        if dset.shape != da.shape or dset.dtype != da.dtype:
+            return False
+        if any(c != 1 for c in dset.chunks[:-2]) or dset.chunks[-1] != dset.shape[-1]:
+            return False
+        for dim in da.dims:
+            stored = file.get(dim)
+            if not isinstance(stored, h5py.Dataset) or stored.shape != (ds.sizes[dim],):
+                return False
+            if not np.array_equal(stored[()], ds[dim].values):
+                return False
+        return True
+
+    def read(self, r0: int, r1: int) -> np.ndarray | None:
+        """Rows [r0, r1), or None if a chunk is not as expected."""
+        out = np.empty((r1 - r0, self.cols), self.dtype)
+        try:
+            for c0 in range(r0 - r0 % self.rows, r1, self.rows):
+                mask, raw = self.dset.id.read_direct_chunk((*self.lead, c0, 0))
+                if mask:
+                    return None
+                self._inflate(raw, c0, r0, out)
+        except (OSError, ValueError, KeyError, RuntimeError, zlib.error):
+            return None
+        return out
+
+    def _inflate(self, raw: bytes, c0: int, r0: int, out: np.ndarray) -> None:
+        """Decode the chunk of rows [c0, c0 + rows) into ``out``, the rows [r0, …)."""
+        chunk = decode_chunk(raw, self.rows, self.cols, self.dtype, self.shuffle)
+        lo, hi = max(c0, r0), min(c0 + self.rows, r0 + out.shape[0])
+        out[lo - r0:hi - r0] = chunk[lo - c0:hi - c0]
 
 
 def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:

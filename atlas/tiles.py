@@ -36,7 +36,7 @@ import numpy as np
 
 from .layout import Layout
 
-__all__ = ["TileStore", "Tile", "partial_path", "encode_chunk", "discard",
+__all__ = ["TileStore", "Tile", "partial_path", "encode_chunk", "decode_chunk", "discard",
            "DEFLATE_LEVEL", "MANIFEST", "PartialStoreError", "IdentityMismatch", "VARIABLES",
            "fsync"]
 
@@ -76,6 +76,20 @@ def encode_chunk(values: np.ndarray, chunk_rows: int, fill) -> bytes:
         values = np.concatenate([values, pad])
     raw = values.view(np.uint8).reshape(-1, values.dtype.itemsize).T
     return zlib.compress(np.ascontiguousarray(raw).tobytes(), DEFLATE_LEVEL)
+
+
+def decode_chunk(raw: bytes, chunk_rows: int, cols: int, dtype, shuffle: bool = True
+                 ) -> np.ndarray:
+    """The inverse of :func:`encode_chunk`: a stored chunk (deflated, after HDF5's byte
+    shuffle when ``shuffle``) as its ``chunk_rows`` × ``cols`` array of ``dtype``; ValueError
+    if it does not inflate to that size (zlib.error if it does not inflate at all)."""
+    dtype = np.dtype(dtype)
+    data = np.frombuffer(zlib.decompress(raw), np.uint8)
+    if data.size != chunk_rows * cols * dtype.itemsize:
+        raise ValueError("a chunk of the wrong size")
+    if shuffle:  # byte j of every element was stored together
+        data = np.ascontiguousarray(data.reshape(dtype.itemsize, -1).T)
+    return data.view(dtype).reshape(chunk_rows, cols)
 
 
 @dataclass(frozen=True)

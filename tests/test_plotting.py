@@ -155,17 +155,17 @@ def test_a_big_map_is_drawn_from_bands_never_read_whole(sweep_tree, monkeypatch,
     row, or the file's whole 20-row chunk), their stored chunks inflated here, and the images
     are those of the whole arrays coarsened in memory; the maps are never loaded. Another
     parameter point reads its own chunks."""
-    from atlas import plotting
+    from atlas import plotting, store
 
     _, path = sweep_tree
     monkeypatch.setattr(plotting, "MAX_PIXELS", 8)
     monkeypatch.setattr(plotting, "BAND_CELLS", band_cells)
     sizes, inflated = [], []
-    read, inflate = plotting._read_rows, plotting._RawChunks._inflate
+    read, inflate = plotting._read_rows, store.StoredRows._inflate
     monkeypatch.setattr(plotting, "_read_rows",
                         lambda source, r0, r1: sizes.append((r1 - r0) * source.shape[1]) or
                         read(source, r0, r1))
-    monkeypatch.setattr(plotting._RawChunks, "_inflate",
+    monkeypatch.setattr(store.StoredRows, "_inflate",
                         lambda self, *args: inflated.append(1) or inflate(self, *args))
     figures = []
     monkeypatch.setattr(plt.Figure, "savefig", lambda fig, *a, **k: figures.append(fig))
