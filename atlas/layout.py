@@ -21,9 +21,12 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
+
+if TYPE_CHECKING:  # the readers only call the datasets' methods: no import at start-up
+    import xarray as xr
 
 __all__ = ["PARAMETERS", "Layout", "points", "at_point", "point_of", "first_point",
            "point_group", "point_nodes", "point_label", "node_name"]

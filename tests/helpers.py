@@ -101,3 +101,24 @@ def lock_is_free(output: Path) -> bool:
             return True
     except OutputLocked:
         return False
+
+
+#: The bistable swing pendulum of bSTAB's pendulum case (tilted wells and a running cycle).
+SWING = {"alpha": 0.05, "omega0": 1.0, "torque": 0.5}
+
+
+def small_atlas(directory: Path, name: str, pendulum: dict, *, theta=("-5pi/6", "7pi/6"),
+                speed=(-6.0, 6.0), num=(36, 30), t_max: float = 400.0,
+                separatrices: bool = True):
+    """``atlas.run`` of a small atlas into ``directory/NAME.h5`` (θ0 and θ̇0 windows,
+    ``num`` = (columns, rows), dt = 0.01); the DataTree. Defaults: the swing window."""
+    import atlas
+
+    cfg = atlas.Config.model_validate({
+        "name": name, "pendulum": pendulum,
+        "grid": {"theta0": {"start": theta[0], "stop": theta[1], "num": num[0]},
+                 "theta_dot0": {"start": speed[0], "stop": speed[1], "num": num[1]}},
+        "integrator": {"dt": 0.01, "t_max": t_max},
+        "separatrices": {"enabled": separatrices},
+        "output": str(Path(directory) / f"{name}.h5")})
+    return atlas.run(cfg, quiet=True)

@@ -10,6 +10,7 @@ import atlas
 from atlas.cli import main
 from atlas.labels import energy_cap
 from atlas.orbit import integrate
+from tests.helpers import SWING, small_atlas
 
 
 @pytest.fixture(scope="module")
@@ -110,19 +111,11 @@ def test_bad_input_is_one_line_and_exit_2(atlas_file, capsys, tmp_path, args, fr
 
 # ---- with a torque τ ----------------------------------------------------------------------
 
-SWING = {"alpha": 0.05, "omega0": 1.0, "torque": 0.5}
-
-
 @pytest.fixture(scope="module")
 def swing_file(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("swing")
-    cfg = atlas.Config.model_validate({
-        "name": "swing", "pendulum": SWING,
-        "grid": {"theta0": {"start": "-5pi/6", "stop": "7pi/6", "num": 48},
-                 "theta_dot0": {"start": -6, "stop": 6, "num": 40}},
-        "output": str(tmp / "swing.h5")})
-    atlas.run(cfg, quiet=True)
-    return cfg.output
+    small_atlas(tmp, "swing", SWING, num=(48, 40), t_max=200.0)
+    return tmp / "swing.h5"
 
 
 @pytest.mark.parametrize("torque", [0.5, -0.5])

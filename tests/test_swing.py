@@ -8,26 +8,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-import atlas
 from atlas.kernels import RUNNING, TRAPPED
 from atlas.layout import at_point, point_group, points
 from atlas.model import Pendulum
 from atlas.running import contains
-from tests.helpers import run_cli
+from tests.helpers import run_cli, small_atlas
 
 MAP = ("attractor", "status", "t_trap", "boundary_distance")
-
-
-def _run(tmp_path, name, pendulum, *, theta=("-5pi/6", "7pi/6"), speed=(-6.0, 6.0),
-         num=(36, 30), t_max=400.0, separatrices=True):
-    cfg = atlas.Config.model_validate({
-        "name": name, "pendulum": pendulum,
-        "grid": {"theta0": {"start": theta[0], "stop": theta[1], "num": num[0]},
-                 "theta_dot0": {"start": speed[0], "stop": speed[1], "num": num[1]}},
-        "integrator": {"dt": 0.01, "t_max": t_max},
-        "separatrices": {"enabled": separatrices},
-        "output": str(tmp_path / f"{name}.h5")})
-    return atlas.run(cfg, quiet=True)
 
 
 @pytest.mark.slow
@@ -37,9 +24,9 @@ def test_zero_torque_is_the_untilted_atlas(tmp_path):
     untilted = {"alpha": 0.1, "omega0": 1.0}
     window = {"theta": ("-3pi", "3pi"), "speed": (-4.0, 4.0), "num": (40, 32),
               "t_max": 200.0, "separatrices": False}
-    plain = _run(tmp_path, "plain", untilted, **window).to_dataset(inherit=False)
-    zero = _run(tmp_path, "zero", {**untilted, "torque": 0.0}, **window)
-    swept = _run(tmp_path, "swept", {**untilted, "torque": [0.0, 0.3]}, **window)
+    plain = small_atlas(tmp_path, "plain", untilted, **window).to_dataset(inherit=False)
+    zero = small_atlas(tmp_path, "zero", {**untilted, "torque": 0.0}, **window)
+    swept = small_atlas(tmp_path, "swept", {**untilted, "torque": [0.0, 0.3]}, **window)
     sweep_root = swept.to_dataset(inherit=False)
     assert sweep_root["attractor"].dims == ("torque", "theta_dot0", "theta0")
     first = at_point(sweep_root, {"alpha": 0.1, "omega0": 1.0, "torque": 0.0})
@@ -85,7 +72,7 @@ def test_certified_labels_are_the_exact_equations(tmp_path, alpha, omega0, torqu
     from atlas.running import running_barrier
 
     p = Pendulum(alpha, omega0, torque)
-    tree = _run(tmp_path, "b", {"alpha": alpha, "omega0": omega0, "torque": torque},
+    tree = small_atlas(tmp_path, "b", {"alpha": alpha, "omega0": omega0, "torque": torque},
                 speed=(-8.0, 8.0), num=(28, 24))
     ds = tree.to_dataset(inherit=False)
     status, d = ds["status"].values, ds["boundary_distance"].values
@@ -111,7 +98,7 @@ def test_certified_labels_are_the_exact_equations(tmp_path, alpha, omega0, torqu
 def test_without_rest_states_every_orbit_runs(tmp_path):
     """|τ| ≥ ω0²: no critical point, no boundary; every orbit is certified running, the
     running basin is the whole window, and atlas info says so plainly."""
-    tree = _run(tmp_path, "runs", {"alpha": 0.1, "omega0": 1.0, "torque": 1.5},
+    tree = small_atlas(tmp_path, "runs", {"alpha": 0.1, "omega0": 1.0, "torque": 1.5},
                 speed=(-4.0, 4.0), t_max=200.0)
     ds = tree.to_dataset(inherit=False)
     assert np.all(ds["status"].values == RUNNING)
@@ -136,7 +123,7 @@ def test_the_published_basin_stability_of_the_torque_pendulum(tmp_path):
     exact fractions (all wells together) must lie within three of those standard errors;
     the running basin takes the rest."""
     published = {0.16: 0.483, 0.31: 0.2756, 0.5: 0.152, 0.81: 0.0391}
-    tree = _run(tmp_path, "bstab", {"alpha": 0.05, "omega0": 1.0,
+    tree = small_atlas(tmp_path, "bstab", {"alpha": 0.05, "omega0": 1.0,
                                     "torque": list(published)},
                 speed=(-10.0, 10.0), num=(24, 24), separatrices=False)
     ds = tree.to_dataset(inherit=False)
@@ -160,7 +147,7 @@ def test_the_published_basin_stability_of_the_torque_pendulum(tmp_path):
 def test_swing_plot_draws_the_running_basin_and_the_limit_cycle(tmp_path):
     from atlas.plotting import basin_map, basin_stability
 
-    tree = _run(tmp_path, "s", {"alpha": 0.05, "omega0": 1.0, "torque": [0.3, 0.5]},
+    tree = small_atlas(tmp_path, "s", {"alpha": 0.05, "omega0": 1.0, "torque": [0.3, 0.5]},
                 num=(30, 24), separatrices=False)
     ax = basin_map(tree, torque=1)
     labels = [line.get_label() for line in ax.lines]

@@ -21,6 +21,7 @@ from browser import Browser, find_browser
 import atlas
 from atlas.cli import main
 from atlas.view import pack_distance, safe_json, unpack_distance, write_view
+from tests.helpers import SWING, small_atlas
 
 pytestmark = pytest.mark.slow  # two atlas runs for the page, a browser
 
@@ -259,20 +260,12 @@ def test_screenshot(files, browser, tmp_path):
 
 # ---- a torque atlas -------------------------------------------------------------------
 
-SWING = {"alpha": 0.05, "omega0": 1.0, "torque": 0.5}
-
-
 @pytest.fixture(scope="module")
 def swing(tmp_path_factory):
     """A small atlas of the bistable swing pendulum (tilted wells and the running cycle)."""
     tmp = tmp_path_factory.mktemp("swing")
-    cfg = atlas.Config.model_validate({
-        "name": "swing", "pendulum": SWING,
-        "grid": {"theta0": {"start": "-5pi/6", "stop": "7pi/6", "num": 48},
-                 "theta_dot0": {"start": -6, "stop": 6, "num": 40}},
-        "integrator": {"dt": 0.01, "t_max": 200.0}, "output": str(tmp / "swing.h5")})
-    atlas.run(cfg, quiet=True)
-    return cfg.output, write_view(cfg.output)
+    small_atlas(tmp, "swing", SWING, num=(48, 40), t_max=200.0)
+    return tmp / "swing.h5", write_view(tmp / "swing.h5")
 
 
 def test_torque_page_carries_the_sweeps_certificates(swing):
