@@ -185,6 +185,10 @@ class PendulumConfig(_Strict):
     def _nonempty(cls, value):
         if isinstance(value, list) and not value:
             raise ValueError("an empty list sweeps nothing")
+        if isinstance(value, list) and len(set(value)) != len(value):
+            twice = next(v for i, v in enumerate(value) if v in value[:i])
+            raise ValueError(f"the value {twice:g} is listed twice (each parameter point "
+                             "must be named by its values)")
         return value
 
     def values(self, name: str) -> list[float]:

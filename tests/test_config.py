@@ -163,3 +163,12 @@ def test_a_single_point_config_sweeps_nothing():
 def test_output_override(tmp_path):
     (tmp_path / "c.yaml").write_text("output: a.h5")
     assert str(load_config(tmp_path / "c.yaml", output="b.h5").output) == "b.h5"
+
+
+@pytest.mark.parametrize("key", ["alpha", "omega0", "torque"])
+def test_a_value_listed_twice_is_refused(tmp_path, key):
+    """A parameter point is named by its values: a sweep may not list one value twice."""
+    path = tmp_path / "twice.yaml"
+    path.write_text(f"pendulum: {{{key}: [0.5, 0.25, 0.5]}}")
+    with pytest.raises(ConfigError, match=f"pendulum.{key}: the value 0.5 is listed twice"):
+        load_config(path)
