@@ -6,7 +6,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from . import store
+from . import lazy_dask, store  # noqa: F401 (lazy_dask installs itself)
 from .layout import at_point, point_group, point_label, points
 
 

@@ -107,7 +107,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from . import defaults
+from . import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from .errors import SeparatrixError
 from .kernels import TRAPPED, UNRESOLVED
 from .labels import label

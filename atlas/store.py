@@ -37,6 +37,7 @@ import h5py
 import numpy as np
 import xarray as xr
 
+from . import lazy_dask  # noqa: F401 (installs itself)
 from .errors import InputFileError
 from .kernels import ATTRACTOR_FILL
 from .layout import Layout

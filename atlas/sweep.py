@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import running, store, zarrstore
+from . import lazy_dask, running, store, zarrstore  # noqa: F401 (lazy_dask installs itself)
 from .certificate import Certifier, add_tallies, certifier_for
 from .config import Config, config_hash
 from .errors import AtlasError, InputFileError, StorageError

@@ -40,6 +40,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from . import lazy_dask  # noqa: F401 (installs itself)
 from .errors import AtlasError, InputFileError
 from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
 from .labels import CHECK_EVERY, energy_cap, trap_margin

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from . import lazy_dask  # noqa: F401 (installs itself)
 from .errors import BackendUnavailable, InputFileError
 
 __all__ = ["DATA", "is_zarr", "create", "write_tile", "finalize", "attrs_of", "open_tree"]
