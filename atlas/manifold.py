@@ -179,6 +179,7 @@ class StableManifold:
         self.tau = tau
         self.theta, self.theta_dot, _ = self._sol(tau)
         self._tree = None  # k-d tree over the samples, built by foot_points when needed
+        self._crossings: dict[float, np.ndarray] = {}  # _tau_at_speed's results by level
 
     def extended(self, theta_min: float) -> StableManifold:
         """L integrated on until θ < ``theta_min`` [rad] as well (``self`` if it already
@@ -218,7 +219,14 @@ class StableManifold:
         return tau
 
     def _tau_at_speed(self, level: float) -> np.ndarray:
-        """Every τ where θ̇(τ) = ``level`` on L (θ̇ oscillates while it grows)."""
+        """Every τ where θ̇(τ) = ``level`` on L (θ̇ oscillates while it grows); remembered
+        per level (the areas ask for the window's two θ̇ edges once per boundary copy)."""
+        level = float(level)
+        if level not in self._crossings:
+            self._crossings[level] = self._bisect_speed(level)
+        return self._crossings[level]
+
+    def _bisect_speed(self, level: float) -> np.ndarray:
         diff = self.theta_dot - level
         i = np.flatnonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)
         a, b = self.tau[i], self.tau[i + 1]
