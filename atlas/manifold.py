@@ -14,7 +14,8 @@ saddle nπ (n odd) is then the graph over all θ
 with S_n < S_{n+2} everywhere; the basin of the rest state (2πk, 0) is the strip
 S_{2k−1}(θ) < θ̇ < S_{2k+1}(θ).
 
-:class:`StableManifold` integrates L once — scipy's DOP853 (rtol = atol = 1e-13, dense output)
+:class:`StableManifold` integrates L once — DOP853 (rtol = atol = 1e-13, dense output;
+compiled, :mod:`atlas.kernels.dop853`, the method of scipy's ``solve_ivp(method="DOP853")``)
 in reversed time from 10⁻⁷ along the stable eigenvector (essay eqs. 22, 24; the neglected
 curvature is O(10⁻¹⁴)) until θ̇ exceeds a stated speed (:meth:`StableManifold.extended`
 continues it) — together with the quadrature Q(τ) = ∫₀^τ θ̇² dτ' = ∫ θ̇ dθ (Green's theorem
@@ -65,22 +66,39 @@ _NEWTON = 6  # iterations for foot points and inverse functions (quadratic conve
 #: Side of the cells that bin boundary samples for the nearest-sample search [rad-ish], and
 #: the most cells an index may have.
 _CELL, _MAX_CELLS = 0.3, 1 << 20
+#: Steps a DOP853 piece is first given room for (about 130 at rtol 1e-13 on the default
+#: window; more are made room for as needed).
+_STEPS = 1024
 
 
 class _DenseOutput:
     """DOP853's dense output (Hairer, Nørsett & Wanner, §II.6) of a whole solution, evaluated
-    for many times at once: the same polynomial as scipy's ``Dop853DenseOutput``, its
-    coefficients stacked over the steps, so one call costs a few array operations.
-    ``solutions``: scipy ``OdeSolution`` pieces, each starting where the one before ends."""
+    for many times at once: the polynomial of every step, its coefficients stacked over the
+    steps, so one call costs a few array operations. ``t``: the step ends (steps + 1);
+    per step ``t_old``, ``h``, ``y_old`` (steps, 3) and ``F`` (steps, 7, 3), lowest power
+    first (as :func:`atlas.kernels.dop853.stable_manifold` and scipy's
+    ``Dop853DenseOutput`` hold it)."""
 
-    def __init__(self, solutions):
-        parts = [q for solution in solutions for q in solution.interpolants]
-        self.t = np.concatenate([solutions[0].ts] + [s.ts[1:] for s in solutions[1:]])
-        self.t_old = np.array([q.t_old for q in parts])
-        self.h = np.array([q.h for q in parts])
-        self.y_old = np.array([q.y_old for q in parts])  # (steps, 3)
-        self.F = np.array([q.F for q in parts])[:, ::-1]  # (steps, 7, 3), highest first
+    def __init__(self, t, t_old, h, y_old, F):
+        self.t, self.t_old, self.h, self.y_old = t, t_old, h, y_old
+        self.F = np.ascontiguousarray(F[:, ::-1])  # highest power first
         self._lists = None  # the same as Python lists, for point()
+
+    @classmethod
+    def from_scipy(cls, solutions) -> _DenseOutput:
+        """The dense output of scipy ``OdeSolution`` pieces (DOP853), each starting where the
+        one before ends."""
+        parts = [q for solution in solutions for q in solution.interpolants]
+        return cls(np.concatenate([solutions[0].ts] + [s.ts[1:] for s in solutions[1:]]),
+                   np.array([q.t_old for q in parts]), np.array([q.h for q in parts]),
+                   np.array([q.y_old for q in parts]), np.array([q.F for q in parts]))
+
+    @classmethod
+    def from_pieces(cls, pieces) -> _DenseOutput:
+        """The dense output of :class:`_Piece` s, each starting where the one before ends."""
+        return cls(np.concatenate([pieces[0].t] + [q.t[1:] for q in pieces[1:]]),
+                   *(np.concatenate([getattr(q, name) for q in pieces])
+                     for name in ("t_old", "h", "y_old", "F")))
 
     def point(self, tau: float) -> list[float]:
         """The solution at one time τ, as floats: the same polynomial evaluated without
@@ -121,6 +139,19 @@ def to_left_branch(n, right, theta, theta_dot):
             np.where(right, -theta_dot, theta_dot))
 
 
+@dataclass(frozen=True)
+class _Piece:
+    """One DOP853 integration (:func:`atlas.kernels.dop853.stable_manifold`): the step ends
+    ``t`` [s] and states ``y`` (3, steps + 1) there, and each step's dense output."""
+
+    t: np.ndarray
+    y: np.ndarray
+    t_old: np.ndarray
+    h: np.ndarray
+    y_old: np.ndarray
+    F: np.ndarray
+
+
 class StableManifold:
     """The left branch L of the saddle (π, 0) of ``pendulum``, integrated until θ̇ > ``speed``
     [rad s⁻¹]; beyond that point L(u) > speed for ever (its energy exceeds ½speed² + 2ω0² and
@@ -131,6 +162,9 @@ class StableManifold:
         p = self.pendulum = pendulum
         if not p.alpha > 0:
             raise ValueError("the stable manifolds bound basins only for alpha > 0")
+        if p.torque != 0.0:
+            raise ValueError("StableManifold is the untilted pendulum's; with torque see "
+                             "atlas.tilted")
         self.speed, self.rtol = float(speed), rtol
         self.u2 = -p.saddle_eigenvalues()[1]
         e_theta, e_theta_dot = p.saddle_stable_direction()
@@ -140,33 +174,32 @@ class StableManifold:
         self._pieces = [self._integrate(0.0, [*self.start, q0], math.pi)]
         self._finish()
 
-    def _integrate(self, tau0: float, y0, theta_min: float):
-        """DOP853 from state ``y0`` = (θ, θ̇, Q) at τ0 until θ̇ > ``speed`` and θ < theta_min."""
-        from scipy.integrate import solve_ivp
+    def _integrate(self, tau0: float, y0, theta_min: float) -> _Piece:
+        """DOP853 from state ``y0`` = (θ, θ̇, Q) at τ0 until θ̇ > ``speed`` and θ < theta_min
+        (compiled: :func:`atlas.kernels.dop853.stable_manifold`)."""
+        from .kernels.dop853 import EVENT, FULL, stable_manifold
 
         p = self.pendulum
         e_stop = 0.5 * self.speed**2 + p.saddle_energy
-
-        def rhs(_, y):  # eq. (1) in reversed time, and ∫ θ̇² dτ
-            f0, f1 = p.field(y[0], y[1])
-            return [-f0, -f1, f0 * f0]
-
-        def beyond(_, y):  # both grow along L: E (dE/dτ = 2αθ̇²) and −θ
-            return min(p.energy(y[0], y[1]) - e_stop, theta_min - y[0])
-
-        beyond.terminal, beyond.direction = True, 1
         t_cap = tau0 + 1e4 * (1.0 / p.alpha + 1.0 / p.omega0)
-        sol = solve_ivp(rhs, (tau0, t_cap), y0, method="DOP853", rtol=self.rtol,
-                        atol=self.rtol, dense_output=True, events=beyond)
-        if sol.status != 1:
+        capacity = _STEPS
+        while True:
+            status, n, t, y, t_old, h, y_old, F = stable_manifold(
+                np.asarray(y0, float), float(tau0), t_cap, self.rtol, self.rtol,
+                float(p.alpha), float(p.omega0), e_stop, float(theta_min), capacity)
+            if status != FULL:
+                break
+            capacity *= 4
+        if status != EVENT:
             raise RuntimeError(f"the stable manifold did not reach speed {self.speed:g} "
-                               f"({sol.message})")
-        return sol
+                               f"(DOP853 {'step too small' if status < 0 else 'ran out of time'})")
+        return _Piece(t[:n + 1].copy(), y[:n + 1].T.copy(), t_old[:n].copy(), h[:n].copy(),
+                      y_old[:n].copy(), F[:n].copy())
 
     def _finish(self) -> None:
         """Dense output, end point and samples of the integrated pieces."""
         first, rest = self._pieces[0], self._pieces[1:]
-        self._sol = _DenseOutput([piece.sol for piece in self._pieces])
+        self._sol = _DenseOutput.from_pieces(self._pieces)
         t = np.concatenate([first.t] + [piece.t[1:] for piece in rest])
         y = np.concatenate([first.y] + [piece.y[:, 1:] for piece in rest], axis=1)
         self.tau_end = float(t[-1])

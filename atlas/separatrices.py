@@ -384,9 +384,7 @@ def _predict(m: StableManifold, edges: list[float], max_spacing: float) -> _Pred
     """Vertices along L, the left branch of π, walking the dense output of ``m`` in reversed
     time from the saddle to its end: chords ≤ ``max_spacing`` and ≤ max_spacing/√κ, the step
     in τ also limited by the growth of the speed |f| near the saddle, and an extra vertex at
-    every crossing of a speed in ``edges`` (Brent's method on the smooth dense output)."""
-    from scipy.optimize import brentq
-
+    every crossing of a speed in ``edges`` (bisection on the smooth dense output)."""
     p = m.pendulum
     u2 = -p.saddle_eigenvalues()[1]
     tau = min(max(0.0, math.log(0.1 * max_spacing / START_DISTANCE) / u2), m.tau_end)
@@ -409,13 +407,55 @@ def _predict(m: StableManifold, edges: list[float], max_spacing: float) -> _Pred
             if chord <= h:
                 break
             span = (t - tau) * _CHORD_AIM * h / chord
-        crossings = sorted(brentq(lambda s, v=v: m.at(s)[1] - v, tau, t, xtol=1e-15)
+        crossings = sorted(_speed_crossing(m, v, tau, t)
                            for v in edges if (y[1] - v) * (z[1] - v) < 0)
         verts += [(*m.at(s), s) for s in crossings]
         verts.append((*z, t))
         tau, y = t, z
     arr = np.array(verts, float)
     return _Predicted(1, "left", arr[:, 0], arr[:, 1], arr[:, 2], np.arange(arr.shape[0]))
+
+
+def _speed_crossing(m: StableManifold, level: float, a: float, b: float) -> float:
+    """The τ in [a, b] [s] where θ̇ on ``m`` passes ``level`` [rad s⁻¹] (once, by the caller's
+    sign test), by bisection to the last bit of τ."""
+    below = m.at(a)[1] < level
+    while True:
+        mid = 0.5 * (a + b)
+        if not a < mid < b:
+            return mid
+        if (m.at(mid)[1] < level) == below:
+            a = mid
+        else:
+            b = mid
+
+
+def _not_a_knot_spline(x: np.ndarray, y: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The cubic spline through (x, y) (x increasing, at least 4 knots) with the not-a-knot
+    end conditions (the third derivative continuous at the second and the second-to-last
+    knot; de Boor, *A Practical Guide to Splines*, ch. IV), evaluated at ``at`` within
+    [x[0], x[-1]]: scipy's ``CubicSpline(x, y)`` to rounding. The slopes m at the knots solve
+    the usual tridiagonal system (dense here: a few hundred knots at most)."""
+    n = x.size
+    dx = np.diff(x)
+    slope = np.diff(y) / dx
+    a = np.zeros((n, n))
+    rhs = np.empty(n)
+    i = np.arange(1, n - 1)
+    a[i, i - 1], a[i, i], a[i, i + 1] = dx[1:], 2.0 * (dx[:-1] + dx[1:]), dx[:-1]
+    rhs[i] = 3.0 * (dx[1:] * slope[:-1] + dx[:-1] * slope[1:])
+    d = x[2] - x[0]
+    a[0, 0], a[0, 1] = dx[1], d
+    rhs[0] = ((dx[0] + 2.0 * d) * dx[1] * slope[0] + dx[0] ** 2 * slope[1]) / d
+    d = x[-1] - x[-3]
+    a[-1, -1], a[-1, -2] = dx[-2], d
+    rhs[-1] = (dx[-1] ** 2 * slope[-2] + (2.0 * d + dx[-1]) * dx[-2] * slope[-1]) / d
+    m = np.linalg.solve(a, rhs)
+    k = np.clip(np.searchsorted(x, at, side="right") - 1, 0, n - 2)
+    h, u = dx[k], (at - x[k]) / dx[k]
+    # cubic Hermite form on each interval
+    return (y[k] * (1 - u) ** 2 * (1 + 2 * u) + y[k + 1] * u**2 * (3 - 2 * u)
+            + h * (m[k] * u * (1 - u) ** 2 - m[k + 1] * u**2 * (1 - u)))
 
 
 # --------------------------------------------------------------------------- check
@@ -583,8 +623,6 @@ def _locate(labels, base, normal, k, run, tau, tol):
     bracket, ±0.45·tol around the prediction, is usually final: two labels per vertex. Returns
     (s_lo, s_hi) along ``normal``.
     """
-    from scipy.interpolate import CubicSpline
-
     start = np.flatnonzero(np.diff(run, prepend=np.nan) != 0)
     stop = np.append(start[1:], run.size)[:start.size]
     coarse = np.zeros(run.size, bool)
@@ -600,7 +638,7 @@ def _locate(labels, base, normal, k, run, tau, tol):
         c = np.flatnonzero(coarse[a:b]) + a
         f = np.flatnonzero(~coarse[a:b]) + a
         if f.size:
-            offset[f] = CubicSpline(tau[c], offset[c])(tau[f])
+            offset[f] = _not_a_knot_spline(tau[c], offset[c], tau[f])
     fine = ~coarse
     lo_f, hi_f = bisect_across(labels, base[fine] + offset[fine, None] * normal[fine],
                                normal[fine], k[fine], tol=tol, half_width=_FINE_BRACKET * tol,

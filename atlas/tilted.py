@@ -159,7 +159,7 @@ def _branch(p: Pendulum, sign: int, rtol: float, bottom: float, top: float):
                     dense_output=True, events=(above, below))
     if sol.status != 1:
         raise RuntimeError(f"a stable branch did not leave the band ({sol.message})")
-    return _DenseOutput([sol.sol]), sol.t, "top" if sol.t_events[0].size else "bottom"
+    return _DenseOutput.from_scipy([sol.sol]), sol.t, "top" if sol.t_events[0].size else "bottom"
 
 
 def _refine(dense, t, tol: float, longest: float):
