@@ -211,7 +211,6 @@ class StableManifold:
                               for a, b, m in zip(t[:-1], t[1:], pieces)] + [t[-1:]])
         self.tau = tau
         self.theta, self.theta_dot, _ = self._sol(tau)
-        self._tree = None  # k-d tree over the samples, built by foot_points when needed
         self._crossings: dict[float, np.ndarray] = {}  # _tau_at_speed's results by level
 
     def extended(self, theta_min: float) -> StableManifold:
@@ -391,15 +390,15 @@ class StableManifold:
         points (x [rad], v [rad s⁻¹]) given in L's own frame (:func:`to_left_branch`), exact to
         ≈ 1e-13 for points within about ``SAMPLE_SPACING`` of L: the nearest sample, then
         Newton's method on the dense output."""
-        from scipy.spatial import cKDTree
+        from .kernels.foot import nearest_sample
 
         x, v = np.atleast_1d(np.asarray(x, float)), np.atleast_1d(np.asarray(v, float))
         if x.size == 0:
             return np.zeros(0), np.zeros(0)
-        if self._tree is None:
-            self._tree = cKDTree(np.column_stack([self.theta, self.theta_dot]))
-        _, i = self._tree.query(np.column_stack([x, v]))
-        return self._foot(x, v, i)
+        i = np.empty(x.size, np.int64)
+        nearest_sample(np.ascontiguousarray(x.ravel()), np.ascontiguousarray(v.ravel()),
+                       self.theta, self.theta_dot, i)
+        return self._foot(x, v, i.reshape(x.shape))
 
     def index(self, box) -> BoundaryIndex:
         """A search index over every boundary passing through ``box`` = ((θ0, θ1), (v0, v1))
@@ -431,7 +430,6 @@ class BoundaryIndex:
         self.manifold, self.box = manifold, box
         copies = manifold._copies(box)
         self.empty = copies is None
-        self._tree = None
         if self.empty:
             return
         self.theta, self.theta_dot, self.n, self.branch, self.sample = copies
@@ -473,18 +471,18 @@ class BoundaryIndex:
     def saddles_within(self, theta, theta_dot, radius: float):
         """(lowest, highest) saddle n of the boundaries that pass within ``radius`` of each
         point (a superset: samples within radius + the sample spacing); (0, 0) where none."""
-        from scipy.spatial import cKDTree
+        from .kernels.foot import saddles_near
 
-        points = np.column_stack([np.ravel(theta), np.ravel(theta_dot)])
-        lo, hi = np.zeros(len(points), np.int64), np.zeros(len(points), np.int64)
-        if self.empty or not len(points):
+        theta = np.ascontiguousarray(np.ravel(theta), dtype=float)
+        theta_dot = np.ascontiguousarray(np.ravel(theta_dot), dtype=float)
+        lo, hi = np.zeros(theta.size, np.int64), np.zeros(theta.size, np.int64)
+        if self.empty or not theta.size:
             return lo, hi
-        if self._tree is None:
-            self._tree = cKDTree(np.column_stack([self.theta, self.theta_dot]))
-        for i, near in enumerate(self._tree.query_ball_point(points, radius + SAMPLE_SPACING)):
-            if near:
-                ns = self.n[near]
-                lo[i], hi[i] = ns.min(), ns.max()
+        (t0, _), (v0, _) = self.box
+        saddles_near(theta, theta_dot, float(radius + SAMPLE_SPACING), self.theta,
+                     self.theta_dot, self.n.astype(np.int64), self.start, self.items,
+                     float(t0), float(v0), float(self.cell), self.shape[0], self.shape[1],
+                     lo, hi)
         return lo, hi
 
 

@@ -39,3 +39,43 @@ def test_speed_crossing_matches_brent():
     ref = brentq(lambda s: m.at(s)[1] - 2.5, a, b, xtol=1e-15)
     assert abs(tau - ref) <= 4 * math.ulp(ref) + 1e-15
     assert m.at(tau)[1] == pytest.approx(2.5, abs=1e-13)
+
+
+def test_boundary_index_saddles_within_is_a_ball_query():
+    """The bucket search for the saddles near points equals a k-d tree's ball query."""
+    from scipy.spatial import cKDTree
+
+    from atlas.certificate import exact_boundaries
+    from atlas.manifold import SAMPLE_SPACING
+
+    ex = exact_boundaries(Pendulum(alpha=0.1, omega0=1.0), ((-3 * math.pi, 3 * math.pi),
+                                                             (-4.0, 4.0)))
+    index = ex._index(1.0)
+    rng = np.random.default_rng(0)
+    theta, theta_dot = rng.uniform(-10, 10, 5000), rng.uniform(-5, 5, 5000)
+    tree = cKDTree(np.column_stack([index.theta, index.theta_dot]))
+    for radius in (0.01, 0.4):
+        lo, hi = index.saddles_within(theta, theta_dot, radius)
+        ref_lo, ref_hi = np.zeros_like(lo), np.zeros_like(hi)
+        balls = tree.query_ball_point(np.column_stack([theta, theta_dot]),
+                                      radius + SAMPLE_SPACING)
+        for i, near in enumerate(balls):
+            if near:
+                ref_lo[i], ref_hi[i] = index.n[near].min(), index.n[near].max()
+        assert (ref_lo != 0).sum() > 100  # the test sees boundaries
+        np.testing.assert_array_equal(lo, ref_lo)
+        np.testing.assert_array_equal(hi, ref_hi)
+
+
+def test_foot_points_start_from_the_nearest_sample():
+    from scipy.spatial import cKDTree
+
+    m = StableManifold(Pendulum(alpha=0.1, omega0=1.0), 4.0)
+    rng = np.random.default_rng(1)
+    x = m.theta[::3] + rng.normal(0, 0.01, m.theta[::3].size)
+    v = m.theta_dot[::3] + rng.normal(0, 0.01, x.size)
+    tau, dist = m.foot_points(x, v)
+    _, i = cKDTree(np.column_stack([m.theta, m.theta_dot])).query(np.column_stack([x, v]))
+    ref_tau, ref_dist = m._foot(x, v, i)
+    np.testing.assert_array_equal(tau, ref_tau)
+    np.testing.assert_array_equal(dist, ref_dist)

@@ -128,3 +128,46 @@ def nearest_boundary(px, pv, c_theta, c_speed, c_n, c_branch, c_sample, bucket_s
             u = min(max(u, 0.0), 1.0)
             dist = min(dist, math.hypot(math.pi + u * ax - qx, u * av - qv))
         out_dist[p] = dist
+
+
+@cached_njit(parallel=True, nogil=True)
+def saddles_near(px, pv, radius, c_theta, c_speed, c_n, bucket_start, bucket_items, t0, v0,
+                 cell, ncx, ncy, out_lo, out_hi):
+    """The lowest and highest saddle n among the samples within ``radius`` [rad-ish] of each
+    point (px, pv) — every cell that can hold one is searched (samples binned as for
+    :func:`nearest_boundary`); (0, 0) where there is none."""
+    reach = int(math.ceil(radius / cell))
+    r2 = radius * radius
+    for p in nb.prange(px.size):
+        x, v = px[p], pv[p]
+        cx = int(math.floor((x - t0) / cell))
+        cy = int(math.floor((v - v0) / cell))
+        lo, hi = 0, 0
+        found = False
+        for gx in range(max(cx - reach, 0), min(cx + reach, ncx - 1) + 1):
+            for gy in range(max(cy - reach, 0), min(cy + reach, ncy - 1) + 1):
+                b = gx * ncy + gy
+                for q in range(bucket_start[b], bucket_start[b + 1]):
+                    i = bucket_items[q]
+                    dx, dv = c_theta[i] - x, c_speed[i] - v
+                    if dx * dx + dv * dv <= r2:
+                        n = c_n[i]
+                        if not found:
+                            lo, hi, found = n, n, True
+                        else:
+                            lo, hi = min(lo, n), max(hi, n)
+        out_lo[p], out_hi[p] = lo, hi
+
+
+@cached_njit(parallel=True, nogil=True)
+def nearest_sample(px, pv, s_theta, s_speed, out):
+    """Index of the nearest of the samples (s_theta, s_speed) to each point (px, pv), by
+    exhaustive search (a few thousand points against about a thousand samples)."""
+    for p in nb.prange(px.size):
+        best, j = np.inf, 0
+        for i in range(s_theta.size):
+            dx, dv = s_theta[i] - px[p], s_speed[i] - pv[p]
+            d2 = dx * dx + dv * dv
+            if d2 < best:
+                best, j = d2, i
+        out[p] = j
