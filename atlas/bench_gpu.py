@@ -8,7 +8,11 @@ reduced-range polynomial sin; "straightforward": one orbit per thread with libde
   device arrays, no transfers), the wall time of :func:`label_cuda` from host arrays to host
   arrays (transfers, chunking and staging included), and effective steps/s = RK4 steps the
   orbits actually took before trapping (or to t_max) / kernel time;
-* bulk: steps/s of a fixed-steps run (``propagate``, no early exit).
+* bulk: steps/s of a fixed-steps run (``propagate``, no early exit);
+* sweep: the wall time of one :func:`atlas.run` of the default atlas on the same n × n grid
+  with backend "cuda", end to end (separatrices; tiles labelled on the GPU, certified on the
+  CPU and written while the next tile computes; the assembled HDF5 file), in a temporary
+  folder.
 
 Plus a JAX peer (``vmap`` over orbits of a ``lax.fori_loop`` RK4, float64, fixed steps) when
 JAX imports and sees a GPU. Without a CUDA GPU :func:`run_gpu_bench` returns None.
@@ -18,7 +22,9 @@ from __future__ import annotations
 
 import math
 import statistics
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -128,9 +134,32 @@ def _jax_bulk(theta0, theta_dot0, p, bulk_steps, repeats):
             "version": jax.__version__}
 
 
+def _sweep_row(n: int, t_max: float) -> dict:
+    """One end-to-end :func:`atlas.run` of the n × n default atlas on the GPU (module doc)."""
+    from .config import Config
+    from .sweep import layout_of, run
+
+    with tempfile.TemporaryDirectory(prefix="atlas-bench-gpu-") as tmp:
+        cfg = Config.model_validate({
+            "name": f"bench-gpu-{n}",
+            "grid": {"theta0": {"start": defaults.THETA0_WINDOW[0],
+                                "stop": defaults.THETA0_WINDOW[1], "num": n},
+                     "theta_dot0": {"start": defaults.THETA_DOT0_WINDOW[0],
+                                    "stop": defaults.THETA_DOT0_WINDOW[1], "num": n}},
+            "integrator": {"t_max": t_max},
+            "output": Path(tmp) / "sweep.h5"})
+        tiles = layout_of(cfg).n_tiles
+        t0 = time.perf_counter()
+        run(cfg, backend="cuda", quiet=True).close()
+        seconds = time.perf_counter() - t0
+    return {"n": n, "tiles": tiles, "sweep_s": seconds,
+            "orbits_per_s": n * n / seconds}
+
+
 def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = defaults.T_MAX,
                   bulk_steps: int = 1000, allow_simulator: bool = False) -> dict | None:
-    """Benchmark the CUDA kernels on an n × n default-parameter grid (module doc).
+    """Benchmark the CUDA kernels, and one sweep, on an n × n default-parameter grid
+    (module doc).
 
     Returns None when no CUDA GPU can be used (:func:`atlas.kernels.cuda.cuda_status` says
     why) and, unless ``allow_simulator`` (tests), under the CUDA simulator, whose timings are
@@ -160,6 +189,7 @@ def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = defaults.T_
         "variants": variants,
         "labels_agree_fraction": float(np.mean(same)),
         "jax": _jax_bulk(theta0, theta_dot0, p, bulk_steps, repeats),
+        "sweep": _sweep_row(n, t_max),
         "targets": TARGETS,
     }
 
@@ -181,6 +211,10 @@ def format_gpu_rows(result: dict | None) -> str:
     jax_cell = (f"{jax['bulk_gsteps_s']:>16.1f}" if "bulk_gsteps_s" in jax
                 else f"  skipped: {jax['skipped']}")
     lines.append(f"{'JAX vmap+fori':<16}{'—':>14}{'—':>15}{'—':>16}{jax_cell}")
+    sweep = result["sweep"]
+    lines.append(f"sweep: atlas run --backend cuda of the {n}x{n} default atlas "
+                 f"({sweep['tiles']} tiles), end to end {sweep['sweep_s']:.2f} s, "
+                 f"{sweep['orbits_per_s'] / 1e6:.1f} M orbits/s")
     t = result["targets"]
     lines.append(f"targets (H100, 4096²): basin map ≤ {t['label_ms']:.0f} ms, bulk ≥ "
                  f"{t['bulk_gsteps_s']:.0f} G steps/s; labels agree between variants on "

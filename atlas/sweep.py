@@ -22,8 +22,10 @@ import os
 import re
 import shutil
 import sys
+import threading
 import time
 from collections.abc import Iterator
+from concurrent.futures import Future
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -119,10 +121,52 @@ def _tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tup
     return (certifier, barrier, layout.tile(index)[1], cfg.integrator.dt, cfg.integrator.t_max)
 
 
+#: Held by the thread computing a tile ahead: a sweep's tile waits for one that an interrupted
+#: sweep left computing, so two never run the kernels at once (Numba's workqueue threading
+#: layer aborts the process on concurrent parallel launches).
+_AHEAD = threading.Lock()
+
+
+def _in_background(fn, *args, **kwargs) -> Future:
+    """``fn(*args, **kwargs)`` started in a daemon thread; its result, or whatever it raised
+    (Ctrl-C included), comes back through the Future. A daemon rather than a
+    ThreadPoolExecutor worker: those are joined at interpreter exit, so a run stopped by
+    Ctrl-C or SIGTERM would wait for its tile in flight before the process could end."""
+    future = Future()
+
+    def work():
+        with _AHEAD:
+            try:
+                future.set_result(fn(*args, **kwargs))
+            except BaseException as exc:  # re-raised in the caller by future.result()
+                future.set_exception(exc)
+
+    threading.Thread(target=work, name="atlas-tile", daemon=True).start()
+    return future
+
+
 def _local_results(cfg, layout, certifiers, todo, backend) -> Iterator[tuple[int, tuple]]:
-    for index in todo:
-        yield index, compute_tile(*_tile_args(cfg, layout, certifiers, index),
-                                  backend=backend)
+    """(index, (arrays, tally)) of the tiles ``todo`` in order, each computed one tile ahead
+    in a background thread, so tile i+1 is computed while the caller writes tile i (the
+    Numba kernels run without the GIL, and so do zlib and fsync in the write). At most one
+    tile is ahead: memory holds two tiles' arrays. A tile whose computation failed raises
+    its own exception here, after every tile before it has been yielded; a tile still
+    computing when the caller stops (a failed write, Ctrl-C, SIGTERM) is abandoned, its
+    result dropped."""
+    import numba
+
+    threads = numba.get_num_threads()  # the caller's setting: Numba's is per thread
+
+    def start(index):
+        return _in_background(compute_tile, *_tile_args(cfg, layout, certifiers, index),
+                              backend=backend, numba_threads=threads)
+
+    ahead = start(todo[0]) if len(todo) else None
+    for position, index in enumerate(todo):
+        result = ahead.result()
+        if position + 1 < len(todo):
+            ahead = start(todo[position + 1])
+        yield index, result
 
 
 def compute_tile_into_zarr(path, layout, index, *args, numba_threads=None) -> dict:
@@ -416,7 +460,8 @@ def _orbits(layout: Layout, tiles) -> int:
 
 def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], backend: str,
                   quiet: bool) -> None:
-    """Label and certify the tiles still to do and store each as it finishes."""
+    """Label and certify the tiles still to do and store each as it finishes (the local
+    backends compute the next tile meanwhile, :func:`_local_results`)."""
     layout, todo = tiles.layout, tiles.todo()
     written_by_workers = backend == "dask" and tiles.format == "zarr"
     results = (_dask_results(cfg, tiles, certifiers, todo) if backend == "dask"
