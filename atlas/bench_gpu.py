@@ -148,7 +148,7 @@ def _sweep_row(n: int, t_max: float) -> dict:
                                     "stop": defaults.THETA_DOT0_WINDOW[1], "num": n}},
             "integrator": {"t_max": t_max},
             "output": Path(tmp) / "sweep.h5"})
-        tiles = layout_of(cfg).n_tiles
+        tiles = layout_of(cfg, "cuda").n_tiles
         t0 = time.perf_counter()
         run(cfg, backend="cuda", quiet=True).close()
         seconds = time.perf_counter() - t0

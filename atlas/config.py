@@ -261,10 +261,11 @@ class SeparatricesConfig(_Strict):
 
 
 class ExecutionConfig(_Strict):
-    """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write)."""
+    """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write; by
+    default ``defaults.TILE_ORBITS``, on the GPU ``defaults.TILE_ORBITS_CUDA``)."""
 
     backend: Literal["cpu", "cuda", "dask"] = "cpu"
-    tile_orbits: int = Field(default=defaults.TILE_ORBITS, ge=1)
+    tile_orbits: int | None = Field(default=None, ge=1)
     workers: int | None = Field(default=None, ge=1)
     scheduler: str | None = None
 

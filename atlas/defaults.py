@@ -18,6 +18,9 @@ T_MAX = 200.0                               #: integration limit: unresolved aft
 SEPARATRIX_TOL = 1e-12                      #: bisection bracket width of a separatrix point
 MAX_SPACING = 0.05                          #: largest vertex spacing of a separatrix polyline
 TILE_ORBITS = 1 << 18                       #: orbits per tile of a sweep
+#: orbits per tile on the GPU: about 15 waves of an H100/H200 (132 SMs × 2048 threads), so a
+#: tile fills the device several times over and its chunks overlap on two streams
+TILE_ORBITS_CUDA = 1 << 22
 OUTPUT = "outputs/default.h5"               #: output file of a config without `output:`
 
 

@@ -3,8 +3,9 @@
 The grid (θ̇0 rows × θ0 columns, for every α, ω0 of a parameter atlas) is cut into tiles of
 whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled independently
 (:func:`compute_tile`, which any backend can run) and each finished tile is written at once
-(:mod:`atlas.tiles`, one atomically written file per tile in ``<output>.partial/``), so memory
-is bounded by a tile and a crash loses only tiles in flight; when all are done
+(:mod:`atlas.tiles`, one atomically written file per tile in ``<output>.partial/``) while
+the next tile is computed, so memory is bounded by two tiles and a crash loses only tiles in
+flight; when all are done
 :func:`atlas.store.finalize` assembles the HDF5 file. Orbits never interact, so results do not
 depend on tile size, backend or thread count.
 
@@ -32,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import lazy_dask, running, store, zarrstore  # noqa: F401 (lazy_dask installs itself)
+from . import defaults, lazy_dask, running, store, zarrstore  # noqa: F401 (lazy_dask installs itself)
 from .certificate import Certifier, add_tallies, certifier_for
 from .config import Config, config_hash
 from .errors import AtlasError, InputFileError, StorageError
@@ -52,8 +53,13 @@ log = logging.getLogger(__name__)
 BYTES_PER_ORBIT = 7
 
 
-def layout_of(cfg: Config) -> Layout:
-    """The grid axes, parameter axes and tiling of a config."""
+def layout_of(cfg: Config, backend: str | None = None) -> Layout:
+    """The grid axes, parameter axes and tiling of a config run on ``backend`` (default
+    ``execution.backend``): ``execution.tile_orbits`` orbits per tile, or by default
+    ``defaults.TILE_ORBITS`` (``TILE_ORBITS_CUDA`` on the GPU, so that a tile fills it)."""
+    backend = backend or cfg.execution.backend
+    tile = cfg.execution.tile_orbits or (defaults.TILE_ORBITS_CUDA if backend == "cuda"
+                                         else defaults.TILE_ORBITS)
     g = cfg.grid
     theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
     theta_dot0 = np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num)
@@ -62,7 +68,7 @@ def layout_of(cfg: Config) -> Layout:
         parameters={name: np.array(cfg.pendulum.values(name), np.float64)
                     for name in PARAMETERS},
         swept=cfg.pendulum.swept,
-        rows_per_tile=max(1, min(g.theta_dot0.num, cfg.execution.tile_orbits // g.theta0.num)),
+        rows_per_tile=max(1, min(g.theta_dot0.num, tile // g.theta0.num)),
     )
 
 
@@ -560,7 +566,7 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
 
     check_output_target(cfg.output, config_path, force=force)
     backend = backend or cfg.execution.backend
-    layout = layout_of(cfg)
+    layout = layout_of(cfg, backend)
     if backend == "cuda":
         from .kernels.cuda import require_cuda
 

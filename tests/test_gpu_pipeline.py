@@ -302,3 +302,21 @@ output: %s
     out = _child(SWEEP_CUDA.format(config=str(cfg)), simulator=True)
     assert out["same"] == [True] * 4
     assert out["tiles"] == 3 and out["pinned"] == 5  # one set, made for the first tile
+
+
+def test_gpu_tiles_default_to_filling_the_device():
+    """Without ``execution.tile_orbits`` a GPU tile is TILE_ORBITS_CUDA orbits (several waves
+    of the device), a CPU tile TILE_ORBITS; a configured size holds on both."""
+    from atlas import defaults
+    from atlas.config import Config
+    from atlas.sweep import layout_of
+
+    grid = {"theta0": {"start": -3.0, "stop": 3.0, "num": 4096},
+            "theta_dot0": {"start": -4.0, "stop": 4.0, "num": 4096}}
+    cfg = Config.model_validate({"grid": grid})
+    assert layout_of(cfg).rows_per_tile == defaults.TILE_ORBITS // 4096
+    assert layout_of(cfg, "cuda").rows_per_tile == defaults.TILE_ORBITS_CUDA // 4096
+    assert layout_of(cfg.model_copy(update={"execution": cfg.execution.model_copy(
+        update={"backend": "cuda"})})).rows_per_tile == defaults.TILE_ORBITS_CUDA // 4096
+    sized = Config.model_validate({"grid": grid, "execution": {"tile_orbits": 8192}})
+    assert layout_of(sized, "cuda").rows_per_tile == layout_of(sized).rows_per_tile == 2
