@@ -38,28 +38,36 @@ def test_zero_torque_is_the_untilted_atlas(tmp_path):
                                math.asin(0.3))
 
 
-def _dop853_label(p: Pendulum, theta0, theta_dot0, barrier, t_end):
+def _dop853_label(p: Pendulum, theta0, theta_dot0, barrier, t_end, spacing=0.05, piece=20.0):
     """The exact equation's fate by the same certificates, applied along a DOP853 orbit
-    (rtol 1e-12): the first sample at which the orbit is inside a well's energy trap (below
-    the lower saddle's energy, between the well's saddles) gives its k; the first inside the
-    running barrier, 'running'; None if neither by t_end."""
+    (rtol 1e-12) sampled every ``spacing`` s: the first sample at which the orbit is inside a
+    well's energy trap (below the lower saddle's energy, between the well's saddles) gives its
+    k; the first inside the running barrier, 'running'; None if neither by t_end. The orbit is
+    integrated ``piece`` seconds at a time and stops at the first piece with a decided sample
+    (the fate is the first such sample, so the rest of the orbit cannot change it)."""
     def rhs(_, y):
         return [y[1], p.torque - p.omega0**2 * math.sin(y[0]) - 2 * p.alpha * y[1]]
 
-    sol = solve_ivp(rhs, (0.0, t_end), [theta0, theta_dot0], method="DOP853", rtol=1e-12,
-                    atol=1e-12, dense_output=True)
-    t = np.arange(0.0, sol.t[-1], 0.05)
-    theta, theta_dot = sol.sol(t)
-    k = np.array([p.well(x) for x in theta])
-    energy = np.array([p.energy(x, v, kk) for x, v, kk in zip(theta, theta_dot, k)])
-    trapped = energy < p.saddle_energy
-    running = contains(barrier, theta, theta_dot) if barrier is not None else np.zeros_like(
-        trapped)
-    first_trap = np.argmax(trapped) if trapped.any() else t.size
-    first_run = np.argmax(running) if running.any() else t.size
-    if first_trap < first_run:
-        return int(k[first_trap])
-    return "running" if first_run < t.size else None
+    y, start, end, per = [theta0, theta_dot0], 0, round(t_end / spacing), round(piece / spacing)
+    while start < end:
+        stop = min(start + per, end)
+        sol = solve_ivp(rhs, (start * spacing, stop * spacing), y, method="DOP853", rtol=1e-12,
+                        atol=1e-12, dense_output=True)
+        if sol.status != 0:  # the integration failed: the samples it reached
+            stop = math.ceil(sol.t[-1] / spacing)
+        theta, theta_dot = sol.sol(np.arange(start, stop) * spacing)
+        k = p.well(theta)
+        trapped = p.energy(theta, theta_dot, k) < p.saddle_energy
+        running = contains(barrier, theta, theta_dot) if barrier is not None else \
+            np.zeros_like(trapped)
+        if trapped.any() or running.any():
+            first_trap = np.argmax(trapped) if trapped.any() else trapped.size
+            first_run = np.argmax(running) if running.any() else running.size
+            return int(k[first_trap]) if first_trap < first_run else "running"
+        if sol.status != 0:
+            return None
+        y, start = sol.y[:, -1], stop
+    return None
 
 
 @pytest.mark.slow
@@ -111,8 +119,22 @@ def test_without_rest_states_every_orbit_runs(tmp_path):
     assert "none: |torque| > omega0^2, every orbit runs" in info.stdout
 
 
+#: bSTAB's torque sweep and its published basin stability of the rest states (see below).
+PUBLISHED = {0.16: 0.483, 0.31: 0.2756, 0.5: 0.152, 0.81: 0.0391}
+
+
+@pytest.fixture(scope="module")
+def bstab(tmp_path_factory):
+    """bSTAB's pendulum over its torque sweep in its window (separatrices off), built once:
+    the published basin stability and the swing plot read it (each torque point costs seconds
+    of exact boundaries and certificates, whatever the grid)."""
+    return small_atlas(tmp_path_factory.mktemp("bstab"), "bstab",
+                       {"alpha": 0.05, "omega0": 1.0, "torque": list(PUBLISHED)},
+                       speed=(-10.0, 10.0), num=(24, 24), separatrices=False)
+
+
 @pytest.mark.slow
-def test_the_published_basin_stability_of_the_torque_pendulum(tmp_path):
+def test_the_published_basin_stability_of_the_torque_pendulum(bstab):
     """bSTAB's pendulum case (M. Stender and N. Hoffmann, "bSTAB: an open-source software for
     computing the basin stability of multi-stable dynamical systems", Nonlinear Dynamics 107,
     1451-1468 (2022), doi:10.1007/s11071-021-06786-5): theta'' = -0.1 theta' + T - sin(theta),
@@ -122,17 +144,14 @@ def test_the_published_basin_stability_of_the_torque_pendulum(tmp_path):
     at T = 0.31, 0.0391 at T = 0.81, each with a binomial error sqrt(S(1 - S)/N). atlas's
     exact fractions (all wells together) must lie within three of those standard errors;
     the running basin takes the rest."""
-    published = {0.16: 0.483, 0.31: 0.2756, 0.5: 0.152, 0.81: 0.0391}
-    tree = small_atlas(tmp_path, "bstab", {"alpha": 0.05, "omega0": 1.0,
-                                    "torque": list(published)},
-                speed=(-10.0, 10.0), num=(24, 24), separatrices=False)
-    ds = tree.to_dataset(inherit=False)
+    ds = bstab.to_dataset(inherit=False)
+    assert sorted(point["torque"] for point in points(ds)) == sorted(PUBLISHED)
     for point in points(ds):
         one = at_point(ds, point)
         rest = float(one["basin_fraction_exact"].sum("k"))
         error = float(one["basin_fraction_exact_error"].sum("k"))
         running = float(one["running_fraction_exact"])
-        s = published[point["torque"]]
+        s = PUBLISHED[point["torque"]]
         sigma = 0.0036 if point["torque"] == 0.5 else math.sqrt(s * (1 - s) / 1e4)
         assert abs(rest - s) < 3 * sigma, (point, rest, s)
         assert abs(rest + running - 1.0) < 1e-9 and error < 1e-6
@@ -144,12 +163,11 @@ def test_the_published_basin_stability_of_the_torque_pendulum(tmp_path):
 
 
 @pytest.mark.slow
-def test_swing_plot_draws_the_running_basin_and_the_limit_cycle(tmp_path):
+def test_swing_plot_draws_the_running_basin_and_the_limit_cycle(bstab):
     from atlas.plotting import basin_map, basin_stability
 
-    tree = small_atlas(tmp_path, "s", {"alpha": 0.05, "omega0": 1.0, "torque": [0.3, 0.5]},
-                num=(30, 24), separatrices=False)
-    ax = basin_map(tree, torque=1)
+    tree = bstab
+    ax = basin_map(tree, torque=2)  # the third point of the sweep: τ = 0.5
     labels = [line.get_label() for line in ax.lines]
     assert any(label.startswith("limit cycle (period") for label in labels)
     cycle = point_group(tree, "limit_cycle", {"alpha": 0.05, "omega0": 1.0, "torque": 0.5})
@@ -159,7 +177,7 @@ def test_swing_plot_draws_the_running_basin_and_the_limit_cycle(tmp_path):
     assert "running" in names
     ax = basin_stability(tree)
     rest = next(ln for ln in ax.lines if ln.get_label() == "rest states, exact area")
-    np.testing.assert_array_equal(rest.get_xdata(), [0.3, 0.5])
+    np.testing.assert_array_equal(rest.get_xdata(), list(PUBLISHED))
     np.testing.assert_allclose(
         rest.get_ydata(), tree["basin_fraction_exact"].sum("k").values, rtol=0, atol=0)
 
