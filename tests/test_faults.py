@@ -29,6 +29,9 @@ separatrices: {{enabled: false}}
 execution: {{tile_orbits: 48}}
 output: {output}
 """
+#: The same orbits' window in 48 rows (48 tiles): for the faults that need many tiles and an
+#: assembled file larger than a tile, not 160 of them (each tile costs a durable write).
+TILES_48 = SLOW.replace("num: 160", "num: 48")
 
 
 def _start(cfg, *extra):
@@ -58,7 +61,7 @@ def _one_line(proc, code, *fragments):
 
 def test_disk_full_mid_run_keeps_finished_tiles_resumable(tmp_path):
     out = tmp_path / "full.h5"
-    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
+    cfg = write_config(tmp_path / "c.yaml", TILES_48.format(dt=0.01, output=out))
     script = textwrap.dedent(f"""
         import errno, sys
         from atlas.tiles import TileStore
@@ -80,7 +83,7 @@ def test_disk_full_mid_run_keeps_finished_tiles_resumable(tmp_path):
     assert describe(out.with_name("full.h5.partial"))["tiles_done"] == 3
     resumed = run_cli("run", cfg, "--quiet")
     assert resumed.returncode == 0, resumed.stderr
-    assert "resuming" in resumed.stderr and "3 of 160 tiles already done" in resumed.stderr
+    assert "resuming" in resumed.stderr and "3 of 48 tiles already done" in resumed.stderr
     assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
     for a, b in zip(_labels(out), _labels(tmp_path / "ref.h5")):
         np.testing.assert_array_equal(a, b)
@@ -101,7 +104,7 @@ def test_a_real_write_failure_while_assembling_keeps_every_tile(tmp_path):
     not: the kernel refuses the write (EFBIG), the run stops with one line and exit 1, every
     tile is kept, and the next run without the limit gives the clean result."""
     out = tmp_path / "big.h5"
-    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
+    cfg = write_config(tmp_path / "c.yaml", TILES_48.format(dt=0.01, output=out))
     # the reference first: it also fills Numba's kernel cache, whose files would not fit
     # under the limit (a cold cache would fail the first tile, not the assembly)
     assert run_cli("run", cfg, "--quiet", "-o", tmp_path / "ref.h5").returncode == 0
@@ -109,7 +112,7 @@ def test_a_real_write_failure_while_assembling_keeps_every_tile(tmp_path):
                           capture_output=True, text=True, cwd=REPO,
                           preexec_fn=_limit_file_size(20_000))
     _one_line(proc, 1, "big.h5.partial", "File too large", "tiles finished before it are kept")
-    assert not out.exists() and describe(out.with_name("big.h5.partial"))["tiles_done"] == 160
+    assert not out.exists() and describe(out.with_name("big.h5.partial"))["tiles_done"] == 48
     assert run_cli("run", cfg, "--quiet").returncode == 0
     for a, b in zip(_labels(out), _labels(tmp_path / "ref.h5")):
         np.testing.assert_array_equal(a, b)
@@ -123,7 +126,7 @@ def test_a_real_full_disk_mid_run(tmp_path):
 
     if not _unshare_works(tmp_path):
         pytest.skip("unprivileged mount namespaces are not available here")
-    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=tmp_path / "x.h5"))
+    cfg = write_config(tmp_path / "c.yaml", TILES_48.format(dt=0.01, output=tmp_path / "x.h5"))
     code, line, recovered = _tmpfs_trial(cfg, tmp_path, 64)
     assert code == 1 and "No space left on device" in line and "kept" in line, line
     assert len(line.splitlines()) == 1 and recovered
@@ -167,7 +170,7 @@ def test_the_lock_of_a_killed_run_does_not_block(tmp_path):
     """A run killed with SIGKILL while holding the lock (its owner record left behind): the
     kernel released its flock, so the next run takes the lock and finishes."""
     out = tmp_path / "stale.h5"
-    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out))
+    cfg = write_config(tmp_path / "c.yaml", TILES_48.format(dt=0.01, output=out))
     holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
         import time
         from pathlib import Path
@@ -217,7 +220,8 @@ def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
     from atlas.errors import StorageError
 
     out = tmp_path / "fin.h5"
-    cfg = atlas.load_config(write_config(tmp_path / "c.yaml", SLOW.format(dt=0.01, output=out)))
+    cfg = atlas.load_config(write_config(tmp_path / "c.yaml",
+                                         TILES_48.format(dt=0.01, output=out)))
     cfg = cfg.model_copy(update={"separatrices": cfg.separatrices.model_copy(
         update={"enabled": True})})
 
@@ -225,6 +229,8 @@ def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
         raise OSError(errno.ENOSPC, "No space left on device")
 
     real_replace = store.os.replace
+    # the clean result, once: both failures below must end in exactly this file
+    fresh = atlas.run(cfg.model_copy(update={"output": tmp_path / "ref.h5"}), quiet=True)
 
     def no_space_for_the_output(src, dst):
         if dst == out:
@@ -246,11 +252,10 @@ def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
                 raise AssertionError("the simulated failure did not surface")
         partial = out.with_name("fin.h5.partial")
         info = describe(partial)
-        assert not out.exists() and info["tiles_done"] == 160 and not info["complete"]
+        assert not out.exists() and info["tiles_done"] == 48 and not info["complete"]
         tree = atlas.run(cfg, quiet=True)
         assert set(tree.children) == {"critical_points", "separatrices"}
         assert tree.attrs["complete"] == 1
-        fresh = atlas.run(cfg.model_copy(update={"output": tmp_path / "ref.h5"}), quiet=True)
         for name in ("attractor", "status", "t_trap", "basin_fraction", "k"):
             np.testing.assert_array_equal(tree[name].values, fresh[name].values)
         out.unlink()
@@ -337,8 +342,7 @@ def test_racing_takeovers_of_a_dead_runs_lock_never_overlap(tmp_path):
 def taken_reference(tmp_path_factory):
     """A 48 x 48 config (48 tiles) and its clean result."""
     tmp = tmp_path_factory.mktemp("taken")
-    cfg = write_config(tmp / "c.yaml", SLOW.format(dt=0.01, output=tmp / "ref.h5")
-                       .replace("num: 160", "num: 48"))
+    cfg = write_config(tmp / "c.yaml", TILES_48.format(dt=0.01, output=tmp / "ref.h5"))
     assert run_cli("run", cfg, "--quiet").returncode == 0
     return cfg, _labels(tmp / "ref.h5")
 
