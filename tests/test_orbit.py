@@ -10,7 +10,7 @@ import atlas
 from atlas.cli import main
 from atlas.labels import energy_cap
 from atlas.orbit import integrate
-from tests.helpers import SWING, small_atlas
+from tests.helpers import SWING
 
 
 @pytest.fixture(scope="module")
@@ -112,10 +112,9 @@ def test_bad_input_is_one_line_and_exit_2(atlas_file, capsys, tmp_path, args, fr
 # ---- with a torque τ ----------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def swing_file(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("swing")
-    small_atlas(tmp, "swing", SWING, num=(48, 40), t_max=200.0)
-    return tmp / "swing.h5"
+def swing_file(swing_atlas):
+    """The small swing atlas of conftest (shared with test_view; read only)."""
+    return swing_atlas
 
 
 @pytest.mark.parametrize("torque", [0.5, -0.5])

@@ -21,7 +21,7 @@ from browser import Browser, find_browser
 import atlas
 from atlas.cli import main
 from atlas.view import pack_distance, safe_json, unpack_distance, write_view
-from tests.helpers import SWING, small_atlas
+from tests.helpers import SWING
 
 pytestmark = pytest.mark.slow  # two atlas runs for the page, a browser
 
@@ -261,11 +261,10 @@ def test_screenshot(files, browser, tmp_path):
 # ---- a torque atlas -------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def swing(tmp_path_factory):
-    """A small atlas of the bistable swing pendulum (tilted wells and the running cycle)."""
-    tmp = tmp_path_factory.mktemp("swing")
-    small_atlas(tmp, "swing", SWING, num=(48, 40), t_max=200.0)
-    return tmp / "swing.h5", write_view(tmp / "swing.h5")
+def swing(swing_atlas, tmp_path_factory):
+    """A small atlas of the bistable swing pendulum (tilted wells and the running cycle:
+    conftest's, shared) and its page."""
+    return swing_atlas, write_view(swing_atlas, tmp_path_factory.mktemp("swing") / "swing.html")
 
 
 def test_torque_page_carries_the_sweeps_certificates(swing):
