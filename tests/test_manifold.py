@@ -84,15 +84,25 @@ def test_distance_to_the_nearest_boundary_against_brute_force(case):
     best = np.full(theta.size, np.inf)
     best_n = np.zeros(theta.size, int)
     n_lo = 2 * math.floor((theta_window[0] - 8 * PI) / (2 * PI)) + 1
+    branches = []
     for saddle in range(n_lo, int(theta_window[1] / PI) + 9, 2):
         for side in ("left", "right"):
             c, t, curve = branch_by_dop853(p, saddle, side, reach)
             d2 = (c[0][None, :] - theta[:, None]) ** 2 + (c[1][None, :] - speed[:, None]) ** 2
-            for i, j in enumerate(np.argmin(d2, axis=1)):  # resample around the nearest sample
-                fine = curve(np.linspace(t[max(j - 1, 0)], t[min(j + 1, t.size - 1)], 20_001))
-                d = np.hypot(fine[0] - theta[i], fine[1] - speed[i]).min()
-                if d < best[i]:
-                    best[i], best_n[i] = d, saddle
+            j = np.argmin(d2, axis=1)
+            gap = np.hypot(*np.diff(c, axis=1)).max()  # the widest step between two samples
+            branches.append((saddle, t, curve, j, np.sqrt(d2[np.arange(theta.size), j]), gap))
+    # the resampled distance to a branch lies between its nearest sample's distance minus the
+    # widest step and that distance itself: only branches within that of the best sample can
+    # hold the nearest point, the others need no resampling
+    closest = np.min([near for *_, near, _ in branches], axis=0)
+    for saddle, t, curve, nearest, near, gap in branches:
+        for i in np.flatnonzero(near <= closest + 2 * gap):
+            j = nearest[i]  # resample around the nearest sample
+            fine = curve(np.linspace(t[max(j - 1, 0)], t[min(j + 1, t.size - 1)], 20_001))
+            d = np.hypot(fine[0] - theta[i], fine[1] - speed[i]).min()
+            if d < best[i]:
+                best[i], best_n[i] = d, saddle
     # resampled 10⁴-fold finer, the brute force is exact to ≈ 1e-12 (the two integrations
     # start 1e-9 and 1e-7 from the saddle and differ by about that much)
     np.testing.assert_allclose(dist, best, rtol=0, atol=1e-11)
