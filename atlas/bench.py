@@ -398,23 +398,29 @@ try:  # the high-water mark of this process's own memory (ru_maxrss would count 
         hwm = next(line.split()[1] for line in status if line.startswith("VmHWM:"))
 except (OSError, StopIteration):
     hwm = "nan"
-print(code, hwm)
+try:  # the largest of its drawing processes (forks: they all ended, and were waited for)
+    import resource
+    drawing = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+except ImportError:
+    drawing = "nan"
+print(code, hwm, drawing)
 """
 
 
-def _cli_plot(path) -> tuple[float, float | None]:
-    """(wall s, peak RSS in bytes, None where unknown) of ``atlas plot path`` in a subprocess
-    (the CLI's main in a fresh interpreter)."""
+def _cli_plot(path) -> tuple[float, float | None, float | None]:
+    """(wall s, peak RSS in bytes, peak RSS of its largest drawing process in bytes; None
+    where unknown) of ``atlas plot path`` in a subprocess (the CLI's main in a fresh
+    interpreter; the figures are drawn by forks of it, :func:`atlas.plotting.plot_file`)."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [
         str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")])))
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, "-c", _CLI_PLOT, str(path)], env=env, check=True,
                          capture_output=True, text=True, timeout=600)
     wall = time.perf_counter() - t0
-    code, hwm = out.stdout.split()[-2:]
+    code, hwm, drawing = out.stdout.split()[-3:]
     if code != "0":
         raise RuntimeError(f"atlas plot {path}: {out.stderr.strip()}")
-    return wall, None if hwm == "nan" else float(hwm) * 1024
+    return wall, *(None if kb == "nan" else float(kb) * 1024 for kb in (hwm, drawing))
 
 
 def _plot_rows(sides, repeats: int) -> dict:
@@ -442,10 +448,11 @@ def _plot_rows(sides, repeats: int) -> dict:
                     tree.close()
 
             t = _median_times({"plot": plot}, repeats if side <= 1024 else min(repeats, 3))
-            cli_s, cli_rss = _cli_plot(path)
+            cli_s, cli_rss, drawing_rss = _cli_plot(path)
             rows.append({"n": side, "orbits": side * side, "run_s": run_s,
                          "plot_s": t["plot"][0], "plot_best_s": t["plot"][1],
                          "cli_s": cli_s, "cli_peak_rss_bytes": cli_rss,
+                         "cli_drawing_peak_rss_bytes": drawing_rss,
                          "streamed_peak_bytes": _peak_bytes(_streamed_maps, path),
                          "whole_peak_bytes": _peak_bytes(_whole_array_maps, path),
                          "image": [-(-side // -(-side // MAX_PIXELS))] * 2})

@@ -71,15 +71,9 @@ def _cmd_info(args) -> int:
 
 
 def _cmd_plot(args) -> int:
-    from .plotting import plot_atlas
-    from .store import open_atlas
+    from .plotting import plot_file
 
-    tree = open_atlas(args.file)
-    try:  # plot_atlas reads everything it draws before it writes the first PNG, the maps
-        paths = plot_atlas(tree, args.file)  # band by band (bounded memory)
-    finally:
-        tree.close()
-    for path in paths:
+    for path in plot_file(args.file):  # all that is drawn is read before a PNG is written
         print(f"wrote {path}")
     return 0
 

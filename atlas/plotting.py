@@ -13,34 +13,47 @@ The maps are drawn as images of at most MAX_PIXELS per axis: a larger map is rea
 (:func:`read_maps`; from the file, for a tree opened lazily) and each band reduced to blocks
 (labels by their mode, t_trap by the block max, boundary_distance by the block min), so that
 the memory a figure needs does not grow with the map (a 16384² atlas: about 0.5 GB).
+
+Each figure is read, then drawn: a reader (``_*_scene``) takes what the figure shows out of the
+tree as plain arrays and strings, a drawer (``_draw_*``) draws them and reads nothing. This
+lets ``atlas plot`` (:func:`plot_file`) read the file in one process while another imports
+matplotlib (each takes a few tenths of a second), then draw the figures in several processes
+at once. matplotlib is imported only where a figure is drawn.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import os
+import pickle
+import signal
+import sys
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-from matplotlib.colors import BoundaryNorm, ListedColormap, LogNorm  # noqa: E402
+from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
+from .layout import PARAMETERS, first_point, point_group, point_label, point_of
 
-from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED  # noqa: E402
-from .layout import PARAMETERS, first_point, point_group, point_label, point_of  # noqa: E402
-from .store import StoredRows  # noqa: E402
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "fraction_curves",
-           "plot_atlas", "read_maps", "pi_ticks", "critical_point_markers", "STYLE"]
+           "basin_stability", "plot_atlas", "plot_file", "read_maps", "pi_ticks",
+           "critical_point_markers", "STYLE"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
          "axes.titlesize": 11, "legend.fontsize": 8, "legend.frameon": False}
+#: Figure sizes [in]: the maps, and the curves against a swept parameter.
+MAP_SIZE, CURVE_SIZE = (8, 4.8), (7, 4.5)
+#: PNG options of the written figures: zlib's fastest level (deflating the smooth colour maps
+#: at the default level took longer than drawing them; the files are about 40 % larger).
+PNG_OPTIONS = {"compress_level": 1}
 SEPARATRIX_COLOR = "red"
 #: The running basin's colour, and the running limit cycle's.
 RUNNING_COLOR, CYCLE_COLOR = "0.82", "black"
@@ -79,46 +92,6 @@ def critical_point_markers(ax, theta, is_saddle, tilted: bool = False) -> None:
     ax.plot(theta[is_saddle], np.zeros(is_saddle.sum()), "o", mfc="none",
             mec=SEPARATRIX_COLOR, mew=1.5, ms=7,
             label="saddles (π − θ* + 2πk, 0)" if tilted else "saddles ((2j+1)π, 0)", zorder=5)
-
-
-def _critical(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
-    """The critical points of the parameter point that ``ds`` shows, if stored, as
-    :func:`critical_point_markers`."""
-    cp = point_group(tree, "critical_points", point_of(ds))
-    if cp is None:
-        return
-    critical_point_markers(ax, cp["theta"].values, cp["n"].values % 2 != 0,  # odd n: saddles
-                           tilted=bool(float(ds["torque"])))
-
-
-def _limit_cycle(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
-    """The running limit cycle of the parameter point that ``ds`` shows (if it has one),
-    repeated 2π-periodically across the window."""
-    cycle = point_group(tree, "limit_cycle", point_of(ds))
-    if cycle is None:
-        return
-    theta, speed = cycle["theta"].values, cycle["theta_dot"].values
-    lo, hi = float(ds["theta0"][0]), float(ds["theta0"][-1])
-    order = np.argsort(theta)
-    theta, speed = theta[order], speed[order]
-    shifts = np.arange(np.floor((lo - theta.max()) / TWO_PI), np.ceil((hi - theta.min()) / TWO_PI)
-                       + 1)
-    for i, shift in enumerate(shifts):
-        ax.plot(theta + TWO_PI * shift, speed, color=CYCLE_COLOR, lw=1.6, ls="--",
-                label=f"limit cycle (period {float(cycle.attrs['period']):.4g} s)"
-                if i == 0 else None)
-
-
-def _separatrices(ax, tree: xr.DataTree, ds: xr.Dataset) -> None:
-    """The separatrices of the parameter point that ``ds`` shows, in red."""
-    from .separatrices import branches
-
-    sep = point_group(tree, "separatrices", point_of(ds))
-    if sep is None:
-        return
-    for i, (_, _, theta, theta_dot) in enumerate(branches(sep)):
-        ax.plot(theta, theta_dot, color=SEPARATRIX_COLOR, lw=1.2,
-                label="separatrices" if i == 0 else None)
 
 
 #: Largest image drawn per axis [pixels]: a figure is 8 in wide at 150 dpi. Larger maps are
@@ -194,6 +167,8 @@ class _MapRows:
     def __init__(self, ds: xr.Dataset, name: str, point: dict[str, int], coarsened=False):
         self.da = ds[name].isel(point).transpose("theta_dot0", "theta0")
         self.shape = self.da.shape
+        from .store import StoredRows
+
         self.raw = StoredRows.of(ds, name, point) if coarsened else None
         self.chunk_rows = self.raw.rows if self.raw else _chunk_rows(self.da)
 
@@ -423,11 +398,38 @@ def read_maps(tree: xr.DataTree, *names: str, **index) -> dict:
     return {name: _MAP_READERS[name](ds, point) for name in names or _MAP_READERS}
 
 
-def _grid_image(ax, ds: xr.Dataset, image: np.ndarray, **kwargs):
-    """Draw a map over the grid (rows θ̇0, columns θ0) as an image whose pixels are the grid's
-    cells (centred on the grid points); ``image``: the map already coarsened to the figure's
-    resolution (its blocks then span the same extent)."""
-    th, v = ds["theta0"].values, ds["theta_dot0"].values
+# --------------------------------------------------------------------------- the figures
+
+def _axes(ax, size: tuple[float, float]):
+    """``ax``, or the Axes of a new pyplot figure of ``size`` [in] (pyplot manages it, as an
+    interactive session expects; :func:`plot_atlas` draws into figures of its own)."""
+    if ax is not None:
+        return ax
+    import matplotlib.pyplot as plt
+
+    return plt.subplots(figsize=size)[1]
+
+
+def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
+               ) -> tuple[xr.Dataset, dict]:
+    """The point drawn (its dataset) and what every map figure shows of it: the grid (θ0
+    [rad], θ̇0 [rad/s]), the map ``name`` as :func:`read_maps` reads it, and the separatrix
+    branches (θ [rad], θ̇ [rad/s]; none where not stored)."""
+    from .separatrices import branches
+
+    ds = _single(tree.to_dataset(inherit=False), **index)
+    sep = point_group(tree, "separatrices", point_of(ds))
+    return ds, {"grid": (ds["theta0"].values, ds["theta_dot0"].values),
+                "image": (maps or read_maps(tree, name, **index))[name],
+                "separatrices": [] if sep is None else
+                [(theta, theta_dot) for _, _, theta, theta_dot in branches(sep)]}
+
+
+def _grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kwargs):
+    """Draw a map over the grid (θ0, θ̇0: columns, rows) as an image whose pixels are the
+    grid's cells (centred on the grid points); ``image``: the map already coarsened to the
+    figure's resolution (its blocks then span the same extent)."""
+    th, v = grid
     half_t = 0.5 * (th[-1] - th[0]) / max(th.size - 1, 1)
     half_v = 0.5 * (v[-1] - v[0]) / max(v.size - 1, 1)
     image = ax.imshow(np.ma.masked_invalid(image), origin="lower",
@@ -441,14 +443,49 @@ def _grid_image(ax, ds: xr.Dataset, image: np.ndarray, **kwargs):
     return image
 
 
-def basin_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
-    """Draw the basin map of ``tree`` (colour by k) with critical points and separatrices;
-    ``maps``: :func:`read_maps` of the same point, if already read."""
-    ds = _single(tree.to_dataset(inherit=False), **index)
-    if ax is None:
-        _, ax = plt.subplots(figsize=(8, 4.8))
-    k, kmin, kmax, running = (maps or read_maps(tree, "basin", **index))["basin"]
-    colors = list(plt.get_cmap("tab10")(np.arange(kmin, kmax + 1) % 10))
+def _draw_separatrices(ax, separatrices: list) -> None:
+    """The separatrix branches (θ [rad], θ̇ [rad/s]), in red."""
+    for i, (theta, theta_dot) in enumerate(separatrices):
+        ax.plot(theta, theta_dot, color=SEPARATRIX_COLOR, lw=1.2,
+                label="separatrices" if i == 0 else None)
+
+
+def _draw_limit_cycle(ax, lo: float, hi: float, theta: np.ndarray, theta_dot: np.ndarray,
+                      period: float) -> None:
+    """The running limit cycle (θ [rad], θ̇ [rad/s]; period [s]), repeated 2π-periodically
+    across the window θ ∈ [lo, hi]."""
+    order = np.argsort(theta)
+    theta, theta_dot = theta[order], theta_dot[order]
+    shifts = np.arange(np.floor((lo - theta.max()) / TWO_PI), np.ceil((hi - theta.min()) / TWO_PI)
+                       + 1)
+    for i, shift in enumerate(shifts):
+        ax.plot(theta + TWO_PI * shift, theta_dot, color=CYCLE_COLOR, lw=1.6, ls="--",
+                label=f"limit cycle (period {period:.4g} s)" if i == 0 else None)
+
+
+def _basin_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
+    """What :func:`basin_map` draws: :func:`_map_scene`'s, the critical points (θ [rad],
+    saddle or not, tilted or not) and the running limit cycle (θ [rad], θ̇ [rad/s], period
+    [s]) where stored, and the title."""
+    ds, scene = _map_scene(tree, "basin", maps, index)
+    point = point_of(ds)
+    cp = point_group(tree, "critical_points", point)
+    cycle = point_group(tree, "limit_cycle", point)
+    return scene | {
+        "critical": None if cp is None else  # odd n: saddles
+        (cp["theta"].values, cp["n"].values % 2 != 0, bool(float(ds["torque"]))),
+        "cycle": None if cycle is None else
+        (cycle["theta"].values, cycle["theta_dot"].values, float(cycle.attrs["period"])),
+        "title": f"Basins of attraction, {point_title(point)}"}
+
+
+def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
+    """Draw :func:`_basin_scene` (as :func:`basin_map`)."""
+    from matplotlib import colormaps
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    k, kmin, kmax, running = image
+    colors = list(colormaps["tab10"](np.arange(kmin, kmax + 1) % 10))
     ticks, names = list(range(kmin, kmax + 1)), [f"{k:+d}" for k in range(kmin, kmax + 1)]
     if running:  # the running basin: one more colour after the wells
         colors.append(RUNNING_COLOR)
@@ -456,36 +493,78 @@ def basin_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
         names.append("running")
     cmap = ListedColormap(colors).with_extremes(bad="white")
     levels = np.arange(kmin, kmin + len(colors) + 1) - 0.5
-    mesh = _grid_image(ax, ds, k, cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
+    mesh = _grid_image(ax, grid, k, cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
     cbar.ax.set_yticklabels(names)
     cbar.set_label("attractor k: orbit settles at the rest state of well k"
                    + ("; running: rotates" if running else ""))
-    _separatrices(ax, tree, ds)
-    _limit_cycle(ax, tree, ds)
-    _critical(ax, tree, ds)
-    ax.set_title(f"Basins of attraction, {point_title(point_of(ds))}")
+    _draw_separatrices(ax, separatrices)
+    if cycle is not None:
+        _draw_limit_cycle(ax, grid[0][0], grid[0][-1], *cycle)
+    if critical is not None:
+        critical_point_markers(ax, *critical)
+    ax.set_title(title)
     ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)
+    return ax
+
+
+def basin_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
+    """Draw the basin map of ``tree`` (colour by k) with critical points and separatrices;
+    ``maps``: :func:`read_maps` of the same point, if already read."""
+    return _draw_basin(_axes(ax, MAP_SIZE), **_basin_scene(tree, maps, **index))
+
+
+def _trap_time_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
+    """What :func:`trap_time_map` draws (:func:`_map_scene`'s)."""
+    return _map_scene(tree, "t_trap", maps, index)[1]
+
+
+def _draw_trap_time(ax, grid, image, separatrices):
+    """Draw :func:`_trap_time_scene` (as :func:`trap_time_map`)."""
+    from matplotlib import colormaps
+    from matplotlib.colors import LogNorm
+
+    # blocks keep their largest t_trap (the transform below is monotone: the same as the
+    # largest of the transformed cells)
+    t, lo, hi = image
+    lo = lo if lo == lo else 1e-2
+    hi = max(hi if hi == hi else 1.0, lo * 10)
+    cmap = colormaps["magma"].with_extremes(under="0.8", bad="white")
+    # t_trap = 0 (already inside the trap) is drawn below the scale, in grey
+    mesh = _grid_image(ax, grid, np.where(t > 0, t, lo / 2), cmap=cmap, norm=LogNorm(lo, hi))
+    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label("trapping time t_trap [s]")
+    _draw_separatrices(ax, separatrices)
+    ax.set_title("Time to certified trapping (grey: trapped at t = 0; white: never)")
     return ax
 
 
 def trap_time_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
     """Draw the certified trapping time t_trap [s] on a log colour scale (``maps`` as
     :func:`basin_map`)."""
-    ds = _single(tree.to_dataset(inherit=False), **index)
-    if ax is None:
-        _, ax = plt.subplots(figsize=(8, 4.8))
-    # blocks keep their largest t_trap (the transform below is monotone: the same as the
-    # largest of the transformed cells)
-    t, lo, hi = (maps or read_maps(tree, "t_trap", **index))["t_trap"]
-    lo = lo if lo == lo else 1e-2
+    return _draw_trap_time(_axes(ax, MAP_SIZE), **_trap_time_scene(tree, maps, **index))
+
+
+def _boundary_distance_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
+    """What :func:`boundary_distance_map` draws: :func:`_map_scene`'s and d_cert [rad-ish]."""
+    ds, scene = _map_scene(tree, "boundary_distance", maps, index)
+    return scene | {"d_cert": float(ds["d_cert"])}
+
+
+def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float):
+    """Draw :func:`_boundary_distance_scene` (as :func:`boundary_distance_map`)."""
+    from matplotlib import colormaps
+    from matplotlib.colors import LogNorm
+
+    d, lo, hi = image
+    lo = max(lo if lo == lo else 1e-12, d_cert if d_cert > 0 else 0, 1e-12)
     hi = max(hi if hi == hi else 1.0, lo * 10)
-    cmap = plt.get_cmap("magma").with_extremes(under="0.8", bad="white")
-    # t_trap = 0 (already inside the trap) is drawn below the scale, in grey
-    mesh = _grid_image(ax, ds, np.where(t > 0, t, lo / 2), cmap=cmap, norm=LogNorm(lo, hi))
-    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label("trapping time t_trap [s]")
-    _separatrices(ax, tree, ds)
-    ax.set_title("Time to certified trapping (grey: trapped at t = 0; white: never)")
+    cmap = colormaps["viridis"].with_extremes(under="white", bad="0.5")
+    mesh = _grid_image(ax, grid, d, cmap=cmap, norm=LogNorm(lo, hi))
+    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
+        "distance to the nearest basin boundary (rad-ish)")
+    _draw_separatrices(ax, separatrices)
+    cert = f"d_cert = {d_cert:.1e}" if d_cert == d_cert else "d_cert not measured"
+    ax.set_title(f"Distance to tipping into another well (white: closer than {cert})")
     return ax
 
 
@@ -493,21 +572,8 @@ def boundary_distance_map(tree: xr.DataTree, ax=None, maps: dict | None = None, 
     """Draw ``boundary_distance`` on a log colour scale, the separatrices, and in white the
     states closer than d_cert (labels certified for the RK4 map only); ``maps`` as
     :func:`basin_map`."""
-    ds = _single(tree.to_dataset(inherit=False), **index)
-    if ax is None:
-        _, ax = plt.subplots(figsize=(8, 4.8))
-    d, lo, hi = (maps or read_maps(tree, "boundary_distance", **index))["boundary_distance"]
-    d_cert = float(ds["d_cert"])
-    lo = max(lo if lo == lo else 1e-12, d_cert if d_cert > 0 else 0, 1e-12)
-    hi = max(hi if hi == hi else 1.0, lo * 10)
-    cmap = plt.get_cmap("viridis").with_extremes(under="white", bad="0.5")
-    mesh = _grid_image(ax, ds, d, cmap=cmap, norm=LogNorm(lo, hi))
-    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
-        "distance to the nearest basin boundary (rad-ish)")
-    _separatrices(ax, tree, ds)
-    cert = f"d_cert = {d_cert:.1e}" if d_cert == d_cert else "d_cert not measured"
-    ax.set_title(f"Distance to tipping into another well (white: closer than {cert})")
-    return ax
+    return _draw_boundary_distance(_axes(ax, MAP_SIZE),
+                                   **_boundary_distance_scene(tree, maps, **index))
 
 
 #: Axis labels of the parameters.
@@ -515,19 +581,17 @@ PARAMETER_AXES = {"alpha": "damping α [1/s]", "omega0": "natural frequency ω0 
                   "torque": "torque τ [rad/s²]"}
 
 
-def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7):
-    """Exact basin fraction of each k against the swept parameter ``dim`` (lines), with the
-    grid counts and their error bounds (markers with error bars); any other swept parameter
-    is held at its first value (named in the title).
+def _held(full: xr.Dataset, ds: xr.Dataset, dim: str) -> str:
+    """The title's second line: the swept parameters other than ``dim`` at the values held."""
+    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and n in full.dims}
+    return f"\nat {point_label(held)}" if held else ""
 
-    The ``max_curves`` largest basins get a curve each; the rest are summed into one
-    "other k" curve. A dashed line marks critical damping α = ω0 when α is swept.
-    """
+
+def _fraction_scene(tree: xr.DataTree, dim: str = "alpha", max_curves: int = 7) -> dict:
+    """What :func:`fraction_curves` draws: the swept values, the curves (exact fractions,
+    grid counts, their bounds, label, colour), α = ω0 where α is swept, and the labels."""
     full = tree.to_dataset(inherit=False)
     ds = full.isel({d: 0 for d in full["basin_fraction_exact"].dims if d not in (dim, "k")})
-    if ax is None:
-        _, ax = plt.subplots(figsize=(7, 4.5))
-    x = ds[dim].values
     exact = ds["basin_fraction_exact"].transpose(dim, "k").values
     grid = ds["basin_fraction"].transpose(dim, "k").values
     bound = ds["basin_fraction_grid_error_bound"].transpose(dim, "k").values
@@ -538,18 +602,70 @@ def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: 
     if rest.size:
         curves.append((exact[:, rest].sum(axis=1), grid[:, rest].sum(axis=1),
                        bound[:, rest].sum(axis=1), f"other k ({rest.size})", "0.5"))
+    return {"x": ds[dim].values, "curves": curves,
+            "critical": float(ds["omega0"]) if dim == "alpha" and ds["omega0"].ndim == 0
+            else None, "xlabel": PARAMETER_AXES[dim],
+            "title": "Basin fractions: exact areas (lines), grid counts with error bounds "
+                     "(dots)" + _held(full, ds, dim)}
+
+
+def _draw_fractions(ax, x, curves, critical, xlabel: str, title: str):
+    """Draw :func:`_fraction_scene` (as :func:`fraction_curves`)."""
     for e, g, b, label, color in curves:
         line, = ax.plot(x, e, "-", color=color, label=label)
         ax.errorbar(x, g, yerr=b, fmt="o", ms=3, capsize=2, color=line.get_color())
-    if dim == "alpha" and ds["omega0"].ndim == 0:
-        ax.axvline(float(ds["omega0"]), color="0.3", ls=":", lw=1, label="α = ω0 (critical)")
+    if critical is not None:
+        ax.axvline(critical, color="0.3", ls=":", lw=1, label="α = ω0 (critical)")
     ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
-    ax.set_xlabel(PARAMETER_AXES[dim])
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("basin fraction of the window")
-    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and n in full.dims}
-    ax.set_title("Basin fractions: exact areas (lines), grid counts with error bounds (dots)"
-                 + (f"\nat {point_label(held)}" if held else ""))
+    ax.set_title(title)
     ax.legend(ncol=2)
+    return ax
+
+
+def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7):
+    """Exact basin fraction of each k against the swept parameter ``dim`` (lines), with the
+    grid counts and their error bounds (markers with error bars); any other swept parameter
+    is held at its first value (named in the title).
+
+    The ``max_curves`` largest basins get a curve each; the rest are summed into one
+    "other k" curve. A dashed line marks critical damping α = ω0 when α is swept.
+    """
+    return _draw_fractions(_axes(ax, CURVE_SIZE), **_fraction_scene(tree, dim, max_curves))
+
+
+def _stability_scene(tree: xr.DataTree, dim: str = "torque") -> dict:
+    """What :func:`basin_stability` draws: the swept values, the rest states' and the running
+    basin's shares (exact and grid counts), the grid error bound, and the labels."""
+    full = tree.to_dataset(inherit=False)
+    ds = full.isel({d: 0 for d in PARAMETERS if d in full.dims and d != dim})
+    return {"x": ds[dim].values,
+            "exact": ds["basin_fraction_exact"].sum("k", skipna=False).values,
+            "grid": ds["basin_fraction"].sum("k").values,
+            "bound": ds["basin_fraction_grid_error_bound"].sum("k", skipna=False).values,
+            "running": ds["running_fraction"].values,
+            "running_exact": ds["running_fraction_exact"].values,
+            "xlabel": PARAMETER_AXES[dim],
+            "title": "Basin stability of the rest states and of the running cycle"
+                     + _held(full, ds, dim)}
+
+
+def _draw_stability(ax, x, exact, grid, bound, running, running_exact, xlabel: str,
+                    title: str):
+    """Draw :func:`_stability_scene` (as :func:`basin_stability`)."""
+    shown = np.isfinite(exact)
+    if shown.any():
+        ax.plot(x[shown], exact[shown], "-", color="C0", label="rest states, exact area")
+        ax.plot(x[shown], running_exact[shown], "-", color="0.4", label="running, exact area")
+    ax.errorbar(x, grid, yerr=np.where(np.isfinite(bound), bound, 0.0), fmt="o", ms=3,
+                capsize=2, color="C0", label="rest states, grid count")
+    ax.plot(x, running, "s", ms=3, color="0.4", label="running, grid count")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("basin stability (fraction of the window)")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_title(title)
+    ax.legend()
     return ax
 
 
@@ -558,77 +674,250 @@ def basin_stability(tree: xr.DataTree, ax=None, dim: str = "torque"):
     settles at a rest state (all wells together) and the running basin's share, as exact
     areas (lines, where computed) and grid counts (markers; error bars: the grid error bound,
     where computed). Any other swept parameter is held at its first value."""
-    full = tree.to_dataset(inherit=False)
-    ds = full.isel({d: 0 for d in PARAMETERS if d in full.dims and d != dim})
-    if ax is None:
-        _, ax = plt.subplots(figsize=(7, 4.5))
-    x = ds[dim].values
-    exact = ds["basin_fraction_exact"].sum("k", skipna=False).values
-    grid = ds["basin_fraction"].sum("k").values
-    bound = ds["basin_fraction_grid_error_bound"].sum("k", skipna=False).values
-    running = ds["running_fraction"].values
-    running_exact = ds["running_fraction_exact"].values
-    shown = np.isfinite(exact)
-    if shown.any():
-        ax.plot(x[shown], exact[shown], "-", color="C0", label="rest states, exact area")
-        ax.plot(x[shown], running_exact[shown], "-", color="0.4", label="running, exact area")
-    ax.errorbar(x, grid, yerr=np.where(np.isfinite(bound), bound, 0.0), fmt="o", ms=3,
-                capsize=2, color="C0", label="rest states, grid count")
-    ax.plot(x, running, "s", ms=3, color="0.4", label="running, grid count")
-    ax.set_xlabel(PARAMETER_AXES[dim])
-    ax.set_ylabel("basin stability (fraction of the window)")
-    ax.set_ylim(-0.02, 1.02)
-    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and n in full.dims}
-    ax.set_title("Basin stability of the rest states and of the running cycle"
-                 + (f"\nat {point_label(held)}" if held else ""))
-    ax.legend()
-    return ax
+    return _draw_stability(_axes(ax, CURVE_SIZE), **_stability_scene(tree, dim))
 
 
-#: The root variables of the basin map (one value per grid point): read band by band.
-MAP_VARIABLES = ("attractor", "status", "t_trap", "boundary_distance")
+# --------------------------------------------------------------------------- writing them
+
+def _figure_jobs(tree: xr.DataTree, path: Path) -> list[tuple]:
+    """The figures of ``tree`` to write next to ``path``, read: (PNG path, size [in], drawer,
+    scene) each, every scene read from the tree (the maps band by band)."""
+    path = Path(path)
+    maps = read_maps(tree)
+    jobs = [(path.with_suffix(".png"), MAP_SIZE, _draw_basin, _basin_scene(tree, maps)),
+            (path.with_name(path.stem + "_t_trap.png"), MAP_SIZE, _draw_trap_time,
+             _trap_time_scene(tree, maps)),
+            (path.with_name(path.stem + "_boundary_distance.png"), MAP_SIZE,
+             _draw_boundary_distance, _boundary_distance_scene(tree, maps))]
+    swept = tree.to_dataset(inherit=False).dims
+    for dim in (name for name in PARAMETERS if name in swept):
+        jobs.append((path.with_name(f"{path.stem}_fractions_{dim}.png"), CURVE_SIZE,
+                     _draw_fractions, _fraction_scene(tree, dim)))
+        if dim == "torque":
+            jobs.append((path.with_name(f"{path.stem}_basin_stability.png"), CURVE_SIZE,
+                         _draw_stability, _stability_scene(tree)))
+    return jobs
 
 
-def _load_all_but_the_maps(tree: xr.DataTree) -> None:
-    """Read (in place) every variable of ``tree`` except the root's basin maps: the summary
-    and the groups, each small."""
-    for name, variable in tree.variables.items():
-        if name not in MAP_VARIABLES:
-            variable.load()
-    for child in tree.children.values():
-        child.load()
+def _draw_figure(out: Path, size: tuple[float, float], draw, scene: dict) -> Path:
+    """Draw ``scene`` (``draw(ax, **scene)``) into a figure of ``size`` [in] of its own (no
+    pyplot), laid out tight, and write it to ``out`` (PNG)."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with matplotlib.rc_context(STYLE):
+        # laid out at the resolution it is saved at, so that the text the layout measures
+        # is measured once (matplotlib caches it per renderer and resolution)
+        fig = Figure(figsize=size, dpi=STYLE["savefig.dpi"])
+        FigureCanvasAgg(fig)
+        draw(fig.add_subplot(), **scene)
+        fig.tight_layout()
+        # laid out once: without this, savefig would draw the figure once more first
+        # (for tight_layout's placeholder engine) before drawing it into the PNG
+        fig.set_layout_engine(None)
+        fig.savefig(out, pil_kwargs=PNG_OPTIONS)
+    return out
 
 
 def plot_atlas(tree: xr.DataTree, path: Path) -> list[Path]:
     """Write the figures of the atlas stored at ``path`` next to it; returns the PNG paths.
 
     Everything drawn is read before the first PNG is written (a file that cannot be read
-    leaves none): the summary and the groups whole, the maps of the drawn parameter point
-    band by band, coarsened to the figure's pixels (:func:`read_maps`), so that the memory
-    needed is bounded whatever the size of the map."""
-    path = Path(path)
-    written = []
-    _load_all_but_the_maps(tree)
-    ds = tree.to_dataset(inherit=False)
-    maps = read_maps(tree)
-    with plt.rc_context(STYLE):
-        jobs = [(path.with_suffix(".png"), basin_map),
-                (path.with_name(path.stem + "_t_trap.png"), trap_time_map),
-                (path.with_name(path.stem + "_boundary_distance.png"), boundary_distance_map)]
-        jobs = [(out, functools.partial(draw, maps=maps)) for out, draw in jobs]
-        for dim in (name for name in PARAMETERS if name in ds.dims):
-            jobs.append((path.with_name(f"{path.stem}_fractions_{dim}.png"),
-                         functools.partial(fraction_curves, dim=dim)))
-            if dim == "torque":
-                jobs.append((path.with_name(f"{path.stem}_basin_stability.png"),
-                             basin_stability))
-        for out, draw in jobs:
-            ax = draw(tree)
-            ax.figure.tight_layout()
-            # laid out once: without this, savefig would draw the figure once more first
-            # (for tight_layout's placeholder engine) before drawing it into the PNG
-            ax.figure.set_layout_engine(None)
-            ax.figure.savefig(out)
-            plt.close(ax.figure)
-            written.append(out)
-    return written
+    leaves none): the maps of the drawn parameter point band by band, coarsened to the
+    figure's pixels (:func:`read_maps`), so that the memory needed is bounded whatever the
+    size of the map, and what else each figure shows."""
+    return [_draw_figure(*job) for job in _figure_jobs(tree, path)]
+
+
+def plot_file(path: str | Path) -> list[Path]:
+    """``atlas plot``: :func:`plot_atlas` of the atlas file at ``path``, opened and closed
+    here.
+
+    On Linux the figures are drawn by forked processes (:class:`_Drawers`): one is started
+    first and imports matplotlib while this one opens and reads the file, then draws the
+    figures with forks of itself, on every core at once. Elsewhere (no safe ``fork``) they
+    are drawn here, after reading."""
+    drawers = _Drawers.start() if sys.platform.startswith("linux") else None
+    try:
+        from .store import open_atlas  # imported after the fork: xarray, h5py only here
+
+        tree = open_atlas(path)
+        try:
+            jobs = _figure_jobs(tree, path)
+        finally:
+            tree.close()
+        if drawers is None:
+            return [_draw_figure(*job) for job in jobs]
+        return drawers.draw(jobs)
+    finally:
+        if drawers is not None:
+            drawers.close()
+
+
+class _DrawingTraceback(Exception):
+    """The traceback (text) of an exception raised in a drawing process: the cause of the
+    exception re-raised here."""
+
+    def __str__(self) -> str:
+        return "\n" + self.args[0]
+
+
+class _Drawers:
+    """The drawing processes of :func:`plot_file`: a fork of this process that imports
+    matplotlib and draws a small figure (loading the fonts, building the log axes' mathtext
+    parser) while this one reads, then waits for the figures' jobs
+    (:func:`_figure_jobs`), draws them with :func:`_draw_all` and answers with the first
+    exception raised (None if none). Its own process group, so that closing ends it and
+    its forks at once; it draws nothing unless sent the jobs."""
+
+    @classmethod
+    def start(cls) -> _Drawers | None:
+        """The drawing process, started; None if it cannot be (the figures are then drawn
+        in this process)."""
+        try:
+            return cls()
+        except OSError:  # no process or no pipe to spare
+            return None
+
+    def __init__(self):
+        jobs_r, jobs_w = os.pipe()
+        answer_r, answer_w = os.pipe()
+        try:
+            self.pid = os.fork()
+        except OSError:
+            for fd in (jobs_r, jobs_w, answer_r, answer_w):
+                os.close(fd)
+            raise
+        if self.pid == 0:  # pragma: no cover - runs in the fork
+            os.close(jobs_w)
+            os.close(answer_r)
+            _drawing_process(jobs_r, answer_w)
+        os.close(jobs_r)
+        os.close(answer_w)
+        with contextlib.suppress(ProcessLookupError, PermissionError):  # or the child did
+            os.setpgid(self.pid, self.pid)
+        self._jobs, self._answer = os.fdopen(jobs_w, "wb"), os.fdopen(answer_r, "rb")
+        self._answered = False
+
+    def draw(self, jobs: list[tuple]) -> list[Path]:
+        """Draw ``jobs``; returns their PNG paths, or raises the first exception raised in
+        drawing them (with its traceback there as the cause)."""
+        try:
+            pickle.dump(jobs, self._jobs, pickle.HIGHEST_PROTOCOL)
+            self._jobs.close()
+            answer = pickle.load(self._answer)
+        except (BrokenPipeError, EOFError):
+            answer = _answer_of(RuntimeError("the drawing process ended without answering"))
+        self._answered = True
+        if answer is not None:
+            error, traceback = answer
+            raise error from _DrawingTraceback(traceback)
+        return [job[0] for job in jobs]
+
+    def close(self) -> None:
+        """End the drawing processes (at once unless they answered) and reap the first."""
+        self._jobs.close()
+        self._answer.close()
+        if not self._answered:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(self.pid, signal.SIGKILL)
+        os.waitpid(self.pid, 0)
+
+
+def _drawing_process(jobs_fd: int, answer_fd: int):  # pragma: no cover - runs in the fork
+    """The life of the drawing process of :class:`_Drawers` (it ends here): warm up, read the
+    jobs from ``jobs_fd`` (none: the reader failed), draw them, answer on ``answer_fd``."""
+    code = 1
+    try:
+        os.setpgid(0, 0)
+        signal.signal(signal.SIGINT, signal.SIG_DFL)  # ended by the reader, not by Ctrl-C
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        signal.signal(signal.SIGTTOU, signal.SIG_IGN)  # a background group may still warn
+        answer = None
+        try:
+            _warm_up()
+        except Exception as exc:  # the same will fail in drawing: answer it then
+            answer = _answer_of(exc)
+        with os.fdopen(jobs_fd, "rb") as f:
+            try:
+                jobs = pickle.load(f)
+            except EOFError:  # the reader failed: nothing to draw
+                code = 0
+                return
+        answer = answer or _draw_all(jobs)
+        with os.fdopen(answer_fd, "wb") as f:
+            f.write(pickle.dumps(answer, pickle.HIGHEST_PROTOCOL))
+        code = 0
+    finally:
+        os._exit(code)
+
+
+def _warm_up() -> None:
+    """Import what drawing needs and draw a small figure with a legend, a log colour bar and
+    a PNG of it, so that every drawing process forked after this finds matplotlib, the fonts,
+    the mathtext parser (the log axes' labels) and the PNG writer ready."""
+    import io
+
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import LogNorm
+
+    def draw(ax):
+        ax.plot([0.0, 1.0], label="θ̇0 [rad/s]")
+        ax.legend()
+        ax.figure.colorbar(ScalarMappable(LogNorm(0.1, 10.0)), ax=ax)
+
+    _draw_figure(io.BytesIO(), (2, 2), draw, {})
+
+
+def _draw_all(jobs: list[tuple]) -> tuple | None:
+    """Draw ``jobs`` (:func:`_draw_figure`) in n processes at once, this one and n − 1 forks
+    of it (one per core and one more, so that a figure that finishes first does not leave a
+    core idle: n = 3 for the three maps on 2 cores), the i-th job in process i mod n; returns
+    :func:`_answer_of` the first exception raised, None if none."""
+    n = min(len(jobs), _workers() + 1)
+    forks = []
+    for i in range(1, n):
+        r, w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - runs in the fork
+            try:
+                os.close(r)
+                with os.fdopen(w, "wb") as f:
+                    f.write(pickle.dumps(_draw_share(jobs[i::n]), pickle.HIGHEST_PROTOCOL))
+            finally:
+                os._exit(0)
+        os.close(w)
+        forks.append((pid, r))
+    answers = [_draw_share(jobs[0::n])]
+    for pid, r in forks:
+        with os.fdopen(r, "rb") as f:
+            data = f.read()
+        os.waitpid(pid, 0)
+        answers.append(pickle.loads(data) if data else
+                       _answer_of(RuntimeError("a drawing process ended without answering")))
+    return next((answer for answer in answers if answer is not None), None)
+
+
+def _draw_share(jobs: list[tuple]) -> tuple | None:
+    """Draw ``jobs`` one after the other; :func:`_answer_of` the exception raised, if any."""
+    try:
+        for job in jobs:
+            _draw_figure(*job)
+    except Exception as exc:
+        return _answer_of(exc)
+    return None
+
+
+def _answer_of(exc: Exception) -> tuple[Exception, str]:
+    """(``exc``, its traceback as text), as sent back from a drawing process: ``exc`` itself
+    where it pickles (an OSError keeps its errno and file name), else a RuntimeError naming
+    it."""
+    import traceback
+
+    text = "".join(traceback.format_exception(exc))
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:
+        exc = RuntimeError(f"{type(exc).__name__}: {exc}")
+    return exc, text

@@ -1,5 +1,10 @@
 """`atlas plot`: the figures read the atlas and draw what it holds (inspect the Axes)."""
 
+import errno
+import os
+import shutil
+import sys
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -279,3 +284,64 @@ output: {tmp_path / 'c.h5'}
     plt.close("all")
     proc = run_cli("plot", tmp_path / "c.h5")
     assert proc.returncode == 0 and (tmp_path / "c.png").exists()
+
+
+@pytest.mark.slow
+def test_atlas_plot_draws_in_other_processes_what_plot_atlas_draws(sweep_tree, tmp_path):
+    """`atlas plot` reads the file here and draws in forked processes (plot_file; five figures
+    of an α × ω0 sweep in two or more processes): the PNGs are byte for byte those that
+    plot_atlas draws in this process."""
+    from atlas.cli import main
+
+    _, path = sweep_tree
+    here, there = tmp_path / "here", tmp_path / "there"
+    here.mkdir()
+    there.mkdir()
+    tree = atlas.open(shutil.copy(path, here / "s.h5"))
+    try:
+        expected = plot_atlas(tree, here / "s.h5")
+    finally:
+        tree.close()
+    assert main(["plot", str(shutil.copy(path, there / "s.h5"))]) == 0
+    assert len(expected) == 5
+    for png in expected:
+        assert (there / png.name).read_bytes() == png.read_bytes(), png.name
+
+
+def _failing_savefig(save, fails: str, error: Exception):
+    """``save`` (Figure.savefig), raising ``error`` for the PNG whose name ends in ``fails``."""
+
+    def savefig(fig, out, *args, **kwargs):
+        if str(out).endswith(fails):
+            raise error
+        return save(fig, out, *args, **kwargs)
+
+    return savefig
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks on Linux only")
+def test_a_figure_that_fails_in_a_drawing_process_fails_atlas_plot(sweep_tree, tmp_path,
+                                                                   monkeypatch):
+    """A failure in a drawing process is atlas plot's: a full disk is one line and exit 1, as
+    when the figures were drawn in this process; any other exception is raised here, with the
+    drawing process's traceback as its cause."""
+    import io
+    from contextlib import redirect_stderr
+
+    from atlas.cli import main
+
+    _, path = sweep_tree
+    bad = shutil.copy(path, tmp_path / "s.h5")
+    png, save = tmp_path / "s_t_trap.png", plt.Figure.savefig
+    monkeypatch.setattr(plt.Figure, "savefig", _failing_savefig(
+        save, "_t_trap.png", OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(png))))
+    err = io.StringIO()
+    with redirect_stderr(err):
+        assert main(["plot", str(bad)]) == 1
+    assert err.getvalue() == f"atlas: error: {png}: {os.strerror(errno.ENOSPC)}\n"
+    monkeypatch.setattr(plt.Figure, "savefig", _failing_savefig(
+        save, "_boundary_distance.png", ValueError("no colour for this")))
+    with pytest.raises(ValueError, match="no colour for this") as raised:
+        main(["plot", str(bad)])
+    assert "savefig" in str(raised.value.__cause__)  # where it was raised, over there
