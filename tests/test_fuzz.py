@@ -29,6 +29,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import atlas
+from atlas import defaults
 from atlas.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
@@ -113,7 +114,8 @@ def _cheap_enough(text: str, folder: Path) -> bool:
         * len(cfg.pendulum.omega0s)
     steps = cfg.integrator.t_max / cfg.integrator.dt
     return (orbits * steps <= 2e5 and orbits <= 4096 and cfg.execution.backend == "cpu"
-            and not cfg.separatrices.enabled and cfg.execution.tile_orbits >= 4)
+            and not cfg.separatrices.enabled
+            and (cfg.execution.tile_orbits or defaults.TILE_ORBITS) >= 4)
 
 
 def _run_config(text: str, good: Path) -> None:
