@@ -564,6 +564,9 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
     9, with the running basin and the limit cycle for a torque atlas) and θ(t) (essay
     Figure 6) side by side to ``output`` (PNG). Without a file the (tilted) critical points
     and the limit cycle (when known) are drawn under the curve."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, never a window (also on a desktop)
     import matplotlib.pyplot as plt
 
     from .model import Pendulum, critical_points
