@@ -565,18 +565,16 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
     Figure 6) side by side to ``output`` (PNG). Without a file the (tilted) critical points
     and the limit cycle (when known) are drawn under the curve."""
     import matplotlib
-
-    matplotlib.use("Agg")  # files only, never a window (also on a desktop)
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # no pyplot: a file, never a window or a backend
 
     from .model import Pendulum, critical_points
     from .plotting import STYLE, basin_map, critical_point_markers, pi_ticks, point_title
 
     output = Path(output)
     pendulum = Pendulum(orbit.alpha, orbit.omega0, orbit.torque)
-    with plt.rc_context(STYLE):
-        fig, (ax, ax_t) = plt.subplots(1, 2, figsize=(13, 4.8),
-                                       gridspec_kw={"width_ratios": [1.35, 1]})
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=(13, 4.8))
+        ax, ax_t = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.35, 1]})
         if tree is not None:
             basin_map(tree, ax=ax, **(index or {}))
         else:
@@ -632,8 +630,6 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
         except OSError as exc:
             raise AtlasError(f"{output}: cannot write the figure ({exc.strerror or exc})"
                              ) from None
-        finally:
-            plt.close(fig)
     return output
 
 
