@@ -6,26 +6,28 @@ n × n grid of its θ0 and θ̇0 window (:func:`atlas.defaults.grid`). Every fig
 each round the variants run in turn, so they see the same machine load and their ratios are
 meaningful even where absolute times drift (the best of the repeats is kept in the JSON too).
 
-* basin map (512², early exit): atlas = :func:`~atlas.kernels.lanes.label_trigfree` (method
-  "rk4-trigfree") with the trap tested every ``CHECK_EVERY`` steps (what :func:`atlas.label`
-  runs); the lane kernel of method "rk4" (:func:`~atlas.kernels.lanes.label_lanes`, the default
-  before); the straightforward
+* basin map (512², early exit): atlas = :func:`~atlas.kernels.lanes.label_lanes`, the default
+  method "rk4", with the trap tested every ``CHECK_EVERY`` steps (what :func:`atlas.label` and
+  ``atlas run`` run); the trig-free lanes of method "rk4-trigfree"
+  (:func:`~atlas.kernels.lanes.label_trigfree`); the straightforward
   Numba kernel with the trap tested every step (one orbit per ``prange`` iteration,
   ``math.sin``) and every ``CHECK_EVERY`` steps; numpy over the whole grid without early exit
   (fixed duration t_max, timed on a short run and extrapolated); scipy ``solve_ivp`` LSODA
   (rtol 1e-8, atol 1e-10, one process) on a random sample of orbits to t_max, extrapolated to
   the grid. "steps/s" there is effective: the RK4 steps the orbits need (Σ n_trap at
-  check_every = 1) per second of wall time; the run also reports whether the atlas labels
-  equal those of the method's straightforward kernel, and how many differ from the "rk4"
-  straightforward kernel's (a different discretisation: boundary cells only).
-* bulk (fixed number of steps, no early exit): steps/s of ``propagate_trigfree``,
-  ``propagate_lanes``, ``propagate_straightforward`` and numpy; "512² map" there is the time
-  to integrate every orbit to t_max without early exit.
+  check_every = 1) per second of wall time; the run also reports whether each lane method's
+  labels equal those of its straightforward kernel, and how many trig-free labels differ from
+  the default's (a different discretisation: boundary cells only).
+* bulk (fixed number of steps, no early exit): steps/s of ``propagate_lanes`` (the default),
+  ``propagate_trigfree``, ``propagate_straightforward`` and numpy; "512² map" there is the
+  time to integrate every orbit to t_max without early exit.
 * torque: the swing equation's map (bSTAB's pendulum: α = 0.05, ω0 = 1, τ = 0.5, its window
   θ ∈ [−5π/6, 7π/6], θ̇ ∈ [−10, 10], t_max = 400 s) against the untilted map of the same points
   and α, both through :func:`atlas.label` with the file's method "rk4" (the tilted trap and the
   running barrier against the plain energy trap).
 * scaling: the atlas map at 256² … 4096² (the same window, finer grids).
+* end to end: ``atlas run`` of the default config, the whole command, against the budget
+  imports + 3 × the default map's kernel time + 0.5 s (:mod:`atlas.bench_e2e`).
 * JIT: a subprocess with ``NUMBA_CACHE_DIR`` pointed at a fresh directory times import and the
   first call (compilation), then a second subprocess with the same directory (cache hit).
 * plotting: ``atlas plot`` of the default config's atlas at 512² and 4096² (1536² in a quick
@@ -194,12 +196,15 @@ def _row(variant, steps_s, orbits_s, map_s, atlas_map_s, note=""):
 
 
 def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = True,
-              lsoda_sample: int | None = None, plots: bool = True) -> dict:
+              lsoda_sample: int | None = None, plots: bool = True,
+              end_to_end: bool = True) -> dict:
     """Run the CPU benchmark (module docstring) and return a JSON-ready dict.
 
     ``sizes``: grid sides of the scaling rows (default 256…4096; ``quick`` stops at 1024 and
     uses at most 2 repeats, shorter numpy/straightforward runs and a smaller LSODA sample).
     ``plots``: the plotting rows (``atlas plot``; they compute their atlases first).
+    ``end_to_end``: the whole ``atlas run`` of the default config against its budget
+    (:mod:`atlas.bench_e2e`).
     """
     p = defaults.problem()
     if quick:
@@ -212,40 +217,42 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
 
     # basin map, early exit
     ref = _label(label_straightforward, theta0, theta_dot0, 1, p)
+    ref16 = _label(label_straightforward, theta0, theta_dot0, CHECK_EVERY, p)
     ref_tf = _label(label_trigfree_straightforward, theta0, theta_dot0, CHECK_EVERY, p)
-    atl = _label(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p)
+    atl = _label(label_lanes, theta0, theta_dot0, CHECK_EVERY, p)
+    atl_tf = _label(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p)
     trapped = ref[1] == TRAPPED
     useful = float(np.where(trapped, ref[2], full_steps).sum())  # steps the orbits need
     np_steps = 5 if quick else 20
-    bulk_steps = {"atlas trig-free lanes propagate": 50 if quick else 200,
-                  "rk4 lanes propagate": 50 if quick else 200,
+    bulk_steps = {"atlas rk4 lanes propagate (default)": 50 if quick else 200,
+                  "trig-free lanes propagate": 50 if quick else 200,
                   "straightforward numba propagate": 5 if quick else 20,
                   "numpy whole grid": np_steps}
+    default_bulk, trigfree_bulk = list(bulk_steps)[:2]
     t = _median_times({
-        "trigfree": _label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p),
         "lanes": _label_run(label_lanes, theta0, theta_dot0, CHECK_EVERY, p),
+        "trigfree": _label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p),
         "sf1": _label_run(label_straightforward, theta0, theta_dot0, 1, p),
         "sf16": _label_run(label_straightforward, theta0, theta_dot0, CHECK_EVERY, p),
-        "atlas trig-free lanes propagate": _propagate_run(
-            propagate_trigfree, theta0, theta_dot0,
-            bulk_steps["atlas trig-free lanes propagate"], p),
-        "rk4 lanes propagate": _propagate_run(propagate_lanes, theta0, theta_dot0,
-                                              bulk_steps["rk4 lanes propagate"], p),
+        default_bulk: _propagate_run(propagate_lanes, theta0, theta_dot0,
+                                     bulk_steps[default_bulk], p),
+        trigfree_bulk: _propagate_run(propagate_trigfree, theta0, theta_dot0,
+                                      bulk_steps[trigfree_bulk], p),
         "straightforward numba propagate": _propagate_run(
             propagate_straightforward, theta0, theta_dot0,
             bulk_steps["straightforward numba propagate"], p),
         "numpy whole grid": _propagate_run(_numpy_propagate, theta0, theta_dot0, np_steps, p),
     }, repeats)
-    atlas_s, lanes_s, sf1_s, sf16_s = (t[k][0] for k in ("trigfree", "lanes", "sf1", "sf16"))
+    atlas_s, trigfree_s, sf1_s, sf16_s = (t[k][0] for k in ("lanes", "trigfree", "sf1", "sf16"))
     rates = {name: n * steps / t[name][0] for name, steps in bulk_steps.items()}
     np_map_s = n * full_steps / rates["numpy whole grid"]
     lsoda_rate = _lsoda_orbits_per_s(theta0, theta_dot0, p, lsoda_sample)
     lsoda_map_s = n / lsoda_rate
     map_rows = [
-        _row(f"atlas trig-free lanes (check every {CHECK_EVERY})", useful / atlas_s,
+        _row(f"atlas default: rk4 lanes (check every {CHECK_EVERY})", useful / atlas_s,
              n / atlas_s, atlas_s, atlas_s),
-        _row(f"rk4 lanes, sin per stage (check every {CHECK_EVERY})", useful / lanes_s,
-             n / lanes_s, lanes_s, atlas_s),
+        _row(f"trig-free lanes, method rk4-trigfree (check every {CHECK_EVERY})",
+             useful / trigfree_s, n / trigfree_s, trigfree_s, atlas_s),
         _row("straightforward numba (check every step)", useful / sf1_s, n / sf1_s, sf1_s,
              atlas_s),
         _row(f"straightforward numba (check every {CHECK_EVERY})", useful / sf16_s,
@@ -255,7 +262,7 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         _row("scipy LSODA rtol 1e-8, 1 process", useful / lsoda_map_s, lsoda_rate, lsoda_map_s,
              atlas_s, f"extrapolated from {lsoda_sample} random orbits"),
     ]
-    atlas_bulk_map = n * full_steps / rates["atlas trig-free lanes propagate"]
+    atlas_bulk_map = n * full_steps / rates[default_bulk]
     bulk_rows = [
         _row(name, rate, rate / full_steps, n * full_steps / rate, atlas_bulk_map,
              f"{bulk_steps[name]} steps timed, map time extrapolated to {full_steps} steps")
@@ -265,7 +272,7 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
     scaling = []
     for side in sizes:
         th, v = defaults.grid(side)
-        s = _median_times({"atlas": _label_run(label_trigfree, th, v, CHECK_EVERY, p)},
+        s = _median_times({"atlas": _label_run(label_lanes, th, v, CHECK_EVERY, p)},
                           repeats if side <= 1024 else 1)["atlas"][0]
         scaling.append({"n": side, "orbits": th.size, "wall_s": s, "orbits_per_s": th.size / s,
                         "ns_per_orbit": s / th.size * 1e9})
@@ -278,27 +285,31 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         "torque": torque,
         "repeats": repeats, "quick": quick, "targets": TARGETS,
         "map": {"rows": map_rows,
-                "labels_equal_straightforward": _same_labels(atl, ref_tf),
-                "status_equal": bool(np.array_equal(ref_tf[1], atl[1])),
-                "label_mismatches": int(np.sum((ref_tf[0] != atl[0]) & (ref_tf[1] == TRAPPED))),
-                "rk4_label_mismatches": int(np.sum((ref[0] != atl[0]) & trapped)),
-                "rk4_status_mismatches": int(np.sum(ref[1] != atl[1])),
+                "labels_equal_straightforward": _same_labels(atl, ref16),
+                "trigfree_labels_equal_straightforward": _same_labels(atl_tf, ref_tf),
+                "label_mismatches": _label_mismatches(atl, ref16),
+                "trigfree_vs_rk4_label_mismatches": _label_mismatches(atl_tf, atl),
+                "trigfree_vs_rk4_status_mismatches": int(np.sum(atl_tf[1] != atl[1])),
                 "useful_steps": useful},
         "bulk": {"rows": bulk_rows},
         "scaling": scaling,
         "best_of_repeats_s": {name: best for name, (_, best) in t.items()},
         "summary": {"map_speedup": sf1_s / atlas_s,
-                    "map_vs_lanes": lanes_s / atlas_s,
-                    "bulk_msteps_s": rates["atlas trig-free lanes propagate"] / 1e6,
-                    "bulk_msteps_s_best": n * bulk_steps["atlas trig-free lanes propagate"]
-                    / t["atlas trig-free lanes propagate"][1] / 1e6,
-                    "bulk_speedup": rates["atlas trig-free lanes propagate"]
+                    "trigfree_map_speedup": atlas_s / trigfree_s,
+                    "default_bulk_msteps_s": rates[default_bulk] / 1e6,
+                    "bulk_msteps_s": rates[trigfree_bulk] / 1e6,
+                    "bulk_msteps_s_best": n * bulk_steps[trigfree_bulk]
+                    / t[trigfree_bulk][1] / 1e6,
+                    "bulk_speedup": rates[trigfree_bulk]
                     / rates["straightforward numba propagate"],
-                    "bulk_vs_lanes": rates["atlas trig-free lanes propagate"]
-                    / rates["rk4 lanes propagate"]},
+                    "bulk_vs_lanes": rates[trigfree_bulk] / rates[default_bulk]},
     }
     if plot is not None:
         result["plot"] = plot
+    if end_to_end:
+        from .bench_e2e import end_to_end as whole_run
+
+        result["end_to_end"] = whole_run(atlas_s, repeats=1 if quick else 3)
     if jit:
         cold, warm = _jit_times()
         result["jit"] = {"cold": cold, "warm_cache": warm}
@@ -470,11 +481,16 @@ def _same_labels(a, b) -> bool:
                                    np.where(b[1] == TRAPPED, b[0], 0)))
 
 
+def _label_mismatches(a, b) -> int:
+    """Orbits whose status or (where trapped) attractor differ."""
+    return int(np.sum((a[1] != b[1]) | ((a[1] == TRAPPED) & (a[0] != b[0]))))
+
+
 def _fmt_rows(rows):
-    lines = [f"  {'variant':44s} {'steps/s':>10s} {'orbits/s':>10s} {'512² map':>10s} "
+    lines = [f"  {'variant':54s} {'steps/s':>10s} {'orbits/s':>10s} {'512² map':>10s} "
              f"{'× atlas':>8s}"]
     for r in rows:
-        lines.append(f"  {r['variant']:44s} {r['steps_per_s']:10.3g} {r['orbits_per_s']:10.3g} "
+        lines.append(f"  {r['variant']:54s} {r['steps_per_s']:10.3g} {r['orbits_per_s']:10.3g} "
                      f"{_fmt_s(r['map_512_s']):>10s} {r['ratio_to_atlas']:8.3g}"
                      + (f"  ({r['note']})" if r["note"] else ""))
     return lines
@@ -490,11 +506,13 @@ def format_table(result: dict) -> str:
     lines = [f"CPU: {m['cpu']}, {m['cores']} cores ({m['numba_threads']} numba threads); "
              f"python {m['python']}, numpy {m['numpy']}, numba {m['numba']}, "
              f"llvmlite {m['llvmlite']}; {m['timestamp']}",
-             f"Basin map {MAP_N}² (early exit; steps/s = needed RK4 steps / wall; labels equal "
-             f"the trig-free straightforward kernel's: "
-             f"{result['map']['labels_equal_straightforward']}; differ from the rk4 "
-             f"straightforward kernel's in {result['map']['rk4_label_mismatches']} labels, "
-             f"{result['map']['rk4_status_mismatches']} statuses)"]
+             f"Basin map {MAP_N}² (early exit; steps/s = needed RK4 steps / wall; × atlas = "
+             f"time / the default method's; its labels equal the straightforward kernel's "
+             f"(same check interval): {result['map']['labels_equal_straightforward']} "
+             f"({result['map']['label_mismatches']} differ); trig-free lanes against theirs: "
+             f"{result['map']['trigfree_labels_equal_straightforward']}, against the default's "
+             f"{result['map']['trigfree_vs_rk4_label_mismatches']} orbits differ (a different "
+             f"discretisation: boundary cells only))"]
     lines += _fmt_rows(result["map"]["rows"])
     lines.append("Bulk RK4, fixed steps, no early exit")
     lines += _fmt_rows(result["bulk"]["rows"])
@@ -530,12 +548,17 @@ def format_table(result: dict) -> str:
     t = result["targets"]
     jit = (f"; JIT cold {s['jit_cold_s']:.2f} s (< {t['jit_cold_s']:g}), warm cache "
            f"{s['jit_warm_s']:.2f} s (< {t['jit_warm_s']:g})" if "jit_cold_s" in s else "")
-    lines.append(f"Summary: map {s['map_speedup']:.1f}× straightforward (target ≥ "
-                 f"{t['map_speedup']:g}×), {s['map_vs_lanes']:.2f}× rk4 lanes; bulk "
-                 f"{s['bulk_msteps_s']:.0f} M steps/s (target ≥ {t['bulk_msteps_s']:g}; best of "
-                 f"repeats {s['bulk_msteps_s_best']:.0f}), {s['bulk_speedup']:.1f}× "
-                 f"straightforward (target ≥ {t['bulk_speedup']:g}×), {s['bulk_vs_lanes']:.2f}× "
-                 f"rk4 lanes (target ≥ {t['bulk_vs_lanes']:g}×){jit}")
+    lines.append(f"Summary: default map {s['map_speedup']:.1f}× straightforward (target ≥ "
+                 f"{t['map_speedup']:g}×); trig-free map {s['trigfree_map_speedup']:.2f}× the "
+                 f"default; bulk: default {s['default_bulk_msteps_s']:.0f} M steps/s, trig-free "
+                 f"{s['bulk_msteps_s']:.0f} (target ≥ {t['bulk_msteps_s']:g}; best of repeats "
+                 f"{s['bulk_msteps_s_best']:.0f}), {s['bulk_speedup']:.1f}× straightforward "
+                 f"(target ≥ {t['bulk_speedup']:g}×) and {s['bulk_vs_lanes']:.2f}× the default "
+                 f"lanes (target ≥ {t['bulk_vs_lanes']:g}×){jit}")
+    if "end_to_end" in result:
+        from .bench_e2e import format_end_to_end
+
+        lines += format_end_to_end(result["end_to_end"])
     return "\n".join(lines)
 
 
