@@ -40,9 +40,11 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _cmd_run(args) -> int:
-    from . import sweep
     from .config import load_config
-    cfg = load_config(args.config, output=args.output)
+
+    cfg = load_config(args.config, output=args.output)  # a bad config is refused before
+    from . import sweep  # the heavy imports (xarray, Numba kernels)
+
     try:
         tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend,
                          force=args.force, config_path=args.config)
