@@ -70,6 +70,11 @@ SAFETY = 10.0
 RUNNING_SIDE = ATTRACTOR_FILL
 #: First search radius around the grid for boundaries [rad-ish]; grown while needed.
 _FIRST_MARGIN = 1.0
+#: Cell side [rad-ish] of the bins over the tilted boundaries' vertices (the radii asked
+#: for are about half a grid cell's diagonal).
+_VERTEX_CELL = 0.05
+#: Vertices farther than this [rad-ish] outside the window are not binned for points in it.
+_VERTEX_MARGIN = 0.5
 
 
 def cert_distance(shift: float, tol: float, reference_error: float) -> float:
@@ -176,10 +181,11 @@ class _Tilted:
         self.k, self.fraction, self.error = areas.k, areas.fraction, areas.error
         self.running, self.running_error = areas.running, areas.running_error
         self.reference_error = self.exact.reference_error + self.exact.chord_error
-        self._tree = None
+        self.window = window
+        self._vertices = {}  # the polylines' vertices binned, built on first use
 
     def __getstate__(self):
-        return {**self.__dict__, "_tree": None}
+        return {**self.__dict__, "_vertices": {}}
 
     def side(self, theta, theta_dot):
         return self.exact.side(theta, theta_dot)
@@ -192,21 +198,36 @@ class _Tilted:
         """(lowest, highest) saddle n = 2j + 1 of the boundaries with a vertex within
         ``radius`` + the longest segment of each point (a superset of the boundaries within
         ``radius``); (0, 0) where none."""
-        from scipy.spatial import cKDTree
-
+        from .kernels.foot import saddles_near
+        from .manifold import bins
         from .tilted import MAX_SEGMENT
 
-        if self._tree is None:
+        theta = np.ascontiguousarray(np.ravel(theta), dtype=float)
+        theta_dot = np.ascontiguousarray(np.ravel(theta_dot), dtype=float)
+        lo, hi = np.zeros(theta.size, np.int64), np.zeros(theta.size, np.int64)
+        if not theta.size:
+            return lo, hi
+        (w0, w1), (u0, u1) = self.window
+        reach = radius + MAX_SEGMENT
+        # the vertices near the window suffice for points in it (the usual case)
+        near = (reach <= _VERTEX_MARGIN and theta.min() >= w0 and theta.max() <= w1
+                and theta_dot.min() >= u0 and theta_dot.max() <= u1)
+        key = "window" if near else "all"
+        if key not in self._vertices:
             curves = self.exact.curves(clip=False)
-            xy = np.concatenate([np.column_stack([t, v]) for _, _, t, v in curves])
-            self._n = np.concatenate([np.full(t.size, 2 * j + 1) for j, _, t, _ in curves])
-            self._tree = cKDTree(xy)
-        points = np.column_stack([np.ravel(theta), np.ravel(theta_dot)])
-        lo, hi = np.zeros(len(points), np.int64), np.zeros(len(points), np.int64)
-        for i, near in enumerate(self._tree.query_ball_point(points, radius + MAX_SEGMENT)):
+            t = np.concatenate([t for _, _, t, _ in curves])
+            v = np.concatenate([v for _, _, _, v in curves])
+            n = np.concatenate([np.full(t.size, 2 * j + 1) for j, _, t, _ in curves])
             if near:
-                ns = self._n[near]
-                lo[i], hi[i] = ns.min(), ns.max()
+                m = _VERTEX_MARGIN
+                keep = (t >= w0 - m) & (t <= w1 + m) & (v >= u0 - m) & (v <= u1 + m)
+                t, v, n = t[keep], v[keep], n[keep]
+            box = ((t.min(), t.max()), (v.min(), v.max())) if t.size else ((0, 1), (0, 1))
+            self._vertices[key] = (t, v, n, box, bins(t, v, box, _VERTEX_CELL))
+        t, v, n, ((t0, _), (v0, _)), (cell, shape, start, items) = self._vertices[key]
+        saddles_near(theta, theta_dot, float(radius + MAX_SEGMENT), t, v, n.astype(np.int64),
+                     start, items, float(t0), float(v0), float(cell), shape[0], shape[1],
+                     lo, hi)
         return lo, hi
 
 

@@ -421,6 +421,23 @@ class StableManifold:
         return k
 
 
+def bins(theta, theta_dot, box, cell: float):
+    """Points (θ, θ̇) binned in square cells over ``box`` = ((θ0, θ1), (v0, v1)) for the
+    compiled searches of :mod:`atlas.kernels.foot`: (cell side — ``cell`` [rad-ish], larger
+    if the box would need more than ``_MAX_CELLS`` —, (cells along θ, along θ̇), CSR starts
+    over the cells, the points' indices cell by cell). Points outside the box go to its edge
+    cells."""
+    (t0, t1), (v0, v1) = box
+    cell = max(cell, math.sqrt((t1 - t0) * (v1 - v0) / _MAX_CELLS))
+    shape = (max(1, math.ceil((t1 - t0) / cell)), max(1, math.ceil((v1 - v0) / cell)))
+    cx = np.clip(((theta - t0) // cell).astype(np.int64), 0, shape[0] - 1)
+    cy = np.clip(((theta_dot - v0) // cell).astype(np.int64), 0, shape[1] - 1)
+    bucket = cx * shape[1] + cy
+    items = np.argsort(bucket, kind="stable")
+    start = np.concatenate([[0], np.cumsum(np.bincount(bucket, minlength=shape[0] * shape[1]))])
+    return cell, shape, start, items
+
+
 class BoundaryIndex:
     """Nearest basin boundaries of points, among the boundary copies that pass through a box:
     their samples binned in square cells, searched and refined on the dense output of
@@ -433,17 +450,8 @@ class BoundaryIndex:
         if self.empty:
             return
         self.theta, self.theta_dot, self.n, self.branch, self.sample = copies
-        (t0, t1), (v0, v1) = box
-        self.cell = max(_CELL, math.sqrt((t1 - t0) * (v1 - v0) / _MAX_CELLS))
-        self.shape = (max(1, math.ceil((t1 - t0) / self.cell)),
-                      max(1, math.ceil((v1 - v0) / self.cell)))
-        cx = np.clip(((self.theta - t0) // self.cell).astype(np.int64), 0, self.shape[0] - 1)
-        cy = np.clip(((self.theta_dot - v0) // self.cell).astype(np.int64), 0,
-                     self.shape[1] - 1)
-        bucket = cx * self.shape[1] + cy
-        self.items = np.argsort(bucket, kind="stable")
-        self.start = np.concatenate([[0], np.cumsum(np.bincount(
-            bucket, minlength=self.shape[0] * self.shape[1]))])
+        self.cell, self.shape, self.start, self.items = bins(self.theta, self.theta_dot, box,
+                                                             _CELL)
 
     def nearest(self, theta, theta_dot):
         """Distance [rad-ish, Euclidean in the (θ, θ̇) plane] from each point to the nearest

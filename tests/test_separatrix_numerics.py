@@ -79,3 +79,32 @@ def test_foot_points_start_from_the_nearest_sample():
     ref_tau, ref_dist = m._foot(x, v, i)
     np.testing.assert_array_equal(tau, ref_tau)
     np.testing.assert_array_equal(dist, ref_dist)
+
+
+def test_tilted_saddles_within_is_a_ball_query():
+    """With torque: the binned vertices near the window (and all of them, for points outside
+    it) give what a k-d tree's ball query over every vertex gives."""
+    from scipy.spatial import cKDTree
+
+    from atlas.certificate import exact_boundaries
+    from atlas.tilted import MAX_SEGMENT
+
+    window = ((-5 * math.pi / 6, 7 * math.pi / 6), (-10.0, 10.0))
+    ex = exact_boundaries(Pendulum(alpha=0.05, omega0=1.0, torque=0.5), window)
+    curves = ex.exact.curves(clip=False)
+    xy = np.concatenate([np.column_stack([t, v]) for _, _, t, v in curves])
+    n = np.concatenate([np.full(t.size, 2 * j + 1) for j, _, t, _ in curves])
+    tree = cKDTree(xy)
+    rng = np.random.default_rng(2)
+    inside = (rng.uniform(*window[0], 3000), rng.uniform(*window[1], 3000))
+    outside = (rng.uniform(-8.0, 8.0, 300), rng.uniform(-14.0, 14.0, 300))
+    for (theta, theta_dot), radius in ((inside, 0.03), (outside, 0.03), (inside, 0.7)):
+        lo, hi = ex.saddles_within(theta, theta_dot, radius)
+        ref_lo, ref_hi = np.zeros_like(lo), np.zeros_like(hi)
+        for i, near in enumerate(tree.query_ball_point(np.column_stack([theta, theta_dot]),
+                                                       radius + MAX_SEGMENT)):
+            if near:
+                ref_lo[i], ref_hi[i] = n[near].min(), n[near].max()
+        assert (ref_lo != 0).sum() > 10
+        np.testing.assert_array_equal(lo, ref_lo)
+        np.testing.assert_array_equal(hi, ref_hi)
