@@ -1,7 +1,5 @@
 """``python -m atlas``: the ``atlas`` command line (:mod:`atlas.cli`)."""
 
-import sys
+from .cli import entry
 
-from .cli import main
-
-sys.exit(main())
+entry()

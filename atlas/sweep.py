@@ -518,11 +518,10 @@ class _Phases:
 
 
 def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float,
-            running_certificates: tuple[list, list]) -> None:
+            running_certificates: tuple[list, list], phase: _Phases) -> None:
     """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
     and certify what is missing, then assemble the file. A tile file found damaged is set
     aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``)."""
-    phase = _Phases()
     pendulums = _pendulums(tiles.layout)
     cycles, barriers = running_certificates
     tilted = _tilted_boundaries(cfg, pendulums, cycles)  # timed with the separatrices
@@ -582,18 +581,22 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
     age = _process_age()
     if age is not None:
         log.info("%-32s %6.2f s", "start-up (process, imports)", age)
+    phase = _Phases()
     with output_lock(cfg.output):
         try:
             tiles = _open_tiles(cfg, layout, identity, restart)
-            _finish(tiles, cfg, backend, quiet, start, running_certificates)
+            phase.done("partial run (open or resume)")
+            _finish(tiles, cfg, backend, quiet, start, running_certificates, phase)
         except OverflowError as exc:
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:
             raise StorageError(f"{partial}: writing failed ({_reason(exc)}); the "
                                "tiles finished before it are kept: free space or fix the "
                                "disk, then run the same command again") from None
+    tree = store.open_atlas(cfg.output)
+    phase.done("opening the result")
     log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
-    return store.open_atlas(cfg.output)
+    return tree
 
 
 def _reason(exc: OSError) -> str:
