@@ -61,10 +61,6 @@ def _wall(argv: list[str]) -> tuple[float, str]:
     return time.perf_counter() - t0, out.stderr
 
 
-def _median(samples: list[float]) -> float:
-    return statistics.median(samples)
-
-
 def end_to_end(map_kernel_s: float, repeats: int = 3) -> dict:
     """Time the whole ``atlas run`` of the default problem against the budget (module
     docstring); ``map_kernel_s`` [s]: the default method's 512² map kernel, from the same
@@ -83,14 +79,14 @@ def end_to_end(map_kernel_s: float, repeats: int = 3) -> dict:
                                map(_PHASE.match, log.splitlines()) if m})
         imports = [_wall(["-c", _IMPORTS])[0] for _ in range(repeats)]
         first_call = [_wall(["-c", _FIRST_CALL])[0] for _ in range(repeats)]
-    import_s = _median(imports)
+    import_s = statistics.median(imports)
     budget = import_s + KERNEL_FACTOR * map_kernel_s + OVERHEAD_S
-    run_s = _median(runs)
+    run_s = statistics.median(runs)
     names = list(phases[0]) if phases else []
     return {"run_s": run_s, "run_best_s": min(runs), "import_s": import_s,
-            "imports_and_first_call_s": _median(first_call), "map_kernel_s": map_kernel_s,
+            "imports_and_first_call_s": statistics.median(first_call), "map_kernel_s": map_kernel_s,
             "budget_s": budget, "ratio_to_budget": run_s / budget,
-            "phases_s": {name: _median([ph.get(name, float("nan")) for ph in phases])
+            "phases_s": {name: statistics.median([ph.get(name, float("nan")) for ph in phases])
                          for name in names}}
 
 

@@ -261,11 +261,17 @@ class StableManifold:
     def _bisect_speed(self, level: float) -> np.ndarray:
         diff = self.theta_dot - level
         i = np.flatnonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)
-        a, b = self.tau[i], self.tau[i + 1]
-        for _ in range(60):  # bisection: robust where θ̇ turns near the level
+        return self.speed_crossing(level, self.tau[i], self.tau[i + 1])
+
+    def speed_crossing(self, level: float, a, b):
+        """The τ [s] in each bracket [a, b] where θ̇ on L passes ``level`` [rad s⁻¹] (θ̇ − level
+        changes sign between a and b), by bisection on the dense output: 60 halvings, to the
+        last bits of τ, robust where θ̇ turns near the level."""
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        rising = self._state(a)[1] < level
+        for _ in range(60):
             mid = 0.5 * (a + b)
             above = self._state(mid)[1] > level
-            rising = diff[i] < 0
             b = np.where(above == rising, mid, b)
             a = np.where(above == rising, a, mid)
         return 0.5 * (a + b)

@@ -407,27 +407,13 @@ def _predict(m: StableManifold, edges: list[float], max_spacing: float) -> _Pred
             if chord <= h:
                 break
             span = (t - tau) * _CHORD_AIM * h / chord
-        crossings = sorted(_speed_crossing(m, v, tau, t)
+        crossings = sorted(float(m.speed_crossing(v, tau, t))
                            for v in edges if (y[1] - v) * (z[1] - v) < 0)
         verts += [(*m.at(s), s) for s in crossings]
         verts.append((*z, t))
         tau, y = t, z
     arr = np.array(verts, float)
     return _Predicted(1, "left", arr[:, 0], arr[:, 1], arr[:, 2], np.arange(arr.shape[0]))
-
-
-def _speed_crossing(m: StableManifold, level: float, a: float, b: float) -> float:
-    """The τ in [a, b] [s] where θ̇ on ``m`` passes ``level`` [rad s⁻¹] (once, by the caller's
-    sign test), by bisection to the last bit of τ."""
-    below = m.at(a)[1] < level
-    while True:
-        mid = 0.5 * (a + b)
-        if not a < mid < b:
-            return mid
-        if (m.at(mid)[1] < level) == below:
-            a = mid
-        else:
-            b = mid
 
 
 def _not_a_knot_spline(x: np.ndarray, y: np.ndarray, at: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ from scipy.optimize import brentq
 
 from atlas.manifold import StableManifold
 from atlas.model import Pendulum
-from atlas.separatrices import _not_a_knot_spline, _speed_crossing
+from atlas.separatrices import _not_a_knot_spline
 
 
 @pytest.mark.parametrize("n", [4, 5, 12, 60])
@@ -35,7 +35,7 @@ def test_speed_crossing_matches_brent():
     m = StableManifold(Pendulum(alpha=0.1, omega0=1.0), 4.0)
     i = int(np.flatnonzero(np.diff(np.sign(m.theta_dot - 2.5)))[0])
     a, b = float(m.tau[i]), float(m.tau[i + 1])
-    tau = _speed_crossing(m, 2.5, a, b)
+    tau = float(m.speed_crossing(2.5, a, b))
     ref = brentq(lambda s: m.at(s)[1] - 2.5, a, b, xtol=1e-15)
     assert abs(tau - ref) <= 4 * math.ulp(ref) + 1e-15
     assert m.at(tau)[1] == pytest.approx(2.5, abs=1e-13)
