@@ -4,7 +4,8 @@ xarray asks, for every array it wraps, whether it is a dask array, and answers b
 ``dask.array`` when dask is installed (``xarray.namedarray.pycompat.array_type("dask")``),
 which takes about 0.3 s on the development machine — a tenth of ``atlas run``'s wall time,
 a third of ``atlas plot``'s. No object can be a dask array before ``dask.array`` is imported,
-so until then the honest answer is "no such type". :func:`install` puts that answer into
+so until then the honest answer is "no such type" (and likewise for xarray's check for dask
+collections, which imports ``dask.base``). :func:`install` puts that answer into
 xarray's cache of duck-array modules: the array type is looked up in ``sys.modules`` on
 every call, and the real module (version, availability) is imported the first time anything
 else is asked. Once dask is imported (``atlas run --backend dask``, ``xr.open_dataset(...,
@@ -31,10 +32,30 @@ def install() -> bool:
         base = pycompat.DuckArrayModule
     except (ImportError, AttributeError):
         return False
+    _defer_collection_check()
     if "dask" in cache:  # already looked up (real or deferred): nothing to gain or to do
         return isinstance(cache["dask"], _deferred_class(base))
     cache["dask"] = _deferred_class(base)()
     return True
+
+
+def _defer_collection_check() -> None:
+    """xarray's ``is_dask_collection`` imports ``dask.base`` (≈ 0.05 s) to answer for every
+    array it wraps; a dask collection is an instance of a dask class, so before ``dask`` is
+    imported the answer is no. Wrapped once; the wrapper asks the real function after."""
+    try:
+        from xarray.namedarray import utils
+    except ImportError:
+        return
+    real = utils.is_dask_collection
+    if getattr(real, "deferred_by_atlas", False):
+        return
+
+    def is_dask_collection(x) -> bool:
+        return "dask" in sys.modules and real(x)
+
+    is_dask_collection.deferred_by_atlas = True
+    utils.is_dask_collection = is_dask_collection
 
 
 _DEFERRED: dict[type, type] = {}

@@ -5,6 +5,8 @@ import subprocess
 import sys
 import textwrap
 
+import numpy as np
+
 
 def _run(code: str) -> str:
     done = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
@@ -28,16 +30,35 @@ def test_xarray_work_without_dask_arrays_does_not_import_dask_array(tmp_path):
     assert out == "False"
 
 
+def test_datasets_with_index_coordinates_do_not_import_dask(tmp_path):
+    """Building a dataset with an index coordinate (atlas's summary) and reading a file back
+    import no part of dask (xarray's check for dask collections would import dask.base)."""
+    path = tmp_path / "c.h5"
+    import h5py
+    with h5py.File(path, "w") as f:
+        f["a"] = np.arange(3.0)
+    out = _run(f"""
+        import sys
+        import numpy as np
+        import atlas.store  # installs the deferral
+        import xarray as xr
+        ds = xr.Dataset({{"a": ("k", np.arange(3.0))}}, coords={{"k": np.arange(3)}})
+        back = xr.open_dataset("{path}", engine="h5netcdf").load()
+        print(float(ds.a.sel(k=2)), float(back.a.sum()), "dask" in sys.modules)
+    """)
+    assert out == "2.0 3.0 False"
+
+
 def test_without_the_deferral_xarray_imports_dask_array():
     """The control: the test above can fail — plain xarray imports dask.array."""
     out = _run("""
         import sys
         import numpy as np
         import xarray as xr
-        xr.Dataset({"a": ("x", np.arange(3.0))})
-        print("dask.array" in sys.modules)
+        xr.Dataset({"a": ("x", np.arange(3.0))}, coords={"x": np.arange(3)})
+        print("dask.array" in sys.modules, "dask" in sys.modules)
     """)
-    assert out == "True"
+    assert out == "True True"
 
 
 def test_dask_arrays_are_recognised_once_dask_is_imported(tmp_path):
