@@ -47,7 +47,7 @@ def _cmd_run(args) -> int:
 
     try:
         tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend,
-                         force=args.force, config_path=args.config)
+                         force=args.force, config_path=args.config, open_result=False)
     except KeyboardInterrupt as exc:
         from .tiles import partial_path
 

@@ -518,10 +518,11 @@ class _Phases:
 
 
 def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float,
-            running_certificates: tuple[list, list], phase: _Phases) -> None:
+            running_certificates: tuple[list, list], phase: _Phases) -> xr.DataTree:
     """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
     and certify what is missing, then assemble the file. A tile file found damaged is set
-    aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``)."""
+    aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``).
+    Returns what was written beyond the basin map (:func:`atlas.store.summary_tree`)."""
     pendulums = _pendulums(tiles.layout)
     cycles, barriers = running_certificates
     tilted = _tilted_boundaries(cfg, pendulums, cycles)  # timed with the separatrices
@@ -537,10 +538,12 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
         try:
             summary = _summary(cfg, tiles, certifiers)
             phase.done("summary")
-            finalize(tiles, cfg.output, groups, summary,
-                     {"run_time_s": time.perf_counter() - start, "backend": backend})
+            attrs = {"run_time_s": time.perf_counter() - start, "backend": backend}
+            manifest_attrs = tiles.manifest["attrs"]  # read before finalize removes the tiles
+            finalize(tiles, cfg.output, groups, summary, attrs)
             phase.done(f"writing ({tiles.layout.n_tiles} tiles assembled)")
-            return
+            return store.summary_tree(tiles.layout, summary, groups,
+                                      {**manifest_attrs, **attrs})
         except store.DamagedTile as exc:
             log.warning("%s: %s is damaged; computing it again", tiles.path, exc)
             tiles.set_aside(exc.index)
@@ -549,7 +552,7 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
 
 def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool = False,
         backend: str | None = None, force: bool = False,
-        config_path: str | Path | None = None) -> xr.DataTree:
+        config_path: str | Path | None = None, open_result: bool = True) -> xr.DataTree:
     """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
 
     An interrupted run of the same identity at the output (``<output>.partial/``) is
@@ -560,6 +563,9 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
     error) raises :class:`StorageError`; the tiles finished before it are kept. An output
     that atlas did not write is refused (:class:`~atlas.errors.OutputInTheWay`) unless
     ``force``, and one that is the config file ``config_path`` itself always.
+    ``open_result=False`` returns, instead of the file opened (and checked) again, what was
+    written beyond the basin map, from memory (:func:`atlas.store.summary_tree`: what
+    ``atlas run`` prints).
     """
     from .validate import check_output_target
 
@@ -586,17 +592,18 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
         try:
             tiles = _open_tiles(cfg, layout, identity, restart)
             phase.done("partial run (open or resume)")
-            _finish(tiles, cfg, backend, quiet, start, running_certificates, phase)
+            written = _finish(tiles, cfg, backend, quiet, start, running_certificates, phase)
         except OverflowError as exc:
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:
             raise StorageError(f"{partial}: writing failed ({_reason(exc)}); the "
                                "tiles finished before it are kept: free space or fix the "
                                "disk, then run the same command again") from None
-    tree = store.open_atlas(cfg.output)
-    phase.done("opening the result")
+    if open_result:
+        written = store.open_atlas(cfg.output)
+        phase.done("opening the result")
     log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
-    return tree
+    return written
 
 
 def _reason(exc: OSError) -> str:

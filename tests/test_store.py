@@ -10,7 +10,7 @@ import xarray as xr
 import atlas
 from atlas.kernels import NEAR_BOUNDARY
 from atlas.labels import ATTRACTOR_FILL
-from tests.helpers import crash_on_tile, lock_is_free
+from tests.helpers import crash_on_tile, lock_is_free, write_config
 
 
 @pytest.fixture(scope="module")
@@ -145,3 +145,28 @@ def test_the_python_api_does_not_write_over_a_file_atlas_did_not_write(written, 
         atlas.run(cfg, quiet=True)
     assert foreign.read_text() == "someone's notes"
     assert atlas.run(cfg, quiet=True, force=True).attrs["complete"] == 1
+
+
+@pytest.mark.slow
+def test_the_summary_from_memory_is_the_files(tmp_path):
+    """``atlas run`` prints its summary from memory (``open_result=False``) instead of
+    reading the file back: the same lines as from the file opened again, for an atlas of
+    several parameter points with torque and separatrices (every group the summary reads)."""
+    import atlas
+    from atlas.info import summary_lines
+
+    cfg = write_config(tmp_path / "swept.yaml", f"""\
+        name: swept
+        pendulum: {{alpha: 0.1, omega0: 1.0, torque: [0.0, 0.3]}}
+        grid:
+          theta0: {{start: -pi, stop: pi, num: 12}}
+          theta_dot0: {{start: -2, stop: 2, num: 10}}
+        integrator: {{dt: 0.01, t_max: 100}}
+        output: {tmp_path / 'swept.h5'}
+    """)
+    memory = atlas.run(atlas.load_config(cfg), quiet=True, open_result=False)
+    with atlas.open(tmp_path / "swept.h5") as written:
+        assert set(memory.groups) == set(written.groups)
+        assert {"/separatrices/torque1", "/limit_cycle/torque1"} <= set(written.groups)
+        assert summary_lines(memory) == summary_lines(written)
+        assert "torque = 0.3" in "\n".join(summary_lines(written))
