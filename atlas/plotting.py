@@ -856,7 +856,9 @@ def _drawing_process(jobs_fd: int, answer_fd: int):  # pragma: no cover - runs i
 def _warm_up() -> None:
     """Import what drawing needs and draw a small figure with a legend, a log colour bar and
     a PNG of it, so that every drawing process forked after this finds matplotlib, the fonts,
-    the mathtext parser (the log axes' labels) and the PNG writer ready."""
+    the mathtext parser and the PNG writer ready. The colour bar spans 1e-16 to 1e4, so the
+    labels 10^k of the log colour bars (trapping times, boundary distances) are parsed here
+    once, while the reader is still reading, rather than in each figure."""
     import io
 
     from matplotlib.cm import ScalarMappable
@@ -865,7 +867,7 @@ def _warm_up() -> None:
     def draw(ax):
         ax.plot([0.0, 1.0], label="θ̇0 [rad/s]")
         ax.legend()
-        ax.figure.colorbar(ScalarMappable(LogNorm(0.1, 10.0)), ax=ax)
+        ax.figure.colorbar(ScalarMappable(LogNorm(1e-16, 1e4)), ax=ax)
 
     _draw_figure(io.BytesIO(), (2, 2), draw, {})
 
