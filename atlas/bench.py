@@ -17,7 +17,10 @@ meaningful even where absolute times drift (the best of the repeats is kept in t
   the grid. "steps/s" there is effective: the RK4 steps the orbits need (Σ n_trap at
   check_every = 1) per second of wall time; the run also reports whether each lane method's
   labels equal those of its straightforward kernel, and how many trig-free labels differ from
-  the default's (a different discretisation: boundary cells only).
+  the default's (a different discretisation: boundary cells only). One more row runs the
+  trig-free lanes at the step that makes them as accurate as the default (:func:`_equal_dt`:
+  its RK4 map's basin boundaries as close to the exact ones, measured by the separatrix
+  bisection, :func:`atlas.separatrices.trace`).
 * bulk (fixed number of steps, no early exit): steps/s of ``propagate_lanes`` (the default),
   ``propagate_trigfree``, ``propagate_straightforward`` and numpy; "512² map" there is the
   time to integrate every orbit to t_max without early exit.
@@ -190,6 +193,30 @@ def machine_info() -> dict:
     }
 
 
+def _boundary_shift(p: dict, dt: float, method: str) -> float:
+    """The RK4 map's basin-boundary shift from the exact boundaries [rad-ish] over the default
+    window (the separatrices' ``discrepancy``, which sets d_cert)."""
+    from .model import Pendulum
+    from .separatrices import trace
+
+    sep = trace(Pendulum(p["alpha"], p["omega0"]), defaults.THETA0_WINDOW,
+                defaults.THETA_DOT0_WINDOW, dt=dt, method=method)
+    return float(sep.attrs["discrepancy"])
+
+
+def _equal_dt(p: dict) -> tuple[float, float, float]:
+    """The trig-free step as accurate as the default method at ``p["dt"]``: (dt [s], its
+    boundary shift, the default's). Both are of order 4, so dt·(shift ratio)^(−1/4), rounded
+    down to two digits and lowered by 5 % until its shift is no larger (measured, not
+    assumed)."""
+    target = _boundary_shift(p, p["dt"], "rk4")
+    ratio = _boundary_shift(p, p["dt"], "rk4-trigfree") / target
+    dt = float(f"{p['dt'] * ratio ** -0.25:.2g}")
+    while (shift := _boundary_shift(p, dt, "rk4-trigfree")) > target:
+        dt = float(f"{0.95 * dt:.2g}")
+    return dt, shift, target
+
+
 def _row(variant, steps_s, orbits_s, map_s, atlas_map_s, note=""):
     return {"variant": variant, "steps_per_s": steps_s, "orbits_per_s": orbits_s,
             "map_512_s": map_s, "ratio_to_atlas": map_s / atlas_map_s, "note": note}
@@ -229,9 +256,12 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
                   "straightforward numba propagate": 5 if quick else 20,
                   "numpy whole grid": np_steps}
     default_bulk, trigfree_bulk = list(bulk_steps)[:2]
+    equal_dt, equal_shift, default_shift = _equal_dt(p)
+    p_equal = {**p, "dt": equal_dt}
     t = _median_times({
         "lanes": _label_run(label_lanes, theta0, theta_dot0, CHECK_EVERY, p),
         "trigfree": _label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p),
+        "trigfree_equal": _label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p_equal),
         "sf1": _label_run(label_straightforward, theta0, theta_dot0, 1, p),
         "sf16": _label_run(label_straightforward, theta0, theta_dot0, CHECK_EVERY, p),
         default_bulk: _propagate_run(propagate_lanes, theta0, theta_dot0,
@@ -253,6 +283,11 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
              n / atlas_s, atlas_s, atlas_s),
         _row(f"trig-free lanes, method rk4-trigfree (check every {CHECK_EVERY})",
              useful / trigfree_s, n / trigfree_s, trigfree_s, atlas_s),
+        _row(f"trig-free lanes at dt = {equal_dt:g} s, as accurate as the default",
+             useful * p["dt"] / equal_dt / t["trigfree_equal"][0], n / t["trigfree_equal"][0],
+             t["trigfree_equal"][0], atlas_s,
+             f"boundary shift {equal_shift:.2g} vs the default's {default_shift:.2g}; "
+             "steps/s counts its steps"),
         _row("straightforward numba (check every step)", useful / sf1_s, n / sf1_s, sf1_s,
              atlas_s),
         _row(f"straightforward numba (check every {CHECK_EVERY})", useful / sf16_s,
@@ -296,6 +331,10 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         "best_of_repeats_s": {name: best for name, (_, best) in t.items()},
         "summary": {"map_speedup": sf1_s / atlas_s,
                     "trigfree_map_speedup": atlas_s / trigfree_s,
+                    "trigfree_equal_accuracy": {
+                        "dt": equal_dt, "boundary_shift": equal_shift,
+                        "default_boundary_shift": default_shift,
+                        "map_speedup": atlas_s / t["trigfree_equal"][0]},
                     "default_bulk_msteps_s": rates[default_bulk] / 1e6,
                     "bulk_msteps_s": rates[trigfree_bulk] / 1e6,
                     "bulk_msteps_s_best": n * bulk_steps[trigfree_bulk]
@@ -489,10 +528,10 @@ def _label_mismatches(a, b) -> int:
 
 
 def _fmt_rows(rows):
-    lines = [f"  {'variant':54s} {'steps/s':>10s} {'orbits/s':>10s} {'512² map':>10s} "
+    lines = [f"  {'variant':62s} {'steps/s':>10s} {'orbits/s':>10s} {'512² map':>10s} "
              f"{'× atlas':>8s}"]
     for r in rows:
-        lines.append(f"  {r['variant']:54s} {r['steps_per_s']:10.3g} {r['orbits_per_s']:10.3g} "
+        lines.append(f"  {r['variant']:62s} {r['steps_per_s']:10.3g} {r['orbits_per_s']:10.3g} "
                      f"{_fmt_s(r['map_512_s']):>10s} {r['ratio_to_atlas']:8.3g}"
                      + (f"  ({r['note']})" if r["note"] else ""))
     return lines
@@ -552,7 +591,9 @@ def format_table(result: dict) -> str:
            f"{s['jit_warm_s']:.2f} s (< {t['jit_warm_s']:g})" if "jit_cold_s" in s else "")
     lines.append(f"Summary: default map {s['map_speedup']:.1f}× straightforward (target ≥ "
                  f"{t['map_speedup']:g}×); trig-free map {s['trigfree_map_speedup']:.2f}× the "
-                 f"default; bulk: default {s['default_bulk_msteps_s']:.0f} M steps/s, trig-free "
+                 f"default, {s['trigfree_equal_accuracy']['map_speedup']:.2f}× at equal accuracy "
+                 f"(dt {s['trigfree_equal_accuracy']['dt']:g} s); bulk: default "
+                 f"{s['default_bulk_msteps_s']:.0f} M steps/s, trig-free "
                  f"{s['bulk_msteps_s']:.0f} (target ≥ {t['bulk_msteps_s']:g}; best of repeats "
                  f"{s['bulk_msteps_s_best']:.0f}), {s['bulk_speedup']:.1f}× straightforward "
                  f"(target ≥ {t['bulk_speedup']:g}×) and {s['bulk_vs_lanes']:.2f}× the default "

@@ -31,6 +31,7 @@ from pydantic import (
 
 from . import defaults
 from .errors import ConfigError
+from .kernels import METHODS
 from .layout import PARAMETERS
 from .limits import MAX_RATE, MIN_RATE
 
@@ -245,10 +246,13 @@ class GridConfig(_Strict):
 
 
 class IntegratorConfig(_Strict):
-    """Fixed-step RK4: step ``dt`` [s]; orbits not trapped by ``t_max`` [s] are unresolved."""
+    """Fixed-step RK4: step ``dt`` [s]; orbits not trapped by ``t_max`` [s] are unresolved;
+    ``method`` the discretisation (:data:`atlas.kernels.METHODS`: "rk4", classical RK4 on
+    (θ, θ̇), or "rk4-trigfree", RK4 on (θ, θ̇, cos θ, sin θ), CPU only)."""
 
     dt: Number = Field(default=defaults.DT, gt=0)
     t_max: Number = Field(default=defaults.T_MAX, gt=0)
+    method: Literal[METHODS] = defaults.METHOD
 
 
 class SeparatricesConfig(_Strict):
@@ -284,10 +288,14 @@ class Config(_Strict):
     @model_validator(mode="after")
     def _runnable(self):
         """Checks across sections, so that a valid config never fails after work began."""
-        from .labels import CHECK_EVERY, check_integration, check_torque_reach
+        from .labels import CHECK_EVERY, check_integration, check_method, check_torque_reach
         from .limits import check_reach, check_separatrix_settings
 
         dt, t_max = self.integrator.dt, self.integrator.t_max
+        try:
+            check_method(self.integrator.method, self.execution.backend)
+        except ValueError as exc:
+            raise ValueError(f"integrator.{exc}") from None
         g = self.grid
         theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))
         speed_abs = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))

@@ -47,7 +47,7 @@ __all__ = ["LabelResult", "RunningBarrier", "label", "trap_margin", "energy_cap"
 # in atlas.kernels with the status codes and re-exported here.
 
 #: The CPU discretisation :func:`label` uses unless told (see :data:`atlas.kernels.METHODS`).
-DEFAULT_METHOD = METHODS[0]
+DEFAULT_METHOD = defaults.METHOD
 #: Steps between two trap tests in the fast kernels (trapping times are resolved to this).
 CHECK_EVERY = 16
 BACKENDS = ("cpu", "cuda")
@@ -191,9 +191,16 @@ def resolve_method(backend: str, kernel: str | None, method: str | None) -> str:
         return "rk4" if backend == "cuda" or kernel == "straightforward" else DEFAULT_METHOD
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    if backend == "cuda" and method != "rk4":
-        raise ValueError(f"method {method!r} has no CUDA kernel; the cuda backend runs 'rk4'")
+    check_method(method, backend)
     return method
+
+
+def check_method(method: str, backend: str) -> None:
+    """Refuse a discretisation ``method`` that ``backend`` has no kernel for (ValueError,
+    one line): the CUDA kernels run "rk4" only."""
+    if backend == "cuda" and method != "rk4":
+        raise ValueError(f"method: {method!r} has no CUDA kernel; the cuda backend runs "
+                         "'rk4' (set method: rk4, or run on the CPU)")
 
 
 def _kernel(backend: str, kernel: str | None, method: str | None = None):

@@ -45,7 +45,7 @@ def check_reach(theta_abs: float, speed_abs: float, alpha: float) -> None:
 MIN_TOL_ULPS = 64
 #: Smallest ``max_spacing`` [rad-ish]. At 1e-4 the chord error (≤ max_spacing²/8 ≈ 1.3e-9;
 #: measured 6e-10) already equals the located curve's own O(dt⁴) offset from the exact
-#: manifold at the default dt (6e-10 with method "rk4", 4e-9 with the default "rk4-trigfree"),
+#: manifold at the default dt (6e-10 with the default method "rk4", 4e-9 with "rk4-trigfree"),
 #: so a finer polyline adds points but no accuracy; and
 #: the points grow as 1/max_spacing (default window, α = 0.1: 1654 at 0.05, 8e5 and ≈ 20 s
 #: on 2 cores at 1e-4).

@@ -31,6 +31,7 @@ from .labels import (
     check_running,
     energy_cap,
     n_checks_for,
+    resolve_method,
     trap_margin,
 )
 from .layout import point_group
@@ -108,6 +109,47 @@ def _step(theta, theta_dot, w2, a2, dt, torque=0.0):
             theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v))
 
 
+def _trigfree_step(theta, theta_dot, c, s, w2, a2, dt, torque=0.0):
+    """One RK4 step of (θ, θ̇, cos θ, sin θ), method "rk4-trigfree", written as
+    :data:`atlas.kernels.trigfree._TRIGFREE_STEP` (with τ = 0 the terms τ − x are −x
+    exactly, as in :func:`_step`)."""
+    h2 = 0.5 * dt
+    k1v = torque - w2 * s - a2 * theta_dot
+    k1c, k1s = -s * theta_dot, c * theta_dot
+    v2, c2, s2 = theta_dot + h2 * k1v, c + h2 * k1c, s + h2 * k1s
+    k2v = torque - w2 * s2 - a2 * v2
+    k2c, k2s = -s2 * v2, c2 * v2
+    v3, c3, s3 = theta_dot + h2 * k2v, c + h2 * k2c, s + h2 * k2s
+    k3v = torque - w2 * s3 - a2 * v3
+    k3c, k3s = -s3 * v3, c3 * v3
+    v4, c4, s4 = theta_dot + dt * k3v, c + dt * k3c, s + dt * k3s
+    k4v = torque - w2 * s4 - a2 * v4
+    k4c, k4s = -s4 * v4, c4 * v4
+    h6 = dt / 6.0
+    return (theta + h6 * (theta_dot + 2.0 * (v2 + v3) + v4),
+            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
+            c + h6 * (k1c + 2.0 * (k2c + k3c) + k4c),
+            s + h6 * (k1s + 2.0 * (k2s + k3s) + k4s))
+
+
+def _steps(theta, theta_dot, n, w2, a2, dt, torque, method, thetas, speeds):
+    """``n`` steps of ``method`` from (θ, θ̇), appended to ``thetas``/``speeds``; returns the
+    last state. For "rk4-trigfree", (cos θ, sin θ) are re-synchronised from θ (libm) first,
+    as the method's scalar form does at every trap test."""
+    if method == "rk4-trigfree":
+        c, s = math.cos(theta), math.sin(theta)
+        for _ in range(n):
+            theta, theta_dot, c, s = _trigfree_step(theta, theta_dot, c, s, w2, a2, dt, torque)
+            thetas.append(theta)
+            speeds.append(theta_dot)
+        return theta, theta_dot
+    for _ in range(n):
+        theta, theta_dot = _step(theta, theta_dot, w2, a2, dt, torque)
+        thetas.append(theta)
+        speeds.append(theta_dot)
+    return theta, theta_dot
+
+
 def _well_energy(theta, theta_dot, w2, torque=0.0, shift=0.0, vers=0.0):
     """(k, E_k) as the kernels compute them: :func:`atlas.kernels.rk4.make_well_energy` for
     τ = 0, :func:`atlas.kernels.rk4.make_well_energy_torque` (θ* = ``shift``,
@@ -147,7 +189,7 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
               torque: float = 0.0, running: RunningBarrier | None = None,
               dt: float = defaults.DT, t_max: float = defaults.T_MAX,
               check_every: int = CHECK_EVERY, settle: float = 1e-3,
-              turns: float = 2.0) -> Orbit:
+              turns: float = 2.0, method: str = defaults.METHOD) -> Orbit:
     """Follow one orbit of θ̈ = −ω0² sin θ − 2αθ̇ + τ (τ = ``torque`` [rad s⁻²]) with atlas's
     RK4 and certificates (module docstring), tested at the kernels' check steps in the
     kernels' order: the energy trap first, then the running certificate ``running`` (a
@@ -156,10 +198,13 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
     E_k < ``settle`` times the trap's saddle energy (for the pictures), after the running
     certificate for ``turns`` more turns, either at most to t_max. Raises ValueError for
     settings atlas cannot certify (:func:`atlas.labels.check_integration`) or a barrier whose
-    direction is not sign(τ), TypeError for a ``running`` that is not a RunningBarrier."""
+    direction is not sign(τ), TypeError for a ``running`` that is not a RunningBarrier.
+    ``method``: the discretisation (:data:`atlas.kernels.METHODS`), as :func:`atlas.label`'s
+    straightforward kernel of that method steps it."""
     torque = float(torque)
     check_integration(alpha, omega0, dt, t_max, check_every, torque)
     check_running(running, torque)
+    method = resolve_method("cpu", "straightforward", method)
     theta0, theta_dot0 = float(theta0), float(theta_dot0)
     w2, a2 = omega0 * omega0, 2.0 * alpha
     margin = trap_margin(dt, alpha, omega0)
@@ -188,27 +233,18 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
             break
         if j == n_checks:
             break
-        for _ in range(check_every):
-            th, v = _step(th, v, w2, a2, dt, torque)
-            thetas.append(th)
-            speeds.append(v)
+        th, v = _steps(th, v, check_every, w2, a2, dt, torque, method, thetas, speeds)
     limit = n_checks * check_every
     if result["status"] == TRAPPED:
         level = settle * (2.0 * w2 if torque == 0.0 else
                           min(_saddle_energies(alpha, omega0, torque)))
         while (len(thetas) - 1 < limit
                and _well_energy(th, v, w2, torque, shift, vers)[1] > level):
-            for _ in range(check_every):
-                th, v = _step(th, v, w2, a2, dt, torque)
-                thetas.append(th)
-                speeds.append(v)
+            th, v = _steps(th, v, check_every, w2, a2, dt, torque, method, thetas, speeds)
     elif result["status"] == RUNNING:
         start = th
         while len(thetas) - 1 < limit and abs(th - start) < turns * TWO_PI:
-            for _ in range(check_every):
-                th, v = _step(th, v, w2, a2, dt, torque)
-                thetas.append(th)
-                speeds.append(v)
+            th, v = _steps(th, v, check_every, w2, a2, dt, torque, method, thetas, speeds)
     theta, theta_dot = np.array(thetas), np.array(speeds)
     return Orbit(theta0, theta_dot0, float(alpha), float(omega0), float(dt), float(t_max),
                  np.arange(theta.size) * dt, theta, theta_dot, cap=cap, margin=margin,
@@ -366,6 +402,7 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
 
     tree = point = None
     nearest = None
+    method = defaults.METHOD
     shift = tol = math.nan
     index = {}
     stored_cycle = None
@@ -384,6 +421,7 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
                 raise AtlasError(f"--{name.replace('_', '-')} {given:g}: {path} was computed "
                                  f"with {name} = {stored:g}; drop the option")
         dt, t_max = file_dt, file_t_max
+        method = str(ds.attrs.get("method", defaults.METHOD))
         nearest = _nearest(point, theta0, theta_dot0)
         if "boundary_shift" in point:
             shift = float(point["boundary_shift"])
@@ -404,9 +442,10 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
         else:
             barrier, cycle = running_barrier_for(alpha, omega0, torque, dt, stored_cycle)
         orbit = integrate(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=torque,
-                          running=barrier, dt=dt, t_max=t_max)
+                          running=barrier, dt=dt, t_max=t_max, method=method)
         kernel = atlas.label(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=torque,
-                             running=barrier, dt=dt, t_max=t_max, kernel="straightforward")
+                             running=barrier, dt=dt, t_max=t_max, kernel="straightforward",
+                             method=method)
     except (ValueError, OverflowError) as exc:
         raise AtlasError(str(exc)) from None
     orbit = dataclasses.replace(orbit, cycle=cycle)
@@ -414,7 +453,7 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
     tilt = f", torque = {torque:g} rad/s^2" if torque else ""
     lines = [f"orbit        from theta0 = {theta0:.10g} rad, theta_dot0 = {theta_dot0:.10g} "
              f"rad/s; alpha = {alpha:g} 1/s, omega0 = {omega0:g} rad/s{tilt}, dt = {dt:g} s, "
-             f"t_max = {t_max:g} s"]
+             f"t_max = {t_max:g} s, method {method}"]
     same = (int(kernel.status) == orbit.status
             and (orbit.k is None or int(kernel.attractor) == orbit.k))
     kernel_k = ("" if int(kernel.status) != TRAPPED else f", k = {int(kernel.attractor)}")

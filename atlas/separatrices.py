@@ -202,15 +202,16 @@ class _Labeller:
     of θ, so θ never changes again: a fixed point of the floating-point map. Bisection treats
     such samples as unknown and brackets around them (``unresolved`` counts them)."""
 
-    def __init__(self, p: Pendulum, dt: float, t_max: float, backend: str = "cpu"):
+    def __init__(self, p: Pendulum, dt: float, t_max: float, backend: str = "cpu",
+                 method: str = defaults.METHOD):
         # never more steps than an orbit may take (atlas.limits.MAX_STEPS)
-        self.p, self.dt, self.backend = p, dt, backend
+        self.p, self.dt, self.backend, self.method = p, dt, backend, method
         self.t_max = min(t_max, 0.99 * MAX_STEPS * dt)
         self.orbits = self.unresolved = self.nonfinite = 0
 
     def __call__(self, theta: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
         res = label(theta, theta_dot, alpha=self.p.alpha, omega0=self.p.omega0, dt=self.dt,
-                    t_max=self.t_max, backend=self.backend)
+                    t_max=self.t_max, backend=self.backend, method=self.method)
         k, status = res.attractor.astype(np.int64), res.status
         self.orbits += theta.size
         self.unresolved += int(np.sum(status == UNRESOLVED))
@@ -573,7 +574,7 @@ def _needed(g: _Predicted, window: Window) -> _Predicted:
 
 
 def _axis_crossings(m: StableManifold, saddles: np.ndarray, tol: float, dt: float,
-                    backend: str):
+                    backend: str, method: str):
     """θ̇0 [rad s⁻¹] where the stable manifold of each saddle nπ meets the axis θ0 = 0, the
     boundary between basins (n − 1)/2 below and (n + 1)/2 above.
 
@@ -589,7 +590,7 @@ def _axis_crossings(m: StableManifold, saddles: np.ndarray, tol: float, dt: floa
         m = m.extended(float(u.min()))
     travel = m.tau_at(u) if u.size else np.zeros(0)
     labels = _Labeller(m.pendulum, dt, travel.max(initial=0.0) + _linger(m.pendulum, tol),
-                       backend)
+                       backend, method)
     predicted = np.sign(saddles) * m.at(travel)[1]
     base = np.column_stack([np.zeros(saddles.size), predicted])
     k_above = (saddles + 1) // 2
@@ -720,6 +721,7 @@ def trace(
     max_spacing: float = defaults.MAX_SPACING,
     dt: float = defaults.DT,
     backend: str = "cpu",
+    method: str = defaults.METHOD,
 ) -> xr.Dataset:
     """Trace every basin boundary in the window: the branches of the stable manifolds of the
     saddles (nπ, 0), inside the window or not, that enter it.
@@ -727,7 +729,8 @@ def trace(
     ``theta_window`` = (θmin, θmax) [rad], ``theta_dot_window`` = (θ̇min, θ̇max) [rad s⁻¹];
     ``tol``: bisection tolerance, the width [rad-ish] across the curve below which a point is
     accepted; ``max_spacing``: largest distance between vertices (the chord error stays below
-    max_spacing²/8); ``dt`` [s]: RK4 step of the labels, the same as the basin map's.
+    max_spacing²/8); ``dt`` [s]: RK4 step of the labels, the same as the basin map's;
+    ``method``: their discretisation (:data:`atlas.kernels.METHODS`), the basin map's.
 
     Method, accuracy and references: see the module docstring. Returns the ``/separatrices``
     group: per ``point`` the coordinates ``saddle_theta``, ``saddle_n``, ``branch`` (0 left,
@@ -766,7 +769,7 @@ def trace(
 
     # vertices: t_max covers their travel τ and lingering down to δ ≈ tol²; unresolved ones
     # are stuck in floating point (see _Labeller), so a longer t_max would not help them
-    labels = _Labeller(p, dt, tau.max(initial=0.0) + _linger(p, tol), backend)
+    labels = _Labeller(p, dt, tau.max(initial=0.0) + _linger(p, tol), backend, method)
     normal = np.column_stack(_normal(p, base[:, 0], base[:, 1]))
     lo, hi = _locate(labels, base, normal, (saddle_n + 1) // 2, run, tau, tol)
     point = base + 0.5 * (lo + hi)[:, None] * normal
@@ -780,7 +783,7 @@ def trace(
                    point[source, 1])
     saddles = np.unique(stored_n).astype(np.int64)
     crossing, crossing_width, k_above, axis_labels = _axis_crossings(reference, saddles, tol,
-                                                                     dt, backend)
+                                                                     dt, backend, method)
     crossing_in_window = (window.margin(0.0, crossing) >= 0).astype(np.int8)
 
     problems = []
@@ -832,9 +835,10 @@ def trace(
             "n_unresolved": labels.unresolved + axis_labels.unresolved,
             "warnings": "\n".join(problems),
             "method": (
-                "basin boundaries of the RK4 map (step dt): the left branch of pi and the "
-                "right branch of -pi, vertices predicted on the exact stable manifold (DOP853 "
-                "in reversed time, rtol = atol = 1e-13, from 1e-7 along the stable "
+                f"basin boundaries of the RK4 map (step dt, method {method}): the left "
+                "branch of pi and the right branch of -pi, vertices predicted on the exact "
+                "stable manifold (DOP853 in reversed time, rtol = atol = 1e-13, from 1e-7 "
+                "along the stable "
                 "eigenvector, essay eqs. 22, 24; the right branch its point reflection), "
                 "spacing <= max_spacing and <= max_spacing/sqrt(curvature); each vertex "
                 "located by bisection/multisection across the curve on certified RK4 labels "
@@ -926,8 +930,9 @@ class _RunningLabeller(_Labeller):
     """Certified labels with torque: well k, :data:`atlas.tilted.RUNNING_SIDE` for an orbit in
     the running barrier, ``NO_LABEL`` for neither."""
 
-    def __init__(self, p: Pendulum, dt: float, t_max: float, barrier, backend: str = "cpu"):
-        super().__init__(p, dt, t_max, backend)
+    def __init__(self, p: Pendulum, dt: float, t_max: float, barrier, backend: str = "cpu",
+                 method: str = defaults.METHOD):
+        super().__init__(p, dt, t_max, backend, method)
         self.barrier = barrier
 
     def __call__(self, theta: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
@@ -936,7 +941,7 @@ class _RunningLabeller(_Labeller):
 
         res = label(theta, theta_dot, alpha=self.p.alpha, omega0=self.p.omega0,
                     torque=self.p.torque, dt=self.dt, t_max=self.t_max, backend=self.backend,
-                    running=self.barrier)
+                    method=self.method, running=self.barrier)
         k, status = res.attractor.astype(np.int64), res.status
         self.orbits += theta.size
         self.unresolved += int(np.sum(status == UNRESOLVED))
@@ -990,7 +995,8 @@ def _bisect_between(labels, base, normal, below, above, *, tol: float, half_widt
 def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
                  tol: float = defaults.SEPARATRIX_TOL, max_spacing: float = defaults.MAX_SPACING,
                  dt: float = defaults.DT, t_max: float = defaults.T_MAX,
-                 backend: str = "cpu", exact=None, barrier=None) -> xr.Dataset:
+                 backend: str = "cpu", method: str = defaults.METHOD, exact=None,
+                 barrier=None) -> xr.Dataset:
     """The basin boundaries of the RK4 map for a pendulum with torque 0 < |τ| < ω0², the
     counterpart of :func:`trace` (same arguments; ``t_max`` [s] the atlas's, to which the
     lingering time at a saddle is added).
@@ -1032,7 +1038,7 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
         exact = TiltedBoundaries(p, window.theta, window.theta_dot)
         barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.cycle, dt=dt) \
             if exact.cycle is not None else None
-    labels = _RunningLabeller(p, dt, t_max + _linger(p, tol), barrier, backend)
+    labels = _RunningLabeller(p, dt, t_max + _linger(p, tol), barrier, backend, method)
 
     rows = []  # (saddle j, branch, vertex index, θ, θ̇)
     for j, name, theta, theta_dot in exact.curves(clip=False):
@@ -1118,10 +1124,11 @@ def trace_tilted(pendulum: Pendulum, theta_window, theta_dot_window, *,
             "n_orbits": labels.orbits, "n_unresolved": labels.unresolved,
             "warnings": "\n".join(problems),
             "method": (
-                "basin boundaries of the RK4 map (step dt) with torque: vertices on the exact "
-                "stable branches of the tilted saddles (atlas.tilted: DOP853 in reversed time, "
-                "rtol = atol = 1e-13), at most max_spacing apart; each located by bisection "
-                "across the curve on certified RK4 labels (tilted trap, running barrier) "
+                f"basin boundaries of the RK4 map (step dt, method {method}) with torque: "
+                "vertices on the exact stable branches of the tilted saddles (atlas.tilted: "
+                "DOP853 in reversed time, rtol = atol = 1e-13), at most max_spacing apart; "
+                "each located by bisection across the curve on certified RK4 labels (tilted "
+                "trap, running barrier) "
                 "until the bracket is narrower than tol; every copy located on its own "
                 "labels (shift_error: the 2 pi shift between copies); discrepancy = max "
                 "distance of the points to the exact boundaries"),

@@ -37,7 +37,7 @@ from . import defaults, lazy_dask, running, store, zarrstore  # noqa: F401 (lazy
 from .certificate import Certifier, add_tallies, certifier_for
 from .config import Config, config_hash
 from .errors import AtlasError, InputFileError, StorageError
-from .labels import CHECK_EVERY, RunningBarrier, label, trap_margin
+from .labels import CHECK_EVERY, RunningBarrier, check_method, label, trap_margin
 from .layout import PARAMETERS, Layout, node_name, point_label
 from .lock import output_lock
 from .model import Pendulum, critical_points
@@ -100,10 +100,11 @@ def _pendulums(layout: Layout) -> list[Pendulum]:
 
 
 def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice, dt, t_max,
-                 backend="cpu", numba_threads=None):
+                 method=defaults.METHOD, backend="cpu", numba_threads=None):
     """Label and certify the orbits of one tile: the grid rows ``rows`` of ``certifier``'s
     parameter point (θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows); ``barrier`` the
-    point's running certificate (None where it has no running limit cycle).
+    point's running certificate (None where it has no running limit cycle); ``dt`` [s],
+    ``t_max`` [s] and ``method`` the integrator's.
 
     Returns ({variable: array shaped (rows, columns)} for every per-orbit variable of the
     file, the tile's tally). A plain function of picklable arguments, so it can run as a Dask
@@ -116,7 +117,7 @@ def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: sli
     p = certifier.pendulum
     res = label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
                 omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
-                running=barrier)
+                method=method, running=barrier)
     status, distance, tally = certifier.tile(rows, res.attractor, res.status)
     return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
             "boundary_distance": distance}, tally
@@ -124,7 +125,8 @@ def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: sli
 
 def _tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
     certifier, barrier = certifiers[index // layout.bands]
-    return (certifier, barrier, layout.tile(index)[1], cfg.integrator.dt, cfg.integrator.t_max)
+    return (certifier, barrier, layout.tile(index)[1], cfg.integrator.dt, cfg.integrator.t_max,
+            cfg.integrator.method)
 
 
 #: Held by the thread computing a tile ahead: a sweep's tile waits for one that an interrupted
@@ -257,7 +259,7 @@ def _trace_separatrices(cfg: Config, pendulums: list[Pendulum], tilted: list,
 
     window = _window(cfg)
     settings = {"tol": cfg.separatrices.tol, "max_spacing": cfg.separatrices.max_spacing,
-                "dt": cfg.integrator.dt}
+                "dt": cfg.integrator.dt, "method": cfg.integrator.method}
     return [separatrices.trace(p, *window, **settings) if p.torque == 0.0 else
             separatrices.trace_tilted(p, *window, t_max=cfg.integrator.t_max, exact=exact,
                                       barrier=barrier, **settings)
@@ -369,7 +371,7 @@ def _attrs(cfg: Config, identity: dict) -> dict:
         "title": f"atlas basin map: {cfg.name}",
         "Conventions": "CF-1.10",
         "format_version": np.int64(FORMAT_VERSION),
-        "method": "rk4",
+        "method": cfg.integrator.method,
         "dt": cfg.integrator.dt,
         "t_max": cfg.integrator.t_max,
         "check_every": np.int64(CHECK_EVERY),
@@ -571,6 +573,10 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
 
     check_output_target(cfg.output, config_path, force=force)
     backend = backend or cfg.execution.backend
+    try:
+        check_method(cfg.integrator.method, backend)
+    except ValueError as exc:
+        raise AtlasError(f"integrator.{exc}") from None
     layout = layout_of(cfg, backend)
     if backend == "cuda":
         from .kernels.cuda import require_cuda

@@ -36,6 +36,7 @@ import numbers
 import numpy as np
 
 from .errors import InputFileError
+from .kernels import METHODS
 from .layout import PARAMETERS, point_nodes
 
 __all__ = ["FORMAT_VERSION", "check_tree", "check_dataset", "parse_config", "MAP_VARIABLES"]
@@ -198,6 +199,9 @@ def check_dataset(ds, path) -> None:
         every = _number(attrs, "check_every", path, positive=True)
         if every != int(every):
             _refuse(path, f"attribute check_every = {every!r} is not an integer")
+    if "method" in attrs and attrs["method"] not in METHODS:
+        _refuse(path, f"attribute method = {str(attrs['method'])[:40]!r} is not one of "
+                f"{', '.join(METHODS)}")
     parse_config(attrs, path)
 
 

@@ -3,8 +3,9 @@
 The page (no server, no network: every script, style and image is inline) shows the basin map
 of each parameter point as a PNG at the grid's native resolution with its separatrices and
 critical points (and, with a torque τ, the running basin and the running limit cycle). Clicking
-a point integrates that orbit in the browser — the same RK4 step of θ̈ = −ω0² sin θ − 2αθ̇ + τ,
-the same (tilted) energy trap and the same running certificate as atlas's kernels
+a point integrates that orbit in the browser — the same RK4 step of θ̈ = −ω0² sin θ − 2αθ̇ + τ
+(of the file's method: :mod:`atlas.kernels.rk4` or :mod:`atlas.kernels.trigfree`), the same
+(tilted) energy trap and the same running certificate as atlas's kernels
 (:mod:`atlas.kernels.rk4`, :func:`atlas.labels.energy_cap`, the barrier of
 :func:`atlas.running.running_barrier` that the sweep built for the file), tested every
 ``check_every`` steps — draws its phase curve, animates the pendulum along it, and shows the
@@ -40,7 +41,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import lazy_dask  # noqa: F401 (installs itself)
+from . import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from .errors import AtlasError, InputFileError
 from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
 from .labels import CHECK_EVERY, energy_cap, trap_margin
@@ -217,6 +218,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         "created": _text(ds.attrs.get("created", "")),
         "atlas_version": _text(ds.attrs.get("atlas_version", "")),
         "dt": dt, "t_max": t_max, "check_every": check_every,
+        "method": str(ds.attrs.get("method", defaults.METHOD)),
         "theta0": _uniform(ds["theta0"].values, "theta0", path),
         "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
         "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
@@ -305,7 +307,7 @@ style-src 'unsafe-inline'; script-src 'sha256-/*HASH*/'">
     <p id="clock"></p>
     <div id="readout" data-ready="0">
       <p class="hint">Click anywhere on the map: the orbit from that initial condition is
-      integrated here in the browser (RK4 with the file's α, ω0, τ and dt, the energy trap
+      integrated here in the browser (RK4 with the file's α, ω0, τ, dt and method, the energy trap
       and the running certificate of atlas) and drawn in black.</p>
     </div>
   </aside>

@@ -103,6 +103,17 @@ def test_cuda_backend_without_a_gpu_is_one_clear_line(small_config, tmp_path):
 
 
 @pytest.mark.slow
+def test_a_cuda_override_of_a_trigfree_config_is_one_clear_line(tmp_path):
+    """``--backend cuda`` on a config with ``integrator.method: rk4-trigfree``: refused before
+    anything is written (the CUDA kernels run rk4 only), GPU or not."""
+    cfg = tmp_path / "tf.yaml"
+    cfg.write_text(f"integrator: {{method: rk4-trigfree}}\noutput: {tmp_path / 'tf.h5'}\n")
+    proc = run_cli("run", cfg, "--backend", "cuda")
+    _one_clean_line(proc, "integrator.method: 'rk4-trigfree' has no CUDA kernel")
+    assert list(tmp_path.iterdir()) == [cfg]
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("text,message", BAD, ids=[m for _, m in BAD])
 def test_every_bad_config_through_the_cli(tmp_path, text, message):
     out = tmp_path / "out.h5"

@@ -1,5 +1,6 @@
-"""The trig-free method (atlas.kernels.trigfree, the default CPU method): its certified labels
-are the exact equation's, its kernels against its plain form, and how atlas.label selects it.
+"""The trig-free method (atlas.kernels.trigfree, ``integrator.method: rk4-trigfree``): its
+certified labels are the exact equation's, its kernels against its plain form, how atlas.label
+selects it, and a whole atlas run, orbit and separatrices with it.
 
 Order 4 is fitted in tests/test_rk4.py, the energy trap's margin measured for it in
 tests/test_labels.py, the lane machinery's thread independence in tests/test_lanes.py.
@@ -52,15 +53,13 @@ def test_default_cpu_method_is_classical_rk4():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0.1, 2.0])
-def test_certified_trigfree_labels_are_the_exact_equations(alpha, monkeypatch):
+def test_certified_trigfree_labels_are_the_exact_equations(alpha):
     """Random points of the window plus points 1.5 and 3 d_cert off the exact boundaries,
-    labelled with method "rk4-trigfree"; d_cert from the separatrix bisection, which labels
-    with atlas.label's default kernel (made the same method here: asserted). Every label
-    certified (boundary distance > d_cert, on the exact side) must be DOP853's."""
-    monkeypatch.setattr(atlas.labels, "DEFAULT_METHOD", "rk4-trigfree")
-    assert resolve_method("cpu", None, None) == "rk4-trigfree"
+    labelled with method "rk4-trigfree"; d_cert from the separatrix bisection on labels of
+    the same method. Every label certified (boundary distance > d_cert, on the exact side)
+    must be DOP853's."""
     p = Pendulum(alpha, 1.0)
-    sep = separatrices.trace(p, *WINDOW)
+    sep = separatrices.trace(p, *WINDOW, method="rk4-trigfree")
     cert = Certifier(p, np.linspace(*WINDOW[0], 64), np.linspace(*WINDOW[1], 48),
                      float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
     rng = np.random.default_rng(5)
@@ -135,10 +134,67 @@ def test_edge_cases_take_the_scalar_form():
             np.testing.assert_array_equal(x[idx], y[idx], err_msg=name)
 
 
-def test_default_labels_differ_from_rk4_only_on_boundary_cells():
+def test_trigfree_labels_differ_from_rk4_only_on_boundary_cells():
     th, v = _grid(64, 64)
-    new = atlas.label(th, v, alpha=0.1, omega0=1.0)
-    old = atlas.label(th, v, alpha=0.1, omega0=1.0, method="rk4")
+    new = atlas.label(th, v, alpha=0.1, omega0=1.0, method="rk4-trigfree")
+    old = atlas.label(th, v, alpha=0.1, omega0=1.0)
     np.testing.assert_array_equal(new.status, old.status)
     differ = (new.attractor != old.attractor).reshape(64, 64)
     assert not (differ & ~boundary_adjacent(old.attractor.reshape(64, 64))).any()
+
+
+@pytest.mark.slow
+def test_an_atlas_run_with_the_trigfree_method(tmp_path):
+    """``integrator.method: rk4-trigfree``: the file's labels are atlas.label's with that
+    method, the file says so, and its separatrices (which set d_cert) are the boundaries of
+    that method's RK4 map: trace(method=...)'s, farther from the exact ones than rk4's."""
+    from atlas.config import load_config
+    from tests.helpers import write_config
+
+    cfg = load_config(write_config(tmp_path / "tf.yaml", f"""\
+        name: trig-free
+        grid:
+          theta0: {{start: -3pi, stop: 3pi, num: 40}}
+          theta_dot0: {{start: -4, stop: 4, num: 24}}
+        integrator: {{method: rk4-trigfree}}
+        output: {tmp_path / 'tf.h5'}
+    """))
+    assert cfg.integrator.method == "rk4-trigfree"
+    tree = atlas.run(cfg, quiet=True)
+    ds = tree.to_dataset(inherit=False)
+    assert ds.attrs["method"] == "rk4-trigfree"
+    th, v = np.meshgrid(ds["theta0"].values, ds["theta_dot0"].values)
+    ref = atlas.label(th, v, alpha=0.1, omega0=1.0, method="rk4-trigfree")
+    np.testing.assert_array_equal(ds["attractor"].values, ref.attractor)
+    np.testing.assert_array_equal(ds["t_trap"].values, ref.t_trap)
+    sep = tree["separatrices"].to_dataset(inherit=False)
+    p = Pendulum(0.1, 1.0)
+    window = ((-3 * PI, 3 * PI), (-4.0, 4.0))
+    mine = separatrices.trace(p, *window, method="rk4-trigfree")
+    classical = separatrices.trace(p, *window)
+    assert float(sep.attrs["discrepancy"]) == float(mine.attrs["discrepancy"])
+    assert float(mine.attrs["discrepancy"]) > 2 * float(classical.attrs["discrepancy"])
+    assert "method rk4-trigfree" in sep.attrs["method"]
+    assert float(ds["boundary_shift"]) == float(mine.attrs["discrepancy"])
+
+
+def test_orbit_integrates_with_the_trigfree_method():
+    """atlas.orbit.integrate(method="rk4-trigfree") steps as the method's straightforward
+    kernel: the same status and well at random points, t_trap too but at rounding ties."""
+    from atlas.orbit import integrate
+
+    rng = np.random.default_rng(8)
+    th, v = rng.uniform(-9, 9, 80), rng.uniform(-4, 4, 80)
+    ref = atlas.label(th, v, alpha=0.1, omega0=1.0, kernel="straightforward",
+                      method="rk4-trigfree")
+    orbits = [integrate(a, b, alpha=0.1, omega0=1.0, method="rk4-trigfree")
+              for a, b in zip(th, v)]
+    np.testing.assert_array_equal([o.status for o in orbits], ref.status)
+    np.testing.assert_array_equal([o.k for o in orbits], ref.attractor)
+    assert np.mean(np.isclose([o.t_trap for o in orbits], ref.t_trap)) > 0.98
+    classical = [integrate(a, b, alpha=0.1, omega0=1.0) for a, b in zip(th[:5], v[:5])]
+    # the same steps as classical RK4 would fail this: the methods part by far more than rounding
+    assert all(abs(o.theta[n] - c.theta[n]) > 1e-12 for o, c in zip(orbits, classical)
+               for n in [min(o.theta.size, c.theta.size, 1000) - 1])
+    with pytest.raises(ValueError, match="method"):
+        integrate(0.0, 1.0, alpha=0.1, omega0=1.0, method="euler")

@@ -35,12 +35,13 @@ needs_browser = pytest.mark.skipif(
     "chromium, or set ATLAS_BROWSER); the page itself is still tested without one")
 
 
-def _run(tmp, name, alpha=0.1, num=(160, 96), sep=True, t_max=200.0):
+def _run(tmp, name, alpha=0.1, num=(160, 96), sep=True, t_max=200.0, method="rk4"):
     cfg = atlas.Config.model_validate({
         "name": name, "pendulum": {"alpha": alpha, "omega0": 1.0},
         "grid": {"theta0": {"start": "-3pi", "stop": "3pi", "num": num[0]},
                  "theta_dot0": {"start": -4, "stop": 4, "num": num[1]}},
-        "integrator": {"dt": 0.01, "t_max": t_max}, "separatrices": {"enabled": sep},
+        "integrator": {"dt": 0.01, "t_max": t_max, "method": method},
+        "separatrices": {"enabled": sep},
         "output": str(tmp / f"{abs(hash(name))}.h5")})
     atlas.run(cfg, quiet=True)
     return cfg.output
@@ -194,6 +195,40 @@ def test_page_orbits_match_atlas_labels_at_grid_points(files, browser):
         i = ref.trap_index
         assert abs(ref.theta[i] - g["theta_trap"]) + abs(ref.theta_dot[i] - g["theta_dot_trap"]) \
             < 1e-9
+
+
+@needs_browser
+def test_a_trigfree_page_integrates_with_the_files_method(tmp_path, browser):
+    """An atlas computed with method "rk4-trigfree": the page steps (θ, θ̇, cos θ, sin θ) as
+    the file's kernels did, so its orbits end in the stored wells with the stored t_trap, and
+    the state at the trap is atlas.orbit.integrate's with that method (not classical RK4's,
+    which differs by the methods' O(dt⁴) gap, far above rounding)."""
+    from atlas.orbit import integrate
+
+    path = _run(tmp_path, "trig-free", num=(48, 32), method="rk4-trigfree")
+    page = write_view(path)
+    assert _data(page)["method"] == "rk4-trigfree"
+    ds = atlas.open(path).to_dataset(inherit=False)
+    _open(browser, page)
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    rows, cols = _far_points(ds, 60, 1e-6, np.random.default_rng(5))
+    pairs = json.dumps([[float(th[i]), float(v[j])] for j, i in zip(rows, cols)])
+    got = browser.evaluate(f"{pairs}.map(([a, b]) => atlasView.orbit(a, b))")
+    np.testing.assert_array_equal([g["k"] for g in got], ds["attractor"].values[rows, cols])
+    assert np.mean(np.isclose([g["t_trap"] for g in got], ds["t_trap"].values[rows, cols])) \
+        > 0.95
+    gaps = []
+    for g in got[:20]:
+        ref = integrate(g["theta0"], g["theta_dot0"], alpha=0.1, omega0=1.0,
+                        method="rk4-trigfree")
+        rk4 = integrate(g["theta0"], g["theta_dot0"], alpha=0.1, omega0=1.0)
+        i = ref.trap_index
+        assert ref.k == g["k"] and ref.t_trap == pytest.approx(g["t_trap"])
+        assert abs(ref.theta[i] - g["theta_trap"]) \
+            + abs(ref.theta_dot[i] - g["theta_dot_trap"]) < 1e-9
+        if rk4.trap_index == i:
+            gaps.append(abs(rk4.theta[i] - g["theta_trap"]))
+    assert gaps and max(gaps) > 1e-8  # the check above can tell the methods apart
 
 
 @needs_browser

@@ -77,11 +77,8 @@ RUNNING_NEAR_BOUNDARY = 5
 #: Attractor index where status ≠ trapped in a label result (int16; also the file's
 #: _FillValue), the counterpart of the status codes above.
 ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
-#: Discretisations the CPU kernels offer; the first is the default. Classical RK4 stays the
-#: default: the trig-free variant is about 2.4x faster but its error is 1-30x larger at the
-#: same dt (the RK4 map's basin boundaries shift 6x further from the exact ones, 4e-9 against
-#: 6.4e-10 at the default settings, so d_cert grows alike), and the atlas page integrates
-#: clicked orbits with classical RK4 to match the file.
+#: Discretisations the CPU kernels offer (a config's ``integrator.method``; the default is
+#: :data:`atlas.defaults.METHOD`, "rk4": the CUDA kernels' method too).
 METHODS = ("rk4", "rk4-trigfree")
 
 

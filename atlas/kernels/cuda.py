@@ -14,13 +14,13 @@ floating-point options rather than the CPU fast-math set; no copied method). Two
   of the reduced angle, which is the CPU's k = round(θ/2π) exactly (both are the nearest well;
   they could differ only at θ ≡ π mod 2π, where E_k ≥ 2ω0² and nothing is trapped).
 
-The method is "rk4" (:data:`atlas.kernels.METHODS`); the CPU's default "rk4-trigfree" has no
-CUDA kernel, so GPU labels differ from default CPU labels on basin-boundary cells (the two
-methods' trajectories differ by O(dt⁴)), and a GPU run measures its own d_cert (the separatrix
-bisection labels with the backend it is given). Labels, status and n_trap agree with the CPU
-kernel of method "rk4" exactly except for orbits whose fate is decided by rounding (within
-~1e-12 of a separatrix, or an energy within ~1e-13 of the cap at a test): libdevice's sin,
-the polynomial sin and FMA contraction each round differently from the CPU's libm sin.
+The method is "rk4" (:data:`atlas.kernels.METHODS`), the default; "rk4-trigfree" has no CUDA
+kernel (a config asking for it on the cuda backend is refused). A GPU run's d_cert comes from
+the separatrix bisection on the CPU kernels of the same method. Labels, status and n_trap
+agree with the CPU kernel of method "rk4" exactly except for orbits whose fate is decided by
+rounding (within ~1e-12 of a separatrix, or an energy within ~1e-13 of the cap at a test):
+libdevice's sin, the polynomial sin and FMA contraction each round differently from the CPU's
+libm sin.
 ``tests/test_cuda.py`` checks equality on a grid and hand-picked orbits.
 
 Torque. :func:`kernels` compiles the τ = 0 kernels of earlier versions, unchanged;

@@ -2,12 +2,12 @@
 
 Two methods share one lane machinery (:func:`make_label_chunk`):
 
-* :func:`label_trigfree` — method "rk4-trigfree", the default: RK4 on (θ, θ̇, cos θ, sin θ)
+* :func:`label_trigfree` — method "rk4-trigfree": RK4 on (θ, θ̇, cos θ, sin θ)
   with no trigonometric function in a step (:mod:`atlas.kernels.trigfree`); (c, s) are
   re-synchronised from θ at every trap test, where the energy needs cos θ anyway. Measured
   side by side (``atlas bench``) ≈ 2× the bulk RK4 steps/s of ``label_lanes``.
-* :func:`label_lanes` — method "rk4": classical RK4 on (θ, θ̇) with a polynomial sin per stage,
-  the same definition as the straightforward kernel (``make_rk4_step``).
+* :func:`label_lanes` — method "rk4", the default: classical RK4 on (θ, θ̇) with a polynomial
+  sin per stage, the same definition as the straightforward kernel (``make_rk4_step``).
 
 Both follow the kernel contract of :mod:`atlas.kernels` exactly (same arguments, outputs and
 semantics as :func:`~atlas.kernels.rk4.label_straightforward`), and return how many orbits

@@ -81,10 +81,12 @@
     return g[i] + (t - i) * (g[i + 1] - g[i]);
   }
 
-  // One orbit of θ̈ = −ω0² sin θ − 2αθ̇ + τ: atlas's RK4 step, the (tilted) energy trap and
-  // then the running certificate, tested every check_every steps in the kernels' order and
-  // arithmetic (atlas.kernels.rk4). After the trap the orbit is followed on (for the
-  // picture) until it has nearly settled; after the running certificate for two more turns.
+  // One orbit of θ̈ = −ω0² sin θ − 2αθ̇ + τ: atlas's RK4 step (the file's method: "rk4", or
+  // "rk4-trigfree" with cos θ, sin θ carried as state and re-synchronised from θ at every
+  // trap test, atlas.kernels.trigfree), the (tilted) energy trap and then the running
+  // certificate, tested every check_every steps in the kernels' order and arithmetic
+  // (atlas.kernels.rk4). After the trap the orbit is followed on (for the picture) until it
+  // has nearly settled; after the running certificate for two more turns.
   function integrate(theta0, thetaDot0, p) {
     const a = p.alpha, w = p.omega0, tq = p.torque || 0, dt = D.dt, ce = D.check_every;
     const w2 = w * w, a2 = 2 * a, h2 = 0.5 * dt, h6 = dt / 6;
@@ -93,7 +95,7 @@
     const nChecks = Math.max(1, Math.ceil(D.t_max / (dt * ce) - 1e-9));
     let th = theta0, v = thetaDot0;
     const path = [th, v];
-    const step = () => {  // with τ = 0, τ − x is −x exactly: the untilted step
+    const rk4 = () => {  // with τ = 0, τ − x is −x exactly: the untilted step
       const k1t = v, k1v = tq - w2 * Math.sin(th) - a2 * v;
       const k2t = v + h2 * k1v, k2v = tq - w2 * Math.sin(th + h2 * k1t) - a2 * k2t;
       const k3t = v + h2 * k2v, k3v = tq - w2 * Math.sin(th + h2 * k2t) - a2 * k3t;
@@ -101,6 +103,29 @@
       th += h6 * (k1t + 2 * (k2t + k3t) + k4t);
       v += h6 * (k1v + 2 * (k2v + k3v) + k4v);
       path.push(th, v);
+    };
+    let c = 0, s = 0;
+    const trigfree = () => {  // RK4 on (θ, θ̇, c, s): c' = −s θ̇, s' = c θ̇
+      const k1v = tq - w2 * s - a2 * v, k1c = -s * v, k1s = c * v;
+      const v2 = v + h2 * k1v, c2 = c + h2 * k1c, s2 = s + h2 * k1s;
+      const k2v = tq - w2 * s2 - a2 * v2, k2c = -s2 * v2, k2s = c2 * v2;
+      const v3 = v + h2 * k2v, c3 = c + h2 * k2c, s3 = s + h2 * k2s;
+      const k3v = tq - w2 * s3 - a2 * v3, k3c = -s3 * v3, k3s = c3 * v3;
+      const v4 = v + dt * k3v, c4 = c + dt * k3c, s4 = s + dt * k3s;
+      const k4v = tq - w2 * s4 - a2 * v4, k4c = -s4 * v4, k4s = c4 * v4;
+      th += h6 * (v + 2 * (v2 + v3) + v4);
+      v += h6 * (k1v + 2 * (k2v + k3v) + k4v);
+      c += h6 * (k1c + 2 * (k2c + k3c) + k4c);
+      s += h6 * (k1s + 2 * (k2s + k3s) + k4s);
+      path.push(th, v);
+    };
+    const steps = () => {  // check_every steps from a trap test
+      if (D.method === "rk4-trigfree") {
+        c = Math.cos(th); s = Math.sin(th);
+        for (let i = 0; i < ce; i++) trigfree();
+      } else {
+        for (let i = 0; i < ce; i++) rk4();
+      }
     };
     const energy = () => {
       if (tq === 0) {
@@ -134,18 +159,18 @@
         break;
       }
       if (j === nChecks) break;
-      for (let i = 0; i < ce; i++) step();
+      steps();
     }
     r.trap_index = path.length / 2 - 1;
     if (r.status === "trapped") {
       const level = 1e-3 * (tq === 0 ? 2 * w2 : p.saddle_energy);
       while (path.length / 2 - 1 < nChecks * ce && energy()[1] > level) {
-        for (let i = 0; i < ce; i++) step();
+        steps();
       }
     } else if (r.status === "running") {
       const start = th;
       while (path.length / 2 - 1 < nChecks * ce && Math.abs(th - start) < 2 * TWO_PI) {
-        for (let i = 0; i < ce; i++) step();
+        steps();
       }
     }
     r.theta_end = th; r.theta_dot_end = v;
