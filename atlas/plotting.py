@@ -496,8 +496,9 @@ def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
     mesh = _grid_image(ax, grid, k, cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
     cbar.ax.set_yticklabels(names)
-    cbar.set_label("attractor k: orbit settles at the rest state of well k"
-                   + ("; running: rotates" if running else ""))
+    cbar.set_label("attractor k: orbit settles at the rest state of well k" if not running
+                   else "attractor k: orbit settles at the rest state of well k;\n"
+                   "running: orbit rotates (the running limit cycle)")
     _draw_separatrices(ax, separatrices)
     if cycle is not None:
         _draw_limit_cycle(ax, grid[0][0], grid[0][-1], *cycle)

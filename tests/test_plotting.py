@@ -345,3 +345,25 @@ def test_a_figure_that_fails_in_a_drawing_process_fails_atlas_plot(sweep_tree, t
     with pytest.raises(ValueError, match="no colour for this") as raised:
         main(["plot", str(bad)])
     assert "savefig" in str(raised.value.__cause__)  # where it was raised, over there
+
+
+@pytest.mark.parametrize("figure", ["basin", "trap_time", "boundary_distance"])
+@pytest.mark.parametrize("which", ["untilted", "torque"])
+def test_nothing_is_cut_off_at_a_maps_edge(sweep_tree, swing_atlas, which, figure):
+    """The PNGs atlas plot writes: a margin of white all round, so no label, tick or legend
+    text runs off the figure (the torque basin map's colour-bar label is the longest), and
+    the figure is not empty."""
+    import io
+
+    from atlas import plotting
+
+    tree = sweep_tree[0] if which == "untilted" else atlas.open(swing_atlas)
+    scene = getattr(plotting, f"_{figure}_scene")(tree)
+    png = io.BytesIO()
+    plotting._draw_figure(png, plotting.MAP_SIZE, getattr(plotting, f"_draw_{figure}"), scene)
+    png.seek(0)
+    image = plt.imread(png)[..., :3]
+    white = np.all(image > 0.99, axis=-1)
+    assert white.mean() < 0.9  # something is drawn
+    for border in (white[:3], white[-3:], white[:, :3], white[:, -3:]):
+        assert border.all()
