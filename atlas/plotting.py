@@ -18,18 +18,14 @@ Each figure is read, then drawn: a reader (``_*_scene``) takes what the figure s
 tree as plain arrays and strings, a drawer (``_draw_*``) draws them and reads nothing. This
 lets ``atlas plot`` (:func:`plot_file`) read the file in one process while another imports
 matplotlib (each takes a few tenths of a second), then draw the figures in several processes
-at once. matplotlib is imported only where a figure is drawn.
+at once (:mod:`atlas.forked`). matplotlib is imported only where a figure is drawn.
 """
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import math
 import os
-import pickle
-import signal
-import sys
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -735,11 +731,15 @@ def plot_file(path: str | Path) -> list[Path]:
     """``atlas plot``: :func:`plot_atlas` of the atlas file at ``path``, opened and closed
     here.
 
-    On Linux the figures are drawn by forked processes (:class:`_Drawers`): one is started
-    first and imports matplotlib while this one opens and reads the file, then draws the
-    figures with forks of itself, on every core at once. Elsewhere (no safe ``fork``) they
-    are drawn here, after reading."""
-    drawers = _Drawers.start() if sys.platform.startswith("linux") else None
+    On Linux the figures are drawn by forked processes (:class:`atlas.forked.ForkedJobs`):
+    one is started first and imports matplotlib (:func:`_warm_up`) while this one opens and
+    reads the file, then draws the figures with forks of itself, on every core at once (one
+    process per core and one more, so that a figure that finishes first does not leave a core
+    idle: three for the three maps on 2 cores). Elsewhere (no safe ``fork``) they are drawn
+    here, after reading."""
+    from .forked import ForkedJobs, can_fork
+
+    drawers = ForkedJobs.start(_warm_up, _draw_job, _workers() + 1) if can_fork() else None
     try:
         from .store import open_atlas  # imported after the fork: xarray, h5py only here
 
@@ -749,109 +749,17 @@ def plot_file(path: str | Path) -> list[Path]:
         finally:
             tree.close()
         if drawers is None:
-            return [_draw_figure(*job) for job in jobs]
-        return drawers.draw(jobs)
+            return [_draw_job(job) for job in jobs]
+        drawers.run(jobs)
+        return [job[0] for job in jobs]
     finally:
         if drawers is not None:
             drawers.close()
 
 
-class _DrawingTraceback(Exception):
-    """The traceback (text) of an exception raised in a drawing process: the cause of the
-    exception re-raised here."""
-
-    def __str__(self) -> str:
-        return "\n" + self.args[0]
-
-
-class _Drawers:
-    """The drawing processes of :func:`plot_file`: a fork of this process that imports
-    matplotlib and draws a small figure (loading the fonts, building the log axes' mathtext
-    parser) while this one reads, then waits for the figures' jobs
-    (:func:`_figure_jobs`), draws them with :func:`_draw_all` and answers with the first
-    exception raised (None if none). Its own process group, so that closing ends it and
-    its forks at once; it draws nothing unless sent the jobs."""
-
-    @classmethod
-    def start(cls) -> _Drawers | None:
-        """The drawing process, started; None if it cannot be (the figures are then drawn
-        in this process)."""
-        try:
-            return cls()
-        except OSError:  # no process or no pipe to spare
-            return None
-
-    def __init__(self):
-        jobs_r, jobs_w = os.pipe()
-        answer_r, answer_w = os.pipe()
-        try:
-            self.pid = os.fork()
-        except OSError:
-            for fd in (jobs_r, jobs_w, answer_r, answer_w):
-                os.close(fd)
-            raise
-        if self.pid == 0:  # pragma: no cover - runs in the fork
-            os.close(jobs_w)
-            os.close(answer_r)
-            _drawing_process(jobs_r, answer_w)
-        os.close(jobs_r)
-        os.close(answer_w)
-        with contextlib.suppress(ProcessLookupError, PermissionError):  # or the child did
-            os.setpgid(self.pid, self.pid)
-        self._jobs, self._answer = os.fdopen(jobs_w, "wb"), os.fdopen(answer_r, "rb")
-        self._answered = False
-
-    def draw(self, jobs: list[tuple]) -> list[Path]:
-        """Draw ``jobs``; returns their PNG paths, or raises the first exception raised in
-        drawing them (with its traceback there as the cause)."""
-        try:
-            pickle.dump(jobs, self._jobs, pickle.HIGHEST_PROTOCOL)
-            self._jobs.close()
-            answer = pickle.load(self._answer)
-        except (BrokenPipeError, EOFError):
-            answer = _answer_of(RuntimeError("the drawing process ended without answering"))
-        self._answered = True
-        if answer is not None:
-            error, traceback = answer
-            raise error from _DrawingTraceback(traceback)
-        return [job[0] for job in jobs]
-
-    def close(self) -> None:
-        """End the drawing processes (at once unless they answered) and reap the first."""
-        self._jobs.close()
-        self._answer.close()
-        if not self._answered:
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(self.pid, signal.SIGKILL)
-        os.waitpid(self.pid, 0)
-
-
-def _drawing_process(jobs_fd: int, answer_fd: int):  # pragma: no cover - runs in the fork
-    """The life of the drawing process of :class:`_Drawers` (it ends here): warm up, read the
-    jobs from ``jobs_fd`` (none: the reader failed), draw them, answer on ``answer_fd``."""
-    code = 1
-    try:
-        os.setpgid(0, 0)
-        signal.signal(signal.SIGINT, signal.SIG_DFL)  # ended by the reader, not by Ctrl-C
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)
-        signal.signal(signal.SIGTTOU, signal.SIG_IGN)  # a background group may still warn
-        answer = None
-        try:
-            _warm_up()
-        except Exception as exc:  # the same will fail in drawing: answer it then
-            answer = _answer_of(exc)
-        with os.fdopen(jobs_fd, "rb") as f:
-            try:
-                jobs = pickle.load(f)
-            except EOFError:  # the reader failed: nothing to draw
-                code = 0
-                return
-        answer = answer or _draw_all(jobs)
-        with os.fdopen(answer_fd, "wb") as f:
-            f.write(pickle.dumps(answer, pickle.HIGHEST_PROTOCOL))
-        code = 0
-    finally:
-        os._exit(code)
+def _draw_job(job: tuple) -> Path:
+    """:func:`_draw_figure` of one of :func:`_figure_jobs`."""
+    return _draw_figure(*job)
 
 
 def _warm_up() -> None:
@@ -871,56 +779,3 @@ def _warm_up() -> None:
         ax.figure.colorbar(ScalarMappable(LogNorm(1e-16, 1e4)), ax=ax)
 
     _draw_figure(io.BytesIO(), (2, 2), draw, {})
-
-
-def _draw_all(jobs: list[tuple]) -> tuple | None:
-    """Draw ``jobs`` (:func:`_draw_figure`) in n processes at once, this one and n − 1 forks
-    of it (one per core and one more, so that a figure that finishes first does not leave a
-    core idle: n = 3 for the three maps on 2 cores), the i-th job in process i mod n; returns
-    :func:`_answer_of` the first exception raised, None if none."""
-    n = min(len(jobs), _workers() + 1)
-    forks = []
-    for i in range(1, n):
-        r, w = os.pipe()
-        pid = os.fork()
-        if pid == 0:  # pragma: no cover - runs in the fork
-            try:
-                os.close(r)
-                with os.fdopen(w, "wb") as f:
-                    f.write(pickle.dumps(_draw_share(jobs[i::n]), pickle.HIGHEST_PROTOCOL))
-            finally:
-                os._exit(0)
-        os.close(w)
-        forks.append((pid, r))
-    answers = [_draw_share(jobs[0::n])]
-    for pid, r in forks:
-        with os.fdopen(r, "rb") as f:
-            data = f.read()
-        os.waitpid(pid, 0)
-        answers.append(pickle.loads(data) if data else
-                       _answer_of(RuntimeError("a drawing process ended without answering")))
-    return next((answer for answer in answers if answer is not None), None)
-
-
-def _draw_share(jobs: list[tuple]) -> tuple | None:
-    """Draw ``jobs`` one after the other; :func:`_answer_of` the exception raised, if any."""
-    try:
-        for job in jobs:
-            _draw_figure(*job)
-    except Exception as exc:
-        return _answer_of(exc)
-    return None
-
-
-def _answer_of(exc: Exception) -> tuple[Exception, str]:
-    """(``exc``, its traceback as text), as sent back from a drawing process: ``exc`` itself
-    where it pickles (an OSError keeps its errno and file name), else a RuntimeError naming
-    it."""
-    import traceback
-
-    text = "".join(traceback.format_exception(exc))
-    try:
-        pickle.loads(pickle.dumps(exc))
-    except Exception:
-        exc = RuntimeError(f"{type(exc).__name__}: {exc}")
-    return exc, text
