@@ -206,15 +206,19 @@ def _boundary_shift(p: dict, dt: float, method: str) -> float:
 
 def _equal_dt(p: dict) -> tuple[float, float, float]:
     """The trig-free step as accurate as the default method at ``p["dt"]``: (dt [s], its
-    boundary shift, the default's). Both are of order 4, so dt·(shift ratio)^(−1/4), rounded
-    down to two digits and lowered by 5 % until its shift is no larger (measured, not
-    assumed)."""
+    boundary shift, the default's). Both are of order 4, so dt·(shift ratio)^(−1/4), to two
+    digits, lowered by 5 % while its measured shift is larger (at most 8 times: the order
+    estimate is close; a shift that will not come down raises RuntimeError)."""
     target = _boundary_shift(p, p["dt"], "rk4")
     ratio = _boundary_shift(p, p["dt"], "rk4-trigfree") / target
     dt = float(f"{p['dt'] * ratio ** -0.25:.2g}")
-    while (shift := _boundary_shift(p, dt, "rk4-trigfree")) > target:
+    for _ in range(8):
+        shift = _boundary_shift(p, dt, "rk4-trigfree")
+        if shift <= target:
+            return dt, shift, target
         dt = float(f"{0.95 * dt:.2g}")
-    return dt, shift, target
+    raise RuntimeError(f"the trig-free boundary shift stays above {target:.2g} down to "
+                       f"dt = {dt:g} s")
 
 
 def _row(variant, steps_s, orbits_s, map_s, atlas_map_s, note=""):

@@ -296,6 +296,10 @@ class Config(_Strict):
             check_method(self.integrator.method, self.execution.backend)
         except ValueError as exc:
             raise ValueError(f"integrator.{exc}") from None
+        if self.integrator.method != "rk4" and any(self.pendulum.torques):
+            raise ValueError(f"integrator.method: {self.integrator.method!r} is for the "
+                             "pendulum without torque (the running certificate is established "
+                             "for 'rk4' only); use method: rk4 with a torque")
         g = self.grid
         theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))
         speed_abs = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))

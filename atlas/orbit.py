@@ -150,10 +150,22 @@ def _steps(theta, theta_dot, n, w2, a2, dt, torque, method, thetas, speeds):
     return theta, theta_dot
 
 
-def _well_energy(theta, theta_dot, w2, torque=0.0, shift=0.0, vers=0.0):
-    """(k, E_k) as the kernels compute them: :func:`atlas.kernels.rk4.make_well_energy` for
-    τ = 0, :func:`atlas.kernels.rk4.make_well_energy_torque` (θ* = ``shift``,
-    1 − cos θ* = ``vers``) otherwise."""
+def _well_energy(theta, theta_dot, w2, torque=0.0, shift=0.0, vers=0.0, method="rk4"):
+    """(k, E_k) as the kernels of ``method`` compute them: :func:`atlas.kernels.rk4.
+    make_well_energy` for τ = 0, :func:`atlas.kernels.rk4.make_well_energy_torque` (θ* =
+    ``shift``, 1 − cos θ* = ``vers``) otherwise; for "rk4-trigfree" the re-synchronisation's
+    (:func:`atlas.kernels.trigfree.make_sync`, ``make_sync_torque``: 1 − cos θ of the whole
+    θ, libm as the method's scalar form)."""
+    if method == "rk4-trigfree":
+        h = math.sin(0.5 * theta)
+        vers_theta = 2.0 * (h * h)
+        if torque == 0.0:
+            k = math.floor(theta * INV_TWO_PI + 0.5)
+            return k, 0.5 * theta_dot * theta_dot + w2 * vers_theta
+        k = math.floor((theta + shift) * INV_TWO_PI + 0.5)
+        phi = theta - TWO_PI * k
+        return k, (0.5 * theta_dot * theta_dot + w2 * (vers_theta - vers)
+                   - torque * (phi - shift))
     if torque == 0.0:
         k = math.floor(theta * INV_TWO_PI + 0.5)
         s = math.sin(0.5 * (theta - TWO_PI * k))
@@ -203,8 +215,8 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
     straightforward kernel of that method steps it."""
     torque = float(torque)
     check_integration(alpha, omega0, dt, t_max, check_every, torque)
-    check_running(running, torque)
     method = resolve_method("cpu", "straightforward", method)
+    check_running(running, torque, method)
     theta0, theta_dot0 = float(theta0), float(theta_dot0)
     w2, a2 = omega0 * omega0, 2.0 * alpha
     margin = trap_margin(dt, alpha, omega0)
@@ -222,7 +234,7 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
         if not (math.isfinite(th) and math.isfinite(v)):
             result = {"status": NONFINITE}
             break
-        k, energy = _well_energy(th, v, w2, torque, shift, vers)
+        k, energy = _well_energy(th, v, w2, torque, shift, vers, method)
         if energy < cap:
             result = {"status": TRAPPED, "k": int(k), "t_trap": j * check_every * dt,
                       "energy": energy, "trap_index": len(thetas) - 1}
@@ -239,7 +251,7 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
         level = settle * (2.0 * w2 if torque == 0.0 else
                           min(_saddle_energies(alpha, omega0, torque)))
         while (len(thetas) - 1 < limit
-               and _well_energy(th, v, w2, torque, shift, vers)[1] > level):
+               and _well_energy(th, v, w2, torque, shift, vers, method)[1] > level):
             th, v = _steps(th, v, check_every, w2, a2, dt, torque, method, thetas, speeds)
     elif result["status"] == RUNNING:
         start = th

@@ -199,9 +199,13 @@ def check_dataset(ds, path) -> None:
         every = _number(attrs, "check_every", path, positive=True)
         if every != int(every):
             _refuse(path, f"attribute check_every = {every!r} is not an integer")
-    if "method" in attrs and attrs["method"] not in METHODS:
-        _refuse(path, f"attribute method = {str(attrs['method'])[:40]!r} is not one of "
-                f"{', '.join(METHODS)}")
+    if "method" in attrs:
+        method = attrs["method"]
+        if isinstance(method, bytes):
+            method = method.decode("utf-8", "replace")
+        if not isinstance(method, str) or method not in METHODS:
+            _refuse(path, f"attribute method = {str(method)[:40]!r} is not one of "
+                    f"{', '.join(METHODS)}")
     parse_config(attrs, path)
 
 

@@ -81,6 +81,8 @@ BAD = [
     ("integrator: {method: rk5}", "integrator.method: must be 'rk4' or 'rk4-trigfree'"),
     ("integrator: {method: rk4-trigfree}\nexecution: {backend: cuda}",
      "integrator.method: 'rk4-trigfree' has no CUDA kernel"),
+    ("integrator: {method: rk4-trigfree}\npendulum: {torque: [0, 0.5]}",
+     "integrator.method: 'rk4-trigfree' is for the pendulum without torque"),
     ("name: [1, 2]", "name"),
     ("- 1\n- 2", "a config must be a mapping"),
     ("pendulum: {alpha: 0.1\n", "line"),

@@ -146,6 +146,10 @@ BROKEN = [
     ("summary variable missing", _h5(lambda f: f.__delitem__("d_cert")),
      "no d_cert variable"),
     ("dt not a number", _h5(_attr("dt", "fast")), "attribute dt is not a number"),
+    ("unknown method", _h5(_attr("method", "euler")),
+     "attribute method = 'euler' is not one of rk4, rk4-trigfree"),
+    ("method an array", _h5(_attr("method", np.array([b"rk4-trigfree", b"rk4"]))),
+     "is not one of rk4, rk4-trigfree"),
     ("t_trap int", lambda g, d: _rewrite(g, d, _int_t_trap), "variable t_trap is int32"),
 ]
 

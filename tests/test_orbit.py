@@ -71,6 +71,29 @@ def test_orbit_on_a_file_agrees_with_the_stored_label(atlas_file, tmp_path, caps
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_orbit_on_a_trigfree_file_steps_with_its_method(tmp_path, capsys):
+    """A file computed with method "rk4-trigfree": atlas orbit integrates with that method
+    (and says so), so its label and t_trap are the stored ones at a grid point."""
+    cfg = atlas.Config.model_validate({
+        "name": "trig-free", "pendulum": {"alpha": 0.1, "omega0": 1.0},
+        "grid": {"theta0": {"start": "-3pi", "stop": "3pi", "num": 24},
+                 "theta_dot0": {"start": -4, "stop": 4, "num": 16}},
+        "integrator": {"method": "rk4-trigfree"}, "separatrices": {"enabled": False},
+        "output": str(tmp_path / "tf.h5")})
+    atlas.run(cfg, quiet=True)
+    ds = atlas.open(cfg.output).to_dataset(inherit=False)
+    j, i = 11, 7
+    th, v = float(ds["theta0"][i]), float(ds["theta_dot0"][j])
+    assert main(["orbit", str(cfg.output), repr(th), repr(v), "-o",
+                 str(tmp_path / "o.png")]) == 0
+    text = capsys.readouterr().out
+    assert "method rk4-trigfree" in text and "the same as atlas.label" in text
+    orbit = integrate(th, v, alpha=0.1, omega0=1.0, method="rk4-trigfree")
+    assert orbit.k == int(ds["attractor"].values[j, i])
+    assert np.float32(orbit.t_trap) == ds["t_trap"].values[j, i]
+    assert f"t_trap       {orbit.t_trap:.3g} s" in text
+
+
 def test_orbit_without_a_file(tmp_path, capsys):
     out = tmp_path / "free.png"
     assert main(["orbit", "--alpha", "0.2", "--omega0", "1", "-o", str(out), "--",

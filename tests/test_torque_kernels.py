@@ -194,8 +194,9 @@ def test_tau_zero_is_bit_identical_to_the_untilted_kernels(method, kernel, check
 # ------------------------------------------------- the tilted trap and the running label
 @pytest.mark.parametrize("case", list(CASES))
 def test_labels_agree_with_dop853_classified_by_the_same_certificates(case, barriers):
-    """Random points: RK4 labels (both methods, with the running barrier) against DOP853
-    stopped by the same trap and barrier. Where both are decisive they agree on ≥ 99 %, and
+    """Random points: RK4 labels (the lanes and the straightforward kernel, with the running
+    barrier; the trig-free method is refused one) against DOP853 stopped by the same trap and
+    barrier. Where both are decisive they agree on ≥ 99 %, and
     every disagreement is on a basin boundary: ±1e-6 in θ̇0 changes DOP853's own label."""
     alpha, omega0, tau, *_ = CASES[case]
     b = barriers[case]
@@ -207,9 +208,13 @@ def test_labels_agree_with_dop853_classified_by_the_same_certificates(case, barr
     ex_status = np.array([e[0] for e in exact])
     ex_k = np.array([e[1] for e in exact])
     assert np.sum(ex_status == TRAPPED) >= 50 and np.sum(ex_status == RUNNING) >= 50
-    for method in ("rk4", "rk4-trigfree"):
+    # the running certificate is established for classical RK4 only
+    with pytest.raises(ValueError, match="running certificate is established for classical"):
+        atlas.label(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=tau,
+                    method="rk4-trigfree", running=b)
+    for method in (None, "straightforward"):  # (named so for the messages below)
         res = atlas.label(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=tau,
-                          method=method, running=b)
+                          kernel=method, running=b)
         decisive = (res.status != UNRESOLVED) & (ex_status != UNRESOLVED)
         assert decisive.mean() >= 0.95
         agree = (res.status == ex_status) & ((res.status != TRAPPED) | (res.attractor == ex_k))
@@ -324,7 +329,7 @@ def test_running_certificate_fires_and_never_in_a_trap(barriers):
     theta0 = np.concatenate([theta_fast, later[0], phi + TWO_PI * wells])
     theta_dot0 = np.concatenate([np.full(n, 9.0), later[1], speed_in])
     n_trap_start = n + 3
-    for method, kernel in METHOD_KERNELS:
+    for method, kernel in METHOD_KERNELS[:2]:  # method "rk4": the certificate's method
         res = atlas.label(theta0, theta_dot0, alpha=alpha, omega0=omega0, torque=tau,
                           method=method, kernel=kernel, running=b)
         assert np.all(res.status[:n + 3] == RUNNING) and np.all(res.direction[:n + 3] == 1)

@@ -198,3 +198,9 @@ def test_orbit_integrates_with_the_trigfree_method():
                for n in [min(o.theta.size, c.theta.size, 1000) - 1])
     with pytest.raises(ValueError, match="method"):
         integrate(0.0, 1.0, alpha=0.1, omega0=1.0, method="euler")
+    from atlas.orbit import running_barrier_for
+
+    barrier, _ = running_barrier_for(0.05, 1.0, 0.5, 0.01)
+    with pytest.raises(ValueError, match="running certificate is established for classical"):
+        integrate(0.0, 1.0, alpha=0.05, omega0=1.0, torque=0.5, running=barrier,
+                  method="rk4-trigfree")

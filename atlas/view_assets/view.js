@@ -128,6 +128,12 @@
       }
     };
     const energy = () => {
+      if (D.method === "rk4-trigfree") {  // as the re-synchronisation: 1 − cos θ of the whole θ
+        const h = Math.sin(0.5 * th), vt = 2 * (h * h);
+        if (tq === 0) return [Math.floor(th * INV_TWO_PI + 0.5), 0.5 * v * v + w2 * vt];
+        const k = Math.floor((th + shift) * INV_TWO_PI + 0.5), phi = th - TWO_PI * k;
+        return [k, 0.5 * v * v + w2 * (vt - vers) - tq * (phi - shift)];
+      }
       if (tq === 0) {
         const k = Math.floor(th * INV_TWO_PI + 0.5), s = Math.sin(0.5 * (th - TWO_PI * k));
         return [k, 0.5 * v * v + 2 * w2 * s * s];
