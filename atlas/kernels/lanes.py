@@ -563,7 +563,8 @@ def propagate_lanes(theta, theta_dot, alpha, omega0, dt, n_steps):
 def propagate_trigfree(theta, theta_dot, alpha, omega0, dt, n_steps):
     """Advance every orbit by ``n_steps`` trig-free RK4 steps in place (re-synchronised at the
     start and after every ``SYNC_EVERY`` steps), no early exit: bulk throughput of method
-    "rk4-trigfree". Orbits outside its lane domain take the scalar form (libm re-synchronisation)."""
+    "rk4-trigfree". Orbits outside its lane domain take the scalar form (libm
+    re-synchronisation)."""
     n = theta.size
     for b in nb.prange((n + LANES - 1) // LANES):
         lo = b * LANES
