@@ -74,7 +74,7 @@ _STEPS = 1024
 class _DenseOutput:
     """DOP853's dense output (Hairer, Nørsett & Wanner, §II.6) of a whole solution, evaluated
     for many times at once: the polynomial of every step, its coefficients stacked over the
-    steps, so one call costs a few array operations. ``t``: the step ends (steps + 1);
+    steps (evaluated by a compiled loop: a call costs microseconds). ``t``: the step ends (steps + 1);
     per step ``t_old``, ``h``, ``y_old`` (steps, 3) and ``F`` (steps, 7, 3), lowest power
     first (as :func:`atlas.kernels.dop853.stable_manifold` and scipy's
     ``Dop853DenseOutput`` hold it)."""
@@ -116,16 +116,15 @@ class _DenseOutput:
         return [a + b for a, b in zip(y, y_old[step])]
 
     def __call__(self, tau):
+        """The solution at the times ``tau`` (any shape): components × tau's shape
+        (compiled: :func:`atlas.kernels.dop853.dense_output`)."""
+        from .kernels.dop853 import dense_output
+
         tau = np.asarray(tau, float)
-        step = np.clip(np.searchsorted(self.t, tau.ravel(), side="right") - 1, 0,
-                       self.h.size - 1)
-        x = ((tau.ravel() - self.t_old[step]) / self.h[step])[:, None]
-        y = np.zeros((x.shape[0], self.y_old.shape[1]))
-        for i in range(self.F.shape[1]):
-            y += self.F[step, i]
-            y *= x if i % 2 == 0 else 1.0 - x
-        y += self.y_old[step]
-        return y.T.reshape(self.y_old.shape[1], *tau.shape)
+        flat = np.ascontiguousarray(tau.ravel())
+        out = np.empty((self.y_old.shape[1], flat.size))
+        dense_output(flat, self.t, self.t_old, self.h, self.y_old, self.F, out)
+        return out.reshape(self.y_old.shape[1], *tau.shape)
 
 
 def to_left_branch(n, right, theta, theta_dot):

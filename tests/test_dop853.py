@@ -100,3 +100,26 @@ def test_too_few_steps_of_room_is_said_and_more_are_made():
 def test_torque_is_refused():
     with pytest.raises(ValueError, match="torque"):
         StableManifold(Pendulum(alpha=0.1, omega0=1.0, torque=0.2), 4.0)
+
+
+def test_compiled_dense_output_is_scipys_polynomial():
+    """manifold._DenseOutput (compiled: dense_output) at times before, inside, at the ends of
+    and after the steps: scipy's own dense output of the same steps (rtol 1e-13) to rounding,
+    and a step's ends where the next step begins."""
+    p, y0, e_stop, t_cap = _problem(0.1, 1.0, 4.0)
+    sol = _scipy(p, y0, e_stop, t_cap)
+    dense = manifold._DenseOutput.from_scipy([sol.sol])
+    ts = sol.sol.ts
+    rng = np.random.default_rng(4)
+    tau = np.concatenate([rng.uniform(ts[0], ts[-1], 500), ts])
+    tau = tau[: tau.size // 4 * 4]
+    got = dense(tau.reshape(-1, 4))
+    assert got.shape == (3, tau.size // 4, 4)
+    want = sol.sol(tau)
+    np.testing.assert_allclose(got.reshape(3, -1), want, rtol=1e-12, atol=1e-14)
+    # beyond the ends: the first and last steps' polynomials, continued
+    beyond = dense(np.array([ts[0] - 1e-3, ts[-1] + 1e-3]))
+    np.testing.assert_allclose(beyond[:, 0], sol.sol.interpolants[0](ts[0] - 1e-3),
+                               rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(beyond[:, 1], sol.sol.interpolants[-1](ts[-1] + 1e-3),
+                               rtol=1e-12, atol=1e-14)

@@ -169,6 +169,32 @@ def _dense(tau, t_old, h, y_old, F):
 
 
 @cached_njit(nogil=True)
+def dense_output(tau, t, t_old, h, y_old, F, out):
+    """The dense output of a whole solution at each ``tau`` into ``out`` (components ×
+    len(tau)): the step found by bisection in the step ends ``t`` (before the first: the
+    first step; after the last: the last), then its polynomial, ``F`` (steps × powers ×
+    components) highest power first, evaluated as :class:`atlas.manifold._DenseOutput` did
+    with numpy (the same operations in the same order: the same doubles)."""
+    last = h.size - 1
+    for i in range(tau.size):
+        lo, hi = 0, t.size - 1
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if t[mid] <= tau[i]:
+                lo = mid
+            else:
+                hi = mid
+        step = min(lo, last)
+        x = (tau[i] - t_old[step]) / h[step]
+        for c in range(y_old.shape[1]):
+            y = 0.0
+            for p in range(F.shape[1]):
+                y += F[step, p, c]
+                y *= x if p % 2 == 0 else 1.0 - x
+            out[c, i] = y + y_old[step, c]
+
+
+@cached_njit(nogil=True)
 def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_min, capacity):
     """Integrate (θ, θ̇, Q) from ``y0`` at reversed time ``t0`` [s] towards ``t_bound`` until
     the event (module docstring) with DOP853 at ``rtol``, ``atol``; α [s⁻¹], ω0 [rad s⁻¹].
