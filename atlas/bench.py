@@ -481,12 +481,15 @@ def _cli_plot(path) -> tuple[float, float | None, float | None]:
 
 
 def _plot_rows(sides, repeats: int) -> dict:
-    """``atlas plot`` of generated atlases (module docstring)."""
+    """``atlas plot`` of generated atlases (module docstring), warm: atlas's bytecode cache
+    written first (:func:`atlas.bench_e2e.warm_bytecode`)."""
+    from .bench_e2e import warm_bytecode
     from .config import load_config
     from .plotting import MAX_PIXELS, plot_atlas
     from .store import open_atlas
     from .sweep import run
 
+    warm_bytecode()
     rows = []
     with tempfile.TemporaryDirectory(prefix="atlas-bench-plot-") as tmp:
         for side in sides:
