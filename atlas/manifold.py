@@ -75,8 +75,8 @@ class _DenseOutput:
     """DOP853's dense output (Hairer, Nørsett & Wanner, §II.6) of a whole solution, evaluated
     for many times at once: the polynomial of every step, its coefficients stacked over the
     steps (evaluated by a compiled loop: a call costs microseconds). ``t``: the step ends
-    (steps + 1); per step ``t_old``, ``h``, ``y_old`` (steps, 3) and ``F`` (steps, 7, 3), lowest power
-    first (as :func:`atlas.kernels.dop853.stable_manifold` and scipy's
+    (steps + 1); per step ``t_old``, ``h``, ``y_old`` (steps, 3) and ``F`` (steps, 7, 3),
+    lowest power first (as :func:`atlas.kernels.dop853.stable_manifold` and scipy's
     ``Dop853DenseOutput`` hold it)."""
 
     def __init__(self, t, t_old, h, y_old, F):
