@@ -36,7 +36,7 @@ atlas: $(OUT) ## compute any config: make atlas CONFIG=configs/x.yaml
 
 # pytest-xdist: one worker per core (TEST_WORKERS=0: all in this process), each worker taking
 # whole test files so that a module's fixtures are built once. On the 2-core machine, otherwise
-# idle, the whole suite takes about 5 min 30 s in one process and 3 min 35 s in two.
+# idle, the whole suite takes about 5 min 30 s in one process and 3 min 20 s in two.
 TEST_WORKERS ?= auto
 
 test: $(STAMP) ## run the whole test suite (on every core; TEST_WORKERS=0 in one process)
