@@ -28,7 +28,9 @@ meaningful even where absolute times drift (the best of the repeats is kept in t
   θ ∈ [−5π/6, 7π/6], θ̇ ∈ [−10, 10], t_max = 400 s) against the untilted map of the same points
   and α, both through :func:`atlas.label` with the file's method "rk4" (the tilted trap and the
   running barrier against the plain energy trap).
-* scaling: the atlas map at 256² … 4096² (the same window, finer grids).
+* scaling: the atlas map at 256² … 4096² (the same window, finer grids); and the 1024² map on
+  1, 2, 4, … Numba threads up to all of them (:func:`_thread_scaling`: speed-up and parallel
+  efficiency against one thread; the labels are the same on every count).
 * end to end: ``atlas run`` of the default config, the whole command, against the budget
   imports + 3 × the default map's kernel time + 0.5 s (:mod:`atlas.bench_e2e`).
 * JIT: a subprocess with ``NUMBA_CACHE_DIR`` pointed at a fresh directory times import and the
@@ -222,6 +224,33 @@ def _equal_dt(p: dict) -> tuple[float, float, float]:
                        f"dt = {dt:g} s")
 
 
+def _thread_scaling(side: int, repeats: int, p: dict) -> list[dict]:
+    """The default map of ``side``² orbits on 1, 2, 4, … threads and on all of Numba's:
+    median wall time, speed-up and efficiency against one thread, and whether the labels
+    equal one thread's."""
+    import numba
+
+    th, v = defaults.grid(side)
+    counts = sorted({*(1 << k for k in range(numba.config.NUMBA_NUM_THREADS.bit_length())),
+                     numba.config.NUMBA_NUM_THREADS})
+    saved, rows, first = numba.get_num_threads(), [], None
+    try:
+        for count in counts:
+            numba.set_num_threads(count)
+            labels = _label(label_lanes, th, v, CHECK_EVERY, p)
+            first = first or labels
+            s = _median_times({"map": _label_run(label_lanes, th, v, CHECK_EVERY, p)},
+                              repeats)["map"][0]
+            rows.append({"threads": count, "wall_s": s, "same_labels": all(
+                np.array_equal(a, b) for a, b in zip(labels, first))})
+    finally:
+        numba.set_num_threads(saved)
+    for row in rows:
+        row["speedup"] = rows[0]["wall_s"] / row["wall_s"]
+        row["efficiency"] = row["speedup"] / row["threads"]
+    return rows
+
+
 def _row(variant, steps_s, orbits_s, map_s, atlas_map_s, note=""):
     return {"variant": variant, "steps_per_s": steps_s, "orbits_per_s": orbits_s,
             "map_512_s": map_s, "ratio_to_atlas": map_s / atlas_map_s, "note": note}
@@ -317,6 +346,8 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
         scaling.append({"n": side, "orbits": th.size, "wall_s": s, "orbits_per_s": th.size / s,
                         "ns_per_orbit": s / th.size * 1e9})
 
+    thread_side = QUICK_SCALING[0] if quick else 1024
+    threads = {"side": thread_side, "rows": _thread_scaling(thread_side, repeats, p)}
     torque = _torque_rows(QUICK_TORQUE if quick else MAP_N, repeats)
     plot = _plot_rows(QUICK_PLOT_SIDES if quick else PLOT_SIDES, repeats) if plots else None
 
@@ -333,6 +364,7 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
                 "useful_steps": useful},
         "bulk": {"rows": bulk_rows},
         "scaling": scaling,
+        "threads": threads,
         "best_of_repeats_s": {name: best for name, (_, best) in t.items()},
         "summary": {"map_speedup": sf1_s / atlas_s,
                     "trigfree_map_speedup": atlas_s / trigfree_s,
@@ -582,6 +614,13 @@ def format_table(result: dict) -> str:
     for r in result["scaling"]:
         lines.append(f"  {r['n']:5d}² {r['orbits']:9d} orbits {_fmt_s(r['wall_s']):>9s} "
                      f"{r['orbits_per_s']:10.3g} orbits/s {r['ns_per_orbit']:8.1f} ns/orbit")
+    if "threads" in result:
+        lines.append(f"Threads, atlas map {result['threads']['side']}² (speed-up and "
+                     "efficiency against one thread; labels equal one thread's)")
+        for r in result["threads"]["rows"]:
+            lines.append(f"  {r['threads']:3d} threads {_fmt_s(r['wall_s']):>9s} "
+                         f"{r['speedup']:6.2f}× {100 * r['efficiency']:5.0f} %  "
+                         f"same labels: {r['same_labels']}")
     if "plot" in result:
         pl = result["plot"]
         lines.append(f"Plotting: atlas plot of the default atlas at n² (3 PNGs; maps read band by "

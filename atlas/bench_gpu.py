@@ -9,10 +9,14 @@ reduced-range polynomial sin; "straightforward": one orbit per thread with libde
   arrays (transfers, chunking and staging included), and effective steps/s = RK4 steps the
   orbits actually took before trapping (or to t_max) / kernel time;
 * bulk: steps/s of a fixed-steps run (``propagate``, no early exit);
-* sweep: the wall time of one :func:`atlas.run` of the default atlas on the same n × n grid
-  with backend "cuda", end to end (separatrices; tiles labelled on the GPU, certified on the
-  CPU and written while the next tile computes; the assembled HDF5 file), in a temporary
-  folder.
+* the GPU's labels against the CPU's (:func:`atlas.label` with the default method, the
+  lane kernels) on the same grid: the share of orbits with the same status and well, and
+  for those that differ the largest distance to the exact basin boundaries (they should
+  all lie on a boundary: decided by rounding);
+* sweep: the wall time of one :func:`atlas.run` of the default atlas with backend "cuda",
+  end to end (separatrices; tiles labelled on the GPU, certified on the CPU and written while
+  the next tile computes; the assembled HDF5 file), in a temporary folder: on the same n × n
+  grid, and on each grid of ``sweep_sides`` (16384² by default: the target of ≤ 10 s).
 
 Plus a JAX peer (``vmap`` over orbits of a ``lax.fori_loop`` RK4, float64, fixed steps) when
 JAX imports and sees a GPU. Without a CUDA GPU :func:`run_gpu_bench` returns None.
@@ -156,10 +160,32 @@ def _sweep_row(n: int, t_max: float) -> dict:
             "orbits_per_s": n * n / seconds}
 
 
+def _cpu_agreement(theta0, theta_dot0, p, attractor, status) -> dict:
+    """The GPU's labels (fast variant) against the CPU's on the same orbits (module doc)."""
+    from .labels import label
+    from .model import Pendulum
+
+    cpu = label(theta0, theta_dot0, alpha=p["alpha"], omega0=p["omega0"], dt=p["dt"],
+                t_max=p["t_max"])
+    gpu_k = np.where(status == TRAPPED, attractor, 0)
+    cpu_k = np.where(cpu.status == TRAPPED, cpu.attractor, 0)
+    differ = np.flatnonzero((cpu.status != status) | (cpu_k != gpu_k))
+    nearest = math.nan
+    if differ.size:
+        from .certificate import exact_boundaries
+
+        window = (defaults.THETA0_WINDOW, defaults.THETA_DOT0_WINDOW)
+        exact = exact_boundaries(Pendulum(p["alpha"], p["omega0"]), window, None)
+        nearest = float(exact.distance(theta0[differ], theta_dot0[differ])[0].max())
+    return {"agree_fraction": 1.0 - differ.size / theta0.size, "differ": int(differ.size),
+            "differ_max_boundary_distance": nearest}
+
+
 def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = defaults.T_MAX,
-                  bulk_steps: int = 1000, allow_simulator: bool = False) -> dict | None:
-    """Benchmark the CUDA kernels, and one sweep, on an n × n default-parameter grid
-    (module doc).
+                  bulk_steps: int = 1000, sweep_sides: tuple[int, ...] = (16384,),
+                  allow_simulator: bool = False) -> dict | None:
+    """Benchmark the CUDA kernels, and sweeps, on an n × n default-parameter grid (module
+    doc); ``sweep_sides``: more end-to-end sweeps, one per grid side.
 
     Returns None when no CUDA GPU can be used (:func:`atlas.kernels.cuda.cuda_status` says
     why) and, unless ``allow_simulator`` (tests), under the CUDA simulator, whose timings are
@@ -178,6 +204,7 @@ def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = defaults.T_
                                   bulk_steps, repeats) for v in VARIANTS}
     (att_f, st_f), (att_s, st_s) = (variants[v].pop("labels") for v in VARIANTS)
     same = (st_f == st_s) & ((st_f != TRAPPED) | (att_f == att_s))
+    cpu = _cpu_agreement(theta0, theta_dot0, p, att_f, st_f)
     return {
         "device": device,
         "n": n,
@@ -188,8 +215,10 @@ def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = defaults.T_
         "bulk_steps": bulk_steps,
         "variants": variants,
         "labels_agree_fraction": float(np.mean(same)),
+        "cpu_labels": cpu,
         "jax": _jax_bulk(theta0, theta_dot0, p, bulk_steps, repeats),
         "sweep": _sweep_row(n, t_max),
+        "sweeps": [_sweep_row(side, t_max) for side in sweep_sides],
         "targets": TARGETS,
     }
 
@@ -211,10 +240,15 @@ def format_gpu_rows(result: dict | None) -> str:
     jax_cell = (f"{jax['bulk_gsteps_s']:>16.1f}" if "bulk_gsteps_s" in jax
                 else f"  skipped: {jax['skipped']}")
     lines.append(f"{'JAX vmap+fori':<16}{'—':>14}{'—':>15}{'—':>16}{jax_cell}")
-    sweep = result["sweep"]
-    lines.append(f"sweep: atlas run --backend cuda of the {n}x{n} default atlas "
-                 f"({sweep['tiles']} tiles), end to end {sweep['sweep_s']:.2f} s, "
-                 f"{sweep['orbits_per_s'] / 1e6:.1f} M orbits/s")
+    for sweep in [result["sweep"], *result.get("sweeps", [])]:
+        side = sweep["n"]
+        lines.append(f"sweep: atlas run --backend cuda of the {side}x{side} default atlas "
+                     f"({sweep['tiles']} tiles), end to end {sweep['sweep_s']:.2f} s, "
+                     f"{sweep['orbits_per_s'] / 1e6:.1f} M orbits/s")
+    cpu = result["cpu_labels"]
+    lines.append(f"GPU (fast) against CPU labels (default method): the same on "
+                 f"{100 * cpu['agree_fraction']:.4f} % of orbits; {cpu['differ']} differ, all "
+                 f"within {cpu['differ_max_boundary_distance']:.1e} of an exact boundary")
     t = result["targets"]
     lines.append(f"targets (H100, 4096²): basin map ≤ {t['label_ms']:.0f} ms, bulk ≥ "
                  f"{t['bulk_gsteps_s']:.0f} G steps/s; labels agree between variants on "

@@ -145,14 +145,19 @@ def test_gpu_bench_under_simulator():
     code = r"""
 import json
 from atlas.bench_gpu import format_gpu_rows, run_gpu_bench
-r = run_gpu_bench(n=4, repeats=1, t_max=1.0, bulk_steps=4, allow_simulator=True)
+r = run_gpu_bench(n=4, repeats=1, t_max=1.0, bulk_steps=4, sweep_sides=(6,),
+                  allow_simulator=True)
 print(json.dumps({"default": run_gpu_bench() is None, "variants": sorted(r["variants"]),
-                  "agree": r["labels_agree_fraction"], "table": format_gpu_rows(r),
+                  "agree": r["labels_agree_fraction"], "cpu": r["cpu_labels"],
+                  "sweeps": [s["n"] for s in r["sweeps"]], "table": format_gpu_rows(r),
                   "skip": format_gpu_rows(None)}))
 """
     out = _child(code, simulator=True)
     assert out["default"]  # simulator timings are meaningless: no result by default
     assert out["variants"] == ["fast", "straightforward"] and out["agree"] == 1.0
+    assert out["cpu"]["agree_fraction"] == 1.0 and out["cpu"]["differ"] == 0
+    assert out["sweeps"] == [6] and "6x6 default atlas" in out["table"]
+    assert "against CPU labels" in out["table"]
     assert "fast" in out["table"] and out["skip"].startswith("GPU benchmark skipped")
 
 
