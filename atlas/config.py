@@ -340,11 +340,22 @@ class Config(_Strict):
         return json.dumps(self.model_dump(mode="json"), sort_keys=True)
 
 
+def integrator_json(integrator: IntegratorConfig) -> dict:
+    """The integrator settings as JSON data for digests: without ``method`` when it is "rk4",
+    the method of every file written before the key existed, so that their config hashes and
+    run identities stay valid."""
+    data = integrator.model_dump(mode="json")
+    if data["method"] == "rk4":
+        del data["method"]
+    return data
+
+
 def config_hash(cfg: Config) -> str:
     """Digest of the config apart from its name, output and execution settings, recorded in the
     file as provenance. (Whether a partial run may be continued is decided by the stricter
     :func:`atlas.sweep.run_identity`.)"""
     data = cfg.model_dump(mode="json", exclude={"output", "execution", "name"})
+    data["integrator"] = integrator_json(cfg.integrator)
     return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 

@@ -35,7 +35,7 @@ import xarray as xr
 
 from . import defaults, lazy_dask, running, store, zarrstore  # noqa: F401 (lazy_dask installs itself)
 from .certificate import Certifier, add_tallies, certifier_for
-from .config import Config, config_hash
+from .config import Config, config_hash, integrator_json
 from .errors import AtlasError, InputFileError, StorageError
 from .labels import CHECK_EVERY, RunningBarrier, check_method, label, trap_margin
 from .layout import PARAMETERS, Layout, node_name, point_label
@@ -83,7 +83,7 @@ def run_identity(cfg: Config, backend: str) -> dict:
 
     return {"grid": cfg.grid.model_dump(mode="json"),
             "pendulum": cfg.pendulum.model_dump(mode="json"),
-            "integrator": cfg.integrator.model_dump(mode="json"),
+            "integrator": integrator_json(cfg.integrator),
             "separatrices": (cfg.separatrices.model_dump(mode="json")
                              if cfg.separatrices.enabled else {"enabled": False}),
             "check_every": int(CHECK_EVERY), "atlas_version": __version__,

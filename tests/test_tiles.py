@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import atlas
+from atlas.config import config_hash
 from atlas.store import FILLS
 from atlas.sweep import layout_of, run_identity
 from atlas.tiles import IdentityMismatch, TileStore, encode_chunk, partial_path
@@ -42,6 +43,19 @@ def test_identity_decides_what_a_run_continues(cfg):
     other = cfg.model_copy(update={"integrator": cfg.integrator.model_copy(
         update={"dt": 0.02})})
     assert run_identity(other, "cpu") != same
+    other = cfg.model_copy(update={"integrator": cfg.integrator.model_copy(
+        update={"method": "rk4-trigfree"})})
+    assert run_identity(other, "cpu") != same and config_hash(other) != config_hash(cfg)
+    # with the default method, identity and hash are those of the versions before the key
+    # (so their partial runs continue and their files' hashes stay comparable)
+    assert "method" not in same["integrator"] and cfg.integrator.method == "rk4"
+    import hashlib
+    import json
+
+    before = cfg.model_dump(mode="json", exclude={"output", "execution", "name"})
+    del before["integrator"]["method"]
+    assert config_hash(cfg) == hashlib.sha256(
+        json.dumps(before, sort_keys=True).encode()).hexdigest()[:16]
     # enabled separatrices measure d_cert, which decides the tiles' certified statuses;
     # while they are off their settings change nothing
     sep = cfg.separatrices
