@@ -5,9 +5,10 @@ of the saddle (π, 0), integrated by DOP853 with dense output (:mod:`atlas.manif
 query point the kernel
 
 1. finds the nearest *sample* of any copy by a bucket search: samples are binned in square
-   cells of side ``cell``; rings of cells around the point's cell are searched outward until
-   the best sample found is nearer than the next ring can be (a ring r + 1 cell away is at
-   least r·cell away), so the result is the exact nearest sample (compared by squared
+   cells of side ``cell``; rings of cells around the point's cell are searched outward (each
+   ring's perimeter only) until the best sample found is nearer than the next ring can be
+   (a sample beyond ring r is at least r·cell plus the point's distance to its own cell's
+   nearest edge away), so the result is the exact nearest sample (compared by squared
    distance: a third of the time of ``math.hypot`` in the inner loop);
 2. maps the point into L's own frame (the inverse shift or reflection: an isometry) and
    finds the foot point on L by Newton's method on g(τ) = (c(τ) − q)·c'(τ) over the dense
@@ -76,13 +77,18 @@ def nearest_boundary(px, pv, c_theta, c_speed, c_n, c_branch, c_sample, bucket_s
         cy = int(math.floor((v - v0) / cell))
         reach = max(max(cx, ncx - 1 - cx), max(cy, ncy - 1 - cy))
         best, j = np.inf, -1
+        # the point's offsets from its cell's edges: after ring r every sample not yet seen
+        # is at least r·cell + the nearest of them away
+        off = min(min(x - (t0 + cx * cell), t0 + (cx + 1) * cell - x),
+                  min(v - (v0 + cy * cell), v0 + (cy + 1) * cell - v))
         for r in range(reach + 1):
             for gx in range(cx - r, cx + r + 1):
                 if gx < 0 or gx >= ncx:
                     continue
-                edge = gx == cx - r or gx == cx + r
-                for gy in range(cy - r, cy + r + 1):
-                    if gy < 0 or gy >= ncy or not (edge or gy == cy - r or gy == cy + r):
+                # a column on the ring's edge is scanned whole, the others at its two ends
+                step = 1 if (gx == cx - r or gx == cx + r) else max(2 * r, 1)
+                for gy in range(cy - r, cy + r + 1, step):
+                    if gy < 0 or gy >= ncy:
                         continue
                     b = gx * ncy + gy
                     for q in range(bucket_start[b], bucket_start[b + 1]):
@@ -91,7 +97,8 @@ def nearest_boundary(px, pv, c_theta, c_speed, c_n, c_branch, c_sample, bucket_s
                         d2 = dx * dx + dv * dv  # squared: no hypot in the inner loop
                         if d2 < best:
                             best, j = d2, i
-            if best <= (r * cell) * (r * cell):
+            reached = r * cell + off
+            if best <= reached * reached:
                 break
         if j < 0:
             out_dist[p] = np.inf
