@@ -141,17 +141,27 @@ class _Untilted:
 
     def distance(self, theta, theta_dot):
         """Distance [rad-ish] of each point to the nearest exact basin boundary, and that
-        boundary's saddle n. Boundaries are searched within a margin around the window,
-        grown until it exceeds every distance found (so none nearer can lie outside it)."""
+        boundary's saddle n. Boundaries are searched within a margin around the window; a
+        distance found is exact where it does not exceed the point's distance to the edge of
+        the searched box (a boundary outside it is farther). The others are searched again
+        with the margin grown past every distance found."""
+        theta, theta_dot = np.broadcast_arrays(np.asarray(theta, float),
+                                               np.asarray(theta_dot, float))
         margin = _FIRST_MARGIN
-        dist, n = self._index(margin).nearest(theta, theta_dot)
+        index = self._index(margin)
+        dist, n = index.nearest(theta, theta_dot)
+        todo = np.ones(theta.shape, bool)
         while True:
-            far = ~(dist <= margin)
-            if not far.any():
+            (t0, t1), (v0, v1) = index.box
+            edge = np.minimum(np.minimum(theta - t0, t1 - theta),
+                              np.minimum(theta_dot - v0, v1 - theta_dot))
+            todo &= ~(dist <= edge)
+            if not todo.any():
                 return dist, n
-            finite = dist[far][np.isfinite(dist[far])]
+            finite = dist[todo][np.isfinite(dist[todo])]
             margin = 2.0 * max(margin, finite.max(initial=0.0))
-            dist[far], n[far] = self._index(margin).nearest(theta[far], theta_dot[far])
+            index = self._index(margin)
+            dist[todo], n[todo] = index.nearest(theta[todo], theta_dot[todo])
 
     def saddles_within(self, theta, theta_dot, radius: float):
         return self._index(_FIRST_MARGIN).saddles_within(theta, theta_dot, radius)
