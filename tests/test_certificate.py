@@ -148,3 +148,29 @@ output: {tmp_path / 'c.h5'}
     np.testing.assert_array_equal(status == TRAPPED, labelled(status) & (dist > d_cert))
     assert float(ds["certified_fraction"]) == np.mean(status == TRAPPED)
     assert int(ds["side_mismatches"]) == 0
+
+
+@pytest.mark.parametrize("window", [WINDOW, ((-0.5, 0.5), (-0.3, 0.3))],
+                         ids=["default", "inside a basin"])
+def test_distances_are_those_of_one_index_over_everything(window):
+    """The certifier searches a box around the window and searches again, in a larger one,
+    only the points whose distance found exceeds their distance to that box's edge: the
+    same distances and saddles as one index whose box holds every point's nearest boundary.
+    Inside a basin every boundary lies beyond the first margin, so the second search must
+    find them."""
+    from atlas.certificate import _FIRST_MARGIN
+    from atlas.manifold import BoundaryIndex, StableManifold
+
+    p = Pendulum(0.1, 1.0)
+    # even counts: no grid point on a symmetry centre, where two boundaries are equally near
+    cert = Certifier(p, np.linspace(*window[0], 32), np.linspace(*window[1], 16), 1e-9, 1e-12)
+    th, v = np.meshgrid(cert.theta0, cert.theta_dot0)
+    dist, n = cert.distance(th, v)
+    assert np.all(np.isfinite(dist)) and np.count_nonzero(dist > _FIRST_MARGIN) > 10
+    reach = float(dist.max()) + 1.0
+    (t0, t1), (v0, v1) = window
+    big = BoundaryIndex(StableManifold(p, max(abs(v0), abs(v1)) + reach),
+                        ((t0 - reach, t1 + reach), (v0 - reach, v1 + reach)))
+    ref, ref_n = big.nearest(th, v)
+    np.testing.assert_allclose(dist, ref, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(n, ref_n)
