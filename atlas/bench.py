@@ -658,11 +658,14 @@ def format_table(result: dict) -> str:
     return "\n".join(lines)
 
 
-def bench_to_json(path="outputs/bench.json", *, backend: str = "cpu", **kwargs) -> dict:
+def bench_to_json(path="outputs/bench.json", *, backend: str = "cpu",
+                  gpu_sweeps: tuple[int, ...] = (), **kwargs) -> dict:
     """Run the benchmark, write its result to ``path`` as JSON, print the table.
 
     ``backend="cpu"``: the CPU table, plus the GPU rows when a CUDA GPU is present;
     ``backend="cuda"``: the GPU rows only (BackendUnavailable without a GPU).
+    ``gpu_sweeps``: grid sides of further end-to-end GPU sweeps (``--gpu-sweep``; they take
+    minutes at 16384²: the other rows are written first).
     """
     from .bench_gpu import format_gpu_rows, run_gpu_bench
     from .kernels.cuda import cuda_status
@@ -673,10 +676,15 @@ def bench_to_json(path="outputs/bench.json", *, backend: str = "cpu", **kwargs) 
         from .kernels.cuda import require_cuda
 
         require_cuda()  # raises with the one-line reason
-    if gpu_ok:
-        result["gpu"] = run_gpu_bench(repeats=3 if kwargs.get("quick") else 5)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    if gpu_ok:
+        result["gpu"] = run_gpu_bench(repeats=3 if kwargs.get("quick") else 5)
+        if gpu_sweeps and result["gpu"] is not None:
+            from .bench_gpu import sweep_rows
+
+            path.write_text(json.dumps(result, indent=2))  # kept if the big sweeps overrun
+            result["gpu"]["sweeps"] = sweep_rows(gpu_sweeps)
     path.write_text(json.dumps(result, indent=2))
     if backend != "cuda":
         print(format_table(result))

@@ -52,12 +52,14 @@ _FIRST_CALL = (_IMPORTS + "; import numpy as np; from atlas import label; "
 _PHASE = re.compile(r"^atlas: (.+?)\s+([0-9.]+) s$")
 
 
-def warm_bytecode() -> None:
-    """Write the bytecode cache (``__pycache__``) of every atlas module, as the first import
-    does where Python may write it."""
+def warm_bytecode() -> bool:
+    """Write the bytecode cache (``__pycache__``, next to atlas's sources) of every atlas
+    module, as the first import does where Python may write it (this writes it even where
+    ``PYTHONDONTWRITEBYTECODE`` is set). Returns whether every module's could be written (a
+    read-only install: no, and the timed runs compile atlas's sources)."""
     import compileall
 
-    compileall.compile_dir(str(Path(__file__).resolve().parent), quiet=1)
+    return bool(compileall.compile_dir(str(Path(__file__).resolve().parent), quiet=2))
 
 
 def _env() -> dict:
@@ -79,7 +81,7 @@ def end_to_end(map_kernel_s: float, repeats: int = 3) -> dict:
     docstring); ``map_kernel_s`` [s]: the default method's 512² map kernel, from the same
     bench run."""
     p = defaults.problem()
-    warm_bytecode()
+    bytecode = warm_bytecode()
     runs, phases = [], []
     with tempfile.TemporaryDirectory(prefix="atlas-bench-e2e-") as tmp:
         config = Path(tmp) / "default.yaml"
@@ -100,6 +102,7 @@ def end_to_end(map_kernel_s: float, repeats: int = 3) -> dict:
     return {"run_s": run_s, "run_best_s": min(runs), "import_s": import_s,
             "imports_and_first_call_s": statistics.median(first_call), "map_kernel_s": map_kernel_s,
             "budget_s": budget, "ratio_to_budget": run_s / budget,
+            "bytecode_cached": bytecode,
             "phases_s": {name: statistics.median([ph.get(name, float("nan")) for ph in phases])
                          for name in names}}
 
@@ -116,5 +119,7 @@ def format_end_to_end(e: dict) -> list[str]:
         f"{e['ratio_to_budget']:.2f}× the budget",
         f"  phases (-v, medians): {phases}",
         f"  imports alone {e['import_s']:.2f} s; imports and Numba's first call of a cached "
-        f"kernel {e['imports_and_first_call_s']:.2f} s",
+        f"kernel {e['imports_and_first_call_s']:.2f} s"
+        + ("" if e.get("bytecode_cached", True) else
+           "; atlas's bytecode cache could not be written: every run compiled its sources"),
     ]

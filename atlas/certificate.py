@@ -147,6 +147,8 @@ class _Untilted:
         with the margin grown past every distance found."""
         theta, theta_dot = np.broadcast_arrays(np.asarray(theta, float),
                                                np.asarray(theta_dot, float))
+        if not (np.isfinite(theta).all() and np.isfinite(theta_dot).all()):
+            raise ValueError("distance to the basin boundaries of a non-finite point")
         margin = _FIRST_MARGIN
         index = self._index(margin)
         dist, n = index.nearest(theta, theta_dot)

@@ -103,7 +103,8 @@ def _cmd_bench(args) -> int:
 
     output = Path(args.output)
     _output_folder(output.parent)
-    bench_to_json(output, backend=args.backend, quick=args.quick)
+    bench_to_json(output, backend=args.backend, quick=args.quick,
+                  gpu_sweeps=tuple(args.gpu_sweep or ()))
     return 0
 
 
@@ -207,6 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions")
     p.add_argument("--backend", choices=["cpu", "cuda"], default="cpu")
     p.add_argument("--output", default="outputs/bench.json")
+    p.add_argument("--gpu-sweep", type=int, action="append", metavar="N",
+                   help="with a GPU: also time atlas run --backend cuda of the N x N default "
+                        "atlas, end to end (repeatable; 16384 is the target's size)")
     p.set_defaults(func=_cmd_bench)
     _add_view_and_orbit(sub, common)
     return parser

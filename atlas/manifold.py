@@ -80,6 +80,8 @@ class _DenseOutput:
     ``Dop853DenseOutput`` hold it)."""
 
     def __init__(self, t, t_old, h, y_old, F):
+        if np.size(h) == 0:
+            raise ValueError("a dense output needs at least one step")
         self.t, self.t_old, self.h, self.y_old = t, t_old, h, y_old
         self.F = np.ascontiguousarray(F[:, ::-1])  # highest power first
         self._lists = None  # the same as Python lists, for point()

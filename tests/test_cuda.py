@@ -144,9 +144,9 @@ print(json.dumps({"ok": ok, "why": why, "message": message}))
 def test_gpu_bench_under_simulator():
     code = r"""
 import json
-from atlas.bench_gpu import format_gpu_rows, run_gpu_bench
-r = run_gpu_bench(n=4, repeats=1, t_max=1.0, bulk_steps=4, sweep_sides=(6,),
-                  allow_simulator=True)
+from atlas.bench_gpu import format_gpu_rows, run_gpu_bench, sweep_rows
+r = run_gpu_bench(n=4, repeats=1, t_max=1.0, bulk_steps=4, allow_simulator=True)
+r["sweeps"] = sweep_rows([6], t_max=1.0)
 print(json.dumps({"default": run_gpu_bench() is None, "variants": sorted(r["variants"]),
                   "agree": r["labels_agree_fraction"], "cpu": r["cpu_labels"],
                   "sweeps": [s["n"] for s in r["sweeps"]], "table": format_gpu_rows(r),
@@ -157,7 +157,7 @@ print(json.dumps({"default": run_gpu_bench() is None, "variants": sorted(r["vari
     assert out["variants"] == ["fast", "straightforward"] and out["agree"] == 1.0
     assert out["cpu"]["agree_fraction"] == 1.0 and out["cpu"]["differ"] == 0
     assert out["sweeps"] == [6] and "6x6 default atlas" in out["table"]
-    assert "against CPU labels" in out["table"]
+    assert "against CPU labels" in out["table"] and "none differs" in out["table"]
     assert "fast" in out["table"] and out["skip"].startswith("GPU benchmark skipped")
 
 

@@ -117,6 +117,9 @@ def test_compiled_dense_output_is_scipys_polynomial():
     assert got.shape == (3, tau.size // 4, 4)
     want = sol.sol(tau)
     np.testing.assert_allclose(got.reshape(3, -1), want, rtol=1e-12, atol=1e-14)
+    # the same doubles as the scalar evaluation of the same polynomial (Python floats)
+    some = tau[::7]
+    np.testing.assert_array_equal(dense(some), np.array([dense.point(x) for x in some]).T)
     # beyond the ends: the first and last steps' polynomials, continued
     beyond = dense(np.array([ts[0] - 1e-3, ts[-1] + 1e-3]))
     np.testing.assert_allclose(beyond[:, 0], sol.sol.interpolants[0](ts[0] - 1e-3),

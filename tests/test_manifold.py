@@ -214,3 +214,32 @@ def test_copies_map_onto_the_left_branch():
         fin = np.isfinite(speed)
         x, v = to_left_branch(n, theta[fin] > n * PI, theta[fin], speed[fin])
         np.testing.assert_allclose(v, m.left(x), rtol=0, atol=1e-12)
+
+
+def test_nearest_sample_search_does_not_depend_on_the_cells():
+    """The bucket search stops once no unseen sample can be nearer: with cells of another
+    size (a different ring geometry) every distance and saddle is the same, for points on
+    the cells' edges and corners, outside the index's box, and far from every boundary."""
+    import copy
+
+    from atlas.manifold import bins
+
+    p = Pendulum(0.1, 1.0)
+    box = ((-3 * PI - 1, 3 * PI + 1), (-5.0, 5.0))
+    index = StableManifold(p, 5.0).index(box)
+    (t0, _), (v0, _) = box
+    k = np.arange(-2, 40)
+    rng = np.random.default_rng(9)
+    theta = np.concatenate([t0 + k * index.cell, rng.uniform(-15, 15, 200),
+                            [t0 - 3.0, t0 - 0.5, 12.0, 0.0]])
+    speed = np.concatenate([v0 + (k % 30) * index.cell, rng.uniform(-9, 9, 200),
+                            [0.0, -6.0, 7.5, 0.0]])
+    dist, n = index.nearest(theta, speed)
+    for cell in (0.07, 1.1):
+        other = copy.copy(index)
+        other.cell, other.shape, other.start, other.items = bins(
+            index.theta, index.theta_dot, box, cell)
+        d, m = other.nearest(theta, speed)
+        np.testing.assert_array_equal(d, dist)
+        np.testing.assert_array_equal(m, n)
+    assert np.isfinite(dist).all() and dist.max() > 1.0

@@ -10,6 +10,7 @@ from atlas.config import config_hash
 from atlas.store import FILLS
 from atlas.sweep import layout_of, run_identity
 from atlas.tiles import IdentityMismatch, TileStore, encode_chunk, partial_path
+from tests.helpers import REPO
 
 
 @pytest.fixture
@@ -56,6 +57,9 @@ def test_identity_decides_what_a_run_continues(cfg):
     del before["integrator"]["method"]
     assert config_hash(cfg) == hashlib.sha256(
         json.dumps(before, sort_keys=True).encode()).hexdigest()[:16]
+    # the hash atlas recorded for the shipped default config before the key existed
+    assert config_hash(atlas.load_config(REPO / "configs" / "default.yaml")) \
+        == "2f968ecadc4c3325"
     # enabled separatrices measure d_cert, which decides the tiles' certified statuses;
     # while they are off their settings change nothing
     sep = cfg.separatrices

@@ -79,8 +79,8 @@ def nearest_boundary(px, pv, c_theta, c_speed, c_n, c_branch, c_sample, bucket_s
         best, j = np.inf, -1
         # the point's offsets from its cell's edges: after ring r every sample not yet seen
         # is at least r·cell + the nearest of them away
-        off = min(min(x - (t0 + cx * cell), t0 + (cx + 1) * cell - x),
-                  min(v - (v0 + cy * cell), v0 + (cy + 1) * cell - v))
+        off = max(min(min(x - (t0 + cx * cell), t0 + (cx + 1) * cell - x),
+                      min(v - (v0 + cy * cell), v0 + (cy + 1) * cell - v)), 0.0)
         for r in range(reach + 1):
             for gx in range(cx - r, cx + r + 1):
                 if gx < 0 or gx >= ncx:
