@@ -575,8 +575,9 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
     backend = backend or cfg.execution.backend
     try:
         check_method(cfg.integrator.method, backend)
-    except ValueError as exc:
-        raise AtlasError(f"integrator.{exc}") from None
+    except ValueError as exc:  # a --backend override of a valid config: name the config
+        where = f"{config_path}: " if config_path is not None else ""
+        raise AtlasError(f"{where}integrator.{exc}") from None
     layout = layout_of(cfg, backend)
     if backend == "cuda":
         from .kernels.cuda import require_cuda

@@ -109,7 +109,7 @@ def test_a_cuda_override_of_a_trigfree_config_is_one_clear_line(tmp_path):
     cfg = tmp_path / "tf.yaml"
     cfg.write_text(f"integrator: {{method: rk4-trigfree}}\noutput: {tmp_path / 'tf.h5'}\n")
     proc = run_cli("run", cfg, "--backend", "cuda")
-    _one_clean_line(proc, "integrator.method: 'rk4-trigfree' has no CUDA kernel")
+    _one_clean_line(proc, f"{cfg}: integrator.method: 'rk4-trigfree' has no CUDA kernel")
     assert list(tmp_path.iterdir()) == [cfg]
 
 
