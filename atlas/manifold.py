@@ -201,7 +201,7 @@ class StableManifold:
         """Dense output, end point and samples of the integrated pieces."""
         first, rest = self._pieces[0], self._pieces[1:]
         self._sol = _DenseOutput.from_pieces(self._pieces)
-        t = np.concatenate([first.t] + [piece.t[1:] for piece in rest])
+        t = self._sol.t  # the step ends of every piece
         y = np.concatenate([first.y] + [piece.y[:, 1:] for piece in rest], axis=1)
         self.tau_end = float(t[-1])
         self.theta_end = float(y[0, -1])  # L(u) > speed for u < theta_end

@@ -109,40 +109,23 @@ def _step(theta, theta_dot, w2, a2, dt, torque=0.0):
             theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v))
 
 
-def _trigfree_step(theta, theta_dot, c, s, w2, a2, dt, torque=0.0):
-    """One RK4 step of (θ, θ̇, cos θ, sin θ), method "rk4-trigfree", written as
-    :data:`atlas.kernels.trigfree._TRIGFREE_STEP` (with τ = 0 the terms τ − x are −x
-    exactly, as in :func:`_step`)."""
-    h2 = 0.5 * dt
-    k1v = torque - w2 * s - a2 * theta_dot
-    k1c, k1s = -s * theta_dot, c * theta_dot
-    v2, c2, s2 = theta_dot + h2 * k1v, c + h2 * k1c, s + h2 * k1s
-    k2v = torque - w2 * s2 - a2 * v2
-    k2c, k2s = -s2 * v2, c2 * v2
-    v3, c3, s3 = theta_dot + h2 * k2v, c + h2 * k2c, s + h2 * k2s
-    k3v = torque - w2 * s3 - a2 * v3
-    k3c, k3s = -s3 * v3, c3 * v3
-    v4, c4, s4 = theta_dot + dt * k3v, c + dt * k3c, s + dt * k3s
-    k4v = torque - w2 * s4 - a2 * v4
-    k4c, k4s = -s4 * v4, c4 * v4
-    h6 = dt / 6.0
-    return (theta + h6 * (theta_dot + 2.0 * (v2 + v3) + v4),
-            theta_dot + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
-            c + h6 * (k1c + 2.0 * (k2c + k3c) + k4c),
-            s + h6 * (k1s + 2.0 * (k2s + k3s) + k4s))
-
-
-def _steps(theta, theta_dot, n, w2, a2, dt, torque, method, thetas, speeds):
+def _steps(theta, theta_dot, n, alpha, omega0, dt, torque, method, thetas, speeds):
     """``n`` steps of ``method`` from (θ, θ̇), appended to ``thetas``/``speeds``; returns the
-    last state. For "rk4-trigfree", (cos θ, sin θ) are re-synchronised from θ (libm) first,
-    as the method's scalar form does at every trap test."""
+    last state. For "rk4-trigfree" the step is the kernels' own source as plain Python
+    (:data:`atlas.kernels.trigfree._TRIGFREE_STEP`, τ ≠ 0 form: τ − x is −x at τ = 0), and
+    (cos θ, sin θ) are re-synchronised from θ (libm) first, as the method's scalar form does
+    at every trap test."""
     if method == "rk4-trigfree":
+        from .kernels.trigfree import trigfree_step_torque
+
+        step = trigfree_step_torque.py_func
         c, s = math.cos(theta), math.sin(theta)
         for _ in range(n):
-            theta, theta_dot, c, s = _trigfree_step(theta, theta_dot, c, s, w2, a2, dt, torque)
+            theta, theta_dot, c, s = step(theta, theta_dot, c, s, alpha, omega0, dt, torque)
             thetas.append(theta)
             speeds.append(theta_dot)
         return theta, theta_dot
+    w2, a2 = omega0 * omega0, 2.0 * alpha
     for _ in range(n):
         theta, theta_dot = _step(theta, theta_dot, w2, a2, dt, torque)
         thetas.append(theta)
@@ -218,7 +201,7 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
     method = resolve_method("cpu", "straightforward", method)
     check_running(running, torque, method)
     theta0, theta_dot0 = float(theta0), float(theta_dot0)
-    w2, a2 = omega0 * omega0, 2.0 * alpha
+    w2 = omega0 * omega0
     margin = trap_margin(dt, alpha, omega0)
     cap = energy_cap(dt, alpha, omega0, torque)
     shift = _shift(omega0, torque) if torque else 0.0
@@ -245,18 +228,21 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
             break
         if j == n_checks:
             break
-        th, v = _steps(th, v, check_every, w2, a2, dt, torque, method, thetas, speeds)
+        th, v = _steps(th, v, check_every, alpha, omega0, dt, torque, method,
+                   thetas, speeds)
     limit = n_checks * check_every
     if result["status"] == TRAPPED:
         level = settle * (2.0 * w2 if torque == 0.0 else
                           min(_saddle_energies(alpha, omega0, torque)))
         while (len(thetas) - 1 < limit
                and _well_energy(th, v, w2, torque, shift, vers, method)[1] > level):
-            th, v = _steps(th, v, check_every, w2, a2, dt, torque, method, thetas, speeds)
+            th, v = _steps(th, v, check_every, alpha, omega0, dt, torque, method,
+                   thetas, speeds)
     elif result["status"] == RUNNING:
         start = th
         while len(thetas) - 1 < limit and abs(th - start) < turns * TWO_PI:
-            th, v = _steps(th, v, check_every, w2, a2, dt, torque, method, thetas, speeds)
+            th, v = _steps(th, v, check_every, alpha, omega0, dt, torque, method,
+                   thetas, speeds)
     theta, theta_dot = np.array(thetas), np.array(speeds)
     return Orbit(theta0, theta_dot0, float(alpha), float(omega0), float(dt), float(t_max),
                  np.arange(theta.size) * dt, theta, theta_dot, cap=cap, margin=margin,

@@ -168,6 +168,31 @@ def _dense(tau, t_old, h, y_old, F):
     return out + y_old
 
 
+@nb.njit(inline="always")
+def dense_step(tau, t, last):
+    """The step of a whole solution's dense output that holds τ: bisection in the step ends
+    ``t`` (before the first: step 0; after the last: ``last``)."""
+    lo, hi = 0, t.size - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if t[mid] <= tau:
+            lo = mid
+        else:
+            hi = mid
+    return min(lo, last)
+
+
+@nb.njit(inline="always")
+def dense_component(F, step, c, x, y_old):
+    """Component ``c`` of step ``step``'s polynomial at x = (τ − t_old)/h, ``F`` (steps ×
+    powers × components) highest power first."""
+    y = 0.0
+    for p in range(F.shape[1]):
+        y += F[step, p, c]
+        y *= x if p % 2 == 0 else 1.0 - x
+    return y + y_old[step, c]
+
+
 @cached_njit(nogil=True)
 def dense_output(tau, t, t_old, h, y_old, F, out):
     """The dense output of a whole solution at each ``tau`` into ``out`` (components ×
@@ -175,23 +200,11 @@ def dense_output(tau, t, t_old, h, y_old, F, out):
     first step; after the last: the last), then its polynomial, ``F`` (steps × powers ×
     components) highest power first, evaluated as :class:`atlas.manifold._DenseOutput` did
     with numpy (the same operations in the same order: the same doubles)."""
-    last = h.size - 1
     for i in range(tau.size):
-        lo, hi = 0, t.size - 1
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if t[mid] <= tau[i]:
-                lo = mid
-            else:
-                hi = mid
-        step = min(lo, last)
+        step = dense_step(tau[i], t, h.size - 1)
         x = (tau[i] - t_old[step]) / h[step]
         for c in range(y_old.shape[1]):
-            y = 0.0
-            for p in range(F.shape[1]):
-                y += F[step, p, c]
-                y *= x if p % 2 == 0 else 1.0 - x
-            out[c, i] = y + y_old[step, c]
+            out[c, i] = dense_component(F, step, c, x, y_old)
 
 
 @cached_njit(nogil=True)

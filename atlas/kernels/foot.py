@@ -30,6 +30,7 @@ import numba as nb
 import numpy as np
 
 from . import cached_njit
+from .dop853 import dense_component, dense_step
 
 #: Newton iterations for a foot point (quadratic convergence from a sample ≤ 0.02 away).
 NEWTON = 6
@@ -37,25 +38,11 @@ NEWTON = 6
 
 @nb.njit(inline="always")
 def _dense(tau, t, t_old, h, y_old, F):
-    """(θ, θ̇) of the dense output at τ (the step found by bisection in ``t``)."""
-    lo, hi = 0, t.size - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if t[mid] <= tau:
-            lo = mid
-        else:
-            hi = mid
-    step = min(lo, h.size - 1)
+    """(θ, θ̇) of the dense output at τ (:func:`atlas.kernels.dop853.dense_output`'s
+    evaluation, at one τ)."""
+    step = dense_step(tau, t, h.size - 1)
     x = (tau - t_old[step]) / h[step]
-    y0 = 0.0
-    y1 = 0.0
-    for i in range(F.shape[1]):
-        y0 += F[step, i, 0]
-        y1 += F[step, i, 1]
-        w = x if i % 2 == 0 else 1.0 - x
-        y0 *= w
-        y1 *= w
-    return y0 + y_old[step, 0], y1 + y_old[step, 1]
+    return dense_component(F, step, 0, x, y_old), dense_component(F, step, 1, x, y_old)
 
 
 @cached_njit(parallel=True, nogil=True)
