@@ -35,7 +35,7 @@ from .labels import (
     trap_margin,
 )
 from .layout import point_group
-from .validate import STATUS_MEANINGS
+from .validate import STATUS_MEANINGS, file_method
 
 __all__ = ["Orbit", "integrate", "report", "plot_orbit", "parse_number", "running_barrier_for",
            "cycle_from_group"]
@@ -419,7 +419,7 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
                 raise AtlasError(f"--{name.replace('_', '-')} {given:g}: {path} was computed "
                                  f"with {name} = {stored:g}; drop the option")
         dt, t_max = file_dt, file_t_max
-        method = str(ds.attrs.get("method", defaults.METHOD))
+        method = file_method(ds.attrs, path)
         nearest = _nearest(point, theta0, theta_dot0)
         if "boundary_shift" in point:
             shift = float(point["boundary_shift"])

@@ -35,6 +35,7 @@ import numbers
 
 import numpy as np
 
+from . import defaults
 from .errors import InputFileError
 from .kernels import METHODS
 from .layout import PARAMETERS, point_nodes
@@ -82,6 +83,19 @@ def format_version(attrs: dict, path) -> int:
         _refuse(path, f"format_version {value}, an older layout than this atlas reads "
                 f"({FORMAT_VERSION}); run its config again to rewrite it")
     return value
+
+
+def file_method(attrs: dict, path) -> str:
+    """The discretisation the file's labels come from: its ``method`` attribute (bytes
+    decoded; "rk4" where absent), or one InputFileError line if it is not one of
+    :data:`atlas.kernels.METHODS` as text."""
+    method = attrs.get("method", defaults.METHOD)
+    if isinstance(method, bytes):
+        method = method.decode("utf-8", "replace")
+    if not isinstance(method, str) or method not in METHODS:
+        _refuse(path, f"attribute method = {str(method)[:40]!r} is not one of "
+                f"{', '.join(METHODS)}")
+    return method
 
 
 def parse_config(attrs: dict, path):
@@ -199,13 +213,7 @@ def check_dataset(ds, path) -> None:
         every = _number(attrs, "check_every", path, positive=True)
         if every != int(every):
             _refuse(path, f"attribute check_every = {every!r} is not an integer")
-    if "method" in attrs:
-        method = attrs["method"]
-        if isinstance(method, bytes):
-            method = method.decode("utf-8", "replace")
-        if not isinstance(method, str) or method not in METHODS:
-            _refuse(path, f"attribute method = {str(method)[:40]!r} is not one of "
-                    f"{', '.join(METHODS)}")
+    file_method(attrs, path)
     parse_config(attrs, path)
 
 

@@ -41,13 +41,13 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from . import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
+from . import lazy_dask  # noqa: F401 (installs itself)
 from .errors import AtlasError, InputFileError
 from .kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
 from .labels import CHECK_EVERY, energy_cap, trap_margin
 from .layout import at_point, point_group
 from .layout import points as parameter_points
-from .validate import STATUS_MEANINGS
+from .validate import STATUS_MEANINGS, file_method
 
 __all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json",
            "DIST_STEPS"]
@@ -218,7 +218,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         "created": _text(ds.attrs.get("created", "")),
         "atlas_version": _text(ds.attrs.get("atlas_version", "")),
         "dt": dt, "t_max": t_max, "check_every": check_every,
-        "method": str(ds.attrs.get("method", defaults.METHOD)),
+        "method": file_method(ds.attrs, path),
         "theta0": _uniform(ds["theta0"].values, "theta0", path),
         "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
         "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
