@@ -52,7 +52,6 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -88,11 +87,11 @@ TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
 _numpy_step = make_rk4_step(lambda p, delta: np.sin(p + delta), reduce=lambda x: x).py_func
 
 
-def _median_times(runs: dict, repeats: int) -> dict:
+def _median_times(runs: dict, repeats: int, warm_up: bool = True) -> dict:
     """{name: (median s, best s)} of the callables in ``runs``: one warm-up call each (which
-    also compiles), then ``repeats`` rounds that call them in turn, so that every variant sees
-    the same machine load."""
-    for run in runs.values():
+    also compiles; ``warm_up=False``: the caller has just run them), then ``repeats`` rounds
+    that call them in turn, so that every variant sees the same machine load."""
+    for run in runs.values() if warm_up else ():
         run()
     times = {name: [] for name in runs}
     for _ in range(repeats):
@@ -160,16 +159,12 @@ print(t1 - t0, t2 - t1)
 
 def _jit_times():
     """(cold, warm) dicts of import_s, first_call_s, process_s (wall incl. interpreter)."""
-    root = str(Path(__file__).resolve().parents[1])
+    from .bench_e2e import run_python
+
     result = []
     with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache,
-                   PYTHONPATH=os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")])))
         for _ in ("cold", "warm"):
-            t0 = time.perf_counter()
-            out = subprocess.run([sys.executable, "-c", _JIT_SCRIPT], env=env, check=True,
-                                 capture_output=True, text=True, timeout=600)
-            wall = time.perf_counter() - t0
+            wall, out = run_python(["-c", _JIT_SCRIPT], NUMBA_CACHE_DIR=cache)
             import_s, call_s = map(float, out.stdout.split()[-2:])
             result.append({"import_s": import_s, "first_call_s": call_s, "process_s": wall})
     return result
@@ -240,7 +235,7 @@ def _thread_scaling(side: int, repeats: int, p: dict) -> list[dict]:
             labels = _label(label_lanes, th, v, CHECK_EVERY, p)
             first = first or labels
             s = _median_times({"map": _label_run(label_lanes, th, v, CHECK_EVERY, p)},
-                              repeats)["map"][0]
+                              repeats, warm_up=False)["map"][0]  # warmed by the labels above
             rows.append({"threads": count, "wall_s": s, "same_labels": all(
                 np.array_equal(a, b) for a, b in zip(labels, first))})
     finally:
@@ -351,14 +346,15 @@ def run_bench(sizes=None, repeats: int = 5, quick: bool = False, jit: bool = Tru
     torque = _torque_rows(QUICK_TORQUE if quick else MAP_N, repeats)
     plot = _plot_rows(QUICK_PLOT_SIDES if quick else PLOT_SIDES, repeats) if plots else None
 
+    mismatches = _label_mismatches(atl, ref16)
     result = {
         "machine": machine_info(), "problem": {**p, "grid": MAP_N, "check_every": CHECK_EVERY},
         "torque": torque,
         "repeats": repeats, "quick": quick, "targets": TARGETS,
         "map": {"rows": map_rows,
-                "labels_equal_straightforward": _same_labels(atl, ref16),
-                "trigfree_labels_equal_straightforward": _same_labels(atl_tf, ref_tf),
-                "label_mismatches": _label_mismatches(atl, ref16),
+                "labels_equal_straightforward": mismatches == 0,
+                "trigfree_labels_equal_straightforward": _label_mismatches(atl_tf, ref_tf) == 0,
+                "label_mismatches": mismatches,
                 "trigfree_vs_rk4_label_mismatches": _label_mismatches(atl_tf, atl),
                 "trigfree_vs_rk4_status_mismatches": int(np.sum(atl_tf[1] != atl[1])),
                 "useful_steps": useful},
@@ -500,12 +496,9 @@ def _cli_plot(path) -> tuple[float, float | None, float | None]:
     """(wall s, peak RSS in bytes, peak RSS of its largest drawing process in bytes; None
     where unknown) of ``atlas plot path`` in a subprocess (the CLI's main in a fresh
     interpreter; the figures are drawn by forks of it, :func:`atlas.plotting.plot_file`)."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [
-        str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")])))
-    t0 = time.perf_counter()
-    out = subprocess.run([sys.executable, "-c", _CLI_PLOT, str(path)], env=env, check=True,
-                         capture_output=True, text=True, timeout=600)
-    wall = time.perf_counter() - t0
+    from .bench_e2e import run_python
+
+    wall, out = run_python(["-c", _CLI_PLOT, str(path)])
     code, hwm, drawing = out.stdout.split()[-3:]
     if code != "0":
         raise RuntimeError(f"atlas plot {path}: {out.stderr.strip()}")
@@ -559,13 +552,6 @@ def _plot_rows(sides, repeats: int) -> dict:
 
 def _fmt_bytes(b) -> str:
     return "n/a" if b is None else f"{b / 2**20:.0f} MB" if b < 2**30 else f"{b / 2**30:.2f} GB"
-
-
-def _same_labels(a, b) -> bool:
-    """Equal statuses, and equal attractors where trapped."""
-    return bool(np.array_equal(a[1], b[1])
-                and np.array_equal(np.where(a[1] == TRAPPED, a[0], 0),
-                                   np.where(b[1] == TRAPPED, b[0], 0)))
 
 
 def _label_mismatches(a, b) -> int:

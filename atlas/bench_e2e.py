@@ -38,14 +38,8 @@ __all__ = ["end_to_end", "format_end_to_end", "OVERHEAD_S", "KERNEL_FACTOR"]
 #: The budget: imports + KERNEL_FACTOR × the 512² map's kernel time + OVERHEAD_S.
 KERNEL_FACTOR, OVERHEAD_S = 3.0, 0.5
 
-_CONFIG = """\
-name: bench-end-to-end
-pendulum: {{alpha: {alpha}, omega0: {omega0}}}
-grid:
-  theta0: {{start: -3pi, stop: 3pi, num: {n}}}
-  theta_dot0: {{start: -4.0, stop: 4.0, num: {n}}}
-integrator: {{dt: {dt}, t_max: {t_max}}}
-"""
+#: The default problem's config: every key at its default (atlas.defaults).
+_CONFIG = "name: bench-end-to-end\n"
 _IMPORTS = "import numba, xarray, h5netcdf"
 _FIRST_CALL = (_IMPORTS + "; import numpy as np; from atlas import label; "
                "label(np.zeros(64), np.linspace(-3, 3, 64), alpha=0.1, omega0=1.0)")
@@ -62,39 +56,36 @@ def warm_bytecode() -> bool:
     return bool(compileall.compile_dir(str(Path(__file__).resolve().parent), quiet=2))
 
 
-def _env() -> dict:
+def run_python(argv: list[str], **env) -> tuple[float, subprocess.CompletedProcess]:
+    """(wall s, the finished process) of a fresh interpreter running ``argv`` with this atlas
+    first on its path and ``env`` added to the environment (output captured)."""
     root = str(Path(__file__).resolve().parents[1])
-    return dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [
-        root, os.environ.get("PYTHONPATH")])))
-
-
-def _wall(argv: list[str]) -> tuple[float, str]:
-    """(wall s, stderr) of a fresh interpreter running ``argv``."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [
+        root, os.environ.get("PYTHONPATH")])), **env)
     t0 = time.perf_counter()
-    out = subprocess.run([sys.executable, *argv], env=_env(), check=True, capture_output=True,
+    out = subprocess.run([sys.executable, *argv], env=env, check=True, capture_output=True,
                          text=True, timeout=600)
-    return time.perf_counter() - t0, out.stderr
+    return time.perf_counter() - t0, out
 
 
 def end_to_end(map_kernel_s: float, repeats: int = 3) -> dict:
     """Time the whole ``atlas run`` of the default problem against the budget (module
     docstring); ``map_kernel_s`` [s]: the default method's 512² map kernel, from the same
     bench run."""
-    p = defaults.problem()
     bytecode = warm_bytecode()
     runs, phases = [], []
     with tempfile.TemporaryDirectory(prefix="atlas-bench-e2e-") as tmp:
         config = Path(tmp) / "default.yaml"
-        config.write_text(_CONFIG.format(n=defaults.GRID_NUM, **p))
+        config.write_text(_CONFIG)
         for i in range(repeats + 1):  # the first is the warm-up
-            wall, log = _wall(["-m", "atlas", "run", str(config), "-v",
-                               "-o", str(Path(tmp) / f"run{i}.h5")])
+            wall, out = run_python(["-m", "atlas", "run", str(config), "-v",
+                                    "-o", str(Path(tmp) / f"run{i}.h5")])
             if i:
                 runs.append(wall)
                 phases.append({m.group(1).strip(): float(m.group(2)) for m in
-                               map(_PHASE.match, log.splitlines()) if m})
-        imports = [_wall(["-c", _IMPORTS])[0] for _ in range(repeats)]
-        first_call = [_wall(["-c", _FIRST_CALL])[0] for _ in range(repeats)]
+                               map(_PHASE.match, out.stderr.splitlines()) if m})
+        imports = [run_python(["-c", _IMPORTS])[0] for _ in range(repeats)]
+        first_call = [run_python(["-c", _FIRST_CALL])[0] for _ in range(repeats)]
     import_s = statistics.median(imports)
     budget = import_s + KERNEL_FACTOR * map_kernel_s + OVERHEAD_S
     run_s = statistics.median(runs)
