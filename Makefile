@@ -52,7 +52,7 @@ bench: $(STAMP) ## benchmark table → outputs/bench.json
 	$(BIN)/atlas bench
 
 faults: $(STAMP) ## soak: kill -9, SIGTERM, disk full, lock races, Dask faults; prints one table
-	$(BIN)/python -m atlas.faults
+	$(BIN)/python -m tools.faults
 
 lint: $(STAMP) ## ruff
 	$(BIN)/ruff check atlas tests

@@ -10,18 +10,19 @@ The file-level API (config, run, open) loads xarray/pydantic on first use, so th
 ``import atlas`` for labelling alone starts fast.
 """
 
-from . import linear
-from .errors import AtlasError, BackendUnavailable, ConfigError, InputFileError
-from .labels import LabelResult, label
-from .model import Pendulum, critical_points
+from atlas.errors import AtlasError, BackendUnavailable, ConfigError, InputFileError
+from atlas.labels.labelling import LabelResult, label
+from atlas.physics import linear
+from atlas.physics.pendulum import Pendulum, critical_points
 
 __version__ = "0.1.0"
 __all__ = ["label", "linear", "LabelResult", "load_config", "Config", "run", "open",
            "Pendulum", "critical_points", "AtlasError", "ConfigError", "InputFileError",
            "BackendUnavailable", "__version__"]
 
-_LAZY = {"load_config": ("config", "load_config"), "Config": ("config", "Config"),
-         "run": ("sweep", "run"), "open": ("store", "open_atlas")}
+_LAZY = {"load_config": ("atlas.pipeline.config", "load_config"),
+         "Config": ("atlas.pipeline.config", "Config"),
+         "run": ("atlas.pipeline.sweep", "run"), "open": ("atlas.store.atlasfile", "open_atlas")}
 
 
 def __getattr__(name: str):
@@ -29,7 +30,11 @@ def __getattr__(name: str):
         from importlib import import_module
 
         module, attr = _LAZY[name]
-        value = getattr(import_module(f".{module}", __name__), attr)
+        value = getattr(import_module(module), attr)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'atlas' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

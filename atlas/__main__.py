@@ -1,5 +1,5 @@
 """``python -m atlas``: the ``atlas`` command line (:mod:`atlas.cli`)."""
 
-from .cli import entry
+from atlas.cli import entry
 
 entry()

@@ -17,7 +17,7 @@ import signal
 import sys
 from pathlib import Path
 
-from .errors import EXIT_BAD_INPUT, AtlasError, Terminated
+from atlas.errors import EXIT_BAD_INPUT, AtlasError, Terminated
 
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
@@ -40,23 +40,23 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _cmd_run(args) -> int:
-    from .config import load_config
+    from atlas.pipeline.config import load_config
 
     cfg = load_config(args.config, output=args.output)  # a bad config is refused before
-    from . import sweep  # the heavy imports (xarray, Numba kernels)
+    from atlas.pipeline import sweep  # the heavy imports (xarray, Numba kernels)
 
     try:
         tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend,
                          force=args.force, config_path=args.config, open_result=False)
     except KeyboardInterrupt as exc:
-        from .tiles import partial_path
+        from atlas.store.partial import partial_path
 
         what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
         print(f"atlas: {what}; finished tiles are kept in {partial_path(cfg.output)}; "
               "run the same command again to continue", file=sys.stderr)
         return _interrupted(exc)
     if not args.quiet:
-        from .info import summary_lines
+        from atlas.views.info import summary_lines
 
         print(f"wrote {cfg.output}")
         for line in summary_lines(tree):
@@ -65,7 +65,7 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_info(args) -> int:
-    from .info import info_lines
+    from atlas.views.info import info_lines
 
     for line in info_lines(args.file):
         print(line)
@@ -73,7 +73,7 @@ def _cmd_info(args) -> int:
 
 
 def _cmd_plot(args) -> int:
-    from .plotting import plot_file
+    from atlas.views.plotting import plot_file
 
     for path in plot_file(args.file):  # all that is drawn is read before a PNG is written
         print(f"wrote {path}")
@@ -91,7 +91,7 @@ def _output_folder(folder: Path) -> Path:
 
 
 def _cmd_figures(args) -> int:
-    from .figures import write_all
+    from atlas.commands.figures import write_all
 
     for path in write_all(_output_folder(Path(args.outdir))):
         print(f"wrote {path}")
@@ -99,7 +99,7 @@ def _cmd_figures(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    from .bench import bench_to_json
+    from atlas.commands.bench import bench_to_json
 
     output = Path(args.output)
     _output_folder(output.parent)
@@ -109,14 +109,20 @@ def _cmd_bench(args) -> int:
 
 
 def _cmd_view(args) -> int:
-    from .view import write_view
+    from atlas.views.page import write_view
 
     print(f"wrote {write_view(args.file, args.output)}")
     return 0
 
 
 def _cmd_orbit(args) -> int:
-    from .orbit import check_file_argument, default_output, parse_number, plot_orbit, report
+    from atlas.commands.orbit import (
+        check_file_argument,
+        default_output,
+        parse_number,
+        plot_orbit,
+        report,
+    )
 
     if len(args.values) not in (2, 3):
         raise AtlasError("orbit: give THETA0 THETA_DOT0, or FILE THETA0 THETA_DOT0 "
@@ -239,7 +245,7 @@ def _os_error(exc: OSError, args) -> tuple[str, int]:
     """An OSError that reached the CLI: a read of the input file that failed inside HDF5 (no
     system errno: damaged data, checked metadata notwithstanding) is bad input, exit 2; a
     failure of the system (disk full, write refused) is the environment's, exit 1."""
-    from .errors import EXIT_ENVIRONMENT
+    from atlas.errors import EXIT_ENVIRONMENT
 
     reason = os.strerror(exc.errno) if exc.errno else (str(exc).strip().splitlines() or
                                                        [type(exc).__name__])[0]

@@ -1,6 +1,6 @@
 """Every default of atlas, written once: the essay's Figure 9 problem and the integrator.
 
-The config models (:mod:`atlas.config`), the public functions' keyword defaults and the
+The config models (:mod:`atlas.pipeline.config`), the public functions' keyword defaults and the
 benchmarks all read these, so a default changes in one place.
 """
 

@@ -9,7 +9,7 @@ Failures become messages in one place, the CLI (:func:`atlas.cli.main`), which p
 * **1** — a failure of the environment during a run (:class:`EnvironmentFailure`:
   :class:`StorageError`, a disk full or a write refused; :class:`SeparatrixError`): the
   finished tiles are kept and running the same command again continues;
-* **3** — the output is locked by another run (:class:`atlas.lock.OutputLocked`, an
+* **3** — the output is locked by another run (:class:`atlas.pipeline.lock.OutputLocked`, an
   :class:`EnvironmentFailure` too).
 
 Ctrl-C and SIGTERM are not errors: the CLI exits 130 and 143 (:class:`Terminated`).

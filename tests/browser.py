@@ -1,6 +1,6 @@
 """A headless Chromium driven over the Chrome DevTools Protocol on a pipe (no extra package,
 no network): enough to load a page, evaluate JavaScript, click, watch for dialogs and take a
-screenshot. Used by ``tests/test_view.py``.
+screenshot. Used by ``tests/views/test_view.py``.
 
 Chromium reads commands from its fd 3 and writes replies to fd 4 when started with
 ``--remote-debugging-pipe``; each message is one JSON object followed by a NUL byte.

@@ -79,9 +79,9 @@ def run_cli(*args, cwd=None, env=None, timeout=300):
 
 def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
     """Make the sweep's ``call``-th tile computation raise ``error`` (a crash mid-run)."""
-    from atlas import sweep
+    from atlas.pipeline import schedule
 
-    real, calls = sweep.compute_tile, []
+    real, calls = schedule.compute_tile, []
 
     def crashing(*args, **kwargs):
         calls.append(1)
@@ -89,12 +89,12 @@ def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
             raise error
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(sweep, "compute_tile", crashing)
+    monkeypatch.setattr(schedule, "compute_tile", crashing)
 
 
 def lock_is_free(output: Path) -> bool:
     """True if no process holds ``output``'s lock (the lock file itself stays in place)."""
-    from atlas.lock import OutputLocked, output_lock
+    from atlas.pipeline.lock import OutputLocked, output_lock
 
     try:
         with output_lock(Path(output)):

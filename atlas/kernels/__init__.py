@@ -18,7 +18,7 @@ for θ̈ = −ω0² sin θ − 2αθ̇ + τ (τ = ``torque`` [rad s⁻²]).
     rest state (θ* + 2πk, 0) (for τ = 0: k = round(θ/2π), E_k = ½θ̇² + 2ω0² sin²(φ/2)).
     The orbit is *trapped* in well k when E_k < ``energy_cap``, the lower saddle's energy
     relative to the well lowered by the safety margin (2ω0²(1 − m) for τ = 0; see
-    :func:`atlas.labels.energy_cap`; −inf when |τ| ≥ ω0²: there is no well);
+    :func:`atlas.labels.labelling.energy_cap`; −inf when |τ| ≥ ω0²: there is no well);
   - the *running certificate* (only when ``running_g`` is non-empty): with σ = sign(τ)
     (+1 for τ = 0), u = σθ and w = σθ̇, the orbit is *running* when w ≤ ``running_top`` and
     w ≥ ĝ(u), where ĝ is the linear interpolation of the M + 1 samples ``running_g`` on the
@@ -26,7 +26,7 @@ for θ̈ = −ω0² sin θ − 2αθ̇ + τ (τ = ``torque`` [rad s⁻²]).
     ``running_g[0]``). The barrier is thus always given for positive rotation (the τ > 0
     frame, as built for |τ|): the kernel mirrors it (θ → −θ, θ̇ → −θ̇) for τ < 0. That the
     region is forward-invariant, holds the running limit cycle and no rest state, and has
-    the margins the numerical orbit needs is the builder's business (``atlas.running``).
+    the margins the numerical orbit needs is the builder's business (``atlas.physics.running``).
 
   The energy trap is tested first; the orbit's integration stops at the first check where
   either certificate holds.
@@ -61,22 +61,16 @@ import hashlib
 import os
 from pathlib import Path
 
-import numpy as np
+from atlas.status import (  # noqa: F401 (the kernels' status codes, re-exported)
+    ATTRACTOR_FILL,
+    NEAR_BOUNDARY,
+    NONFINITE,
+    RUNNING,
+    RUNNING_NEAR_BOUNDARY,
+    TRAPPED,
+    UNRESOLVED,
+)
 
-TRAPPED, UNRESOLVED, NONFINITE = 0, 1, 2
-#: Status set after labelling (never by a kernel): trapped, but not certified for the exact
-#: equation (closer than d_cert to a basin boundary; see :mod:`atlas.certificate`).
-NEAR_BOUNDARY = 3
-#: Certified to converge to the running limit cycle (τ ≠ 0): the orbit entered the running
-#: certificate's forward-invariant region (contract above). ``attractor`` stays at its fill
-#: value; the direction of rotation is sign(τ) (:class:`atlas.labels.LabelResult`).
-RUNNING = 4
-#: Status set after labelling (never by a kernel): running, but not certified for the exact
-#: equation (closer than d_cert to a basin boundary, or on another basin's side).
-RUNNING_NEAR_BOUNDARY = 5
-#: Attractor index where status ≠ trapped in a label result (int16; also the file's
-#: _FillValue), the counterpart of the status codes above.
-ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
 #: Discretisations the CPU kernels offer (a config's ``integrator.method``; the default is
 #: :data:`atlas.defaults.METHOD`, "rk4": the CUDA kernels' method too).
 METHODS = ("rk4", "rk4-trigfree")

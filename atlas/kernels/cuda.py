@@ -21,7 +21,7 @@ agree with the CPU kernel of method "rk4" exactly except for orbits whose fate i
 rounding (within ~1e-12 of a separatrix, or an energy within ~1e-13 of the cap at a test):
 libdevice's sin, the polynomial sin and FMA contraction each round differently from the CPU's
 libm sin.
-``tests/test_cuda.py`` checks equality on a grid and hand-picked orbits.
+``tests/kernels/test_cuda.py`` checks equality on a grid and hand-picked orbits.
 
 Torque. :func:`kernels` compiles the τ = 0 kernels of earlier versions, unchanged;
 :func:`torque_kernels` (compiled on first use) the tilted one, built the same way from the
@@ -45,10 +45,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import BackendUnavailable
-from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED
-from .fastsin import INV_PI, PI_1, PI_2, PI_3, sin_poly
-from .rk4 import (
+from atlas.errors import BackendUnavailable
+from atlas.kernels import NONFINITE, RUNNING, TRAPPED, UNRESOLVED
+from atlas.kernels.fastsin import INV_PI, PI_1, PI_2, PI_3, sin_poly
+from atlas.kernels.rk4 import (
     INV_TWO_PI,
     make_rk4_step,
     make_rk4_step_torque,

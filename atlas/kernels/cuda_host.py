@@ -15,9 +15,9 @@ import threading
 
 import numpy as np
 
-from . import uses_torque
-from .cuda import _import_cuda, _simulator, kernels, torque_kernels
-from .rk4 import torque_model
+from atlas.kernels import uses_torque
+from atlas.kernels.cuda import _import_cuda, _simulator, kernels, torque_kernels
+from atlas.kernels.rk4 import torque_model
 
 __all__ = ["label_cuda", "propagate_cuda", "chunk_orbits", "release_buffers", "CHUNK_CAP",
            "MEMORY_FRACTION", "WAVES"]

@@ -1,6 +1,6 @@
 """DOP853 for the stable manifold of the saddle (π, 0), compiled: :func:`stable_manifold`.
 
-The exact basin boundaries (:mod:`atlas.manifold`) are one curve, the left branch L of the
+The exact basin boundaries (:mod:`atlas.boundaries.manifold`) are one curve, the left branch L of the
 saddle (π, 0), integrated in reversed time at rtol = atol = 1e-13 with dense output, together
 with Q(τ) = ∫ θ̇² dτ. That used to be scipy's ``solve_ivp(method="DOP853")``, whose import
 alone (scipy.integrate pulls in scipy.optimize, special, sparse and linalg) took about a tenth
@@ -16,7 +16,7 @@ of a whole ``atlas run``. This is the same method, step for step, compiled:
   the dense output by bisection to 4 ulp; the last step's dense output is kept whole and the
   solution ends at the event, as ``solve_ivp`` does.
 
-It agrees with scipy's DOP853 on the same problem to rounding (tests/test_manifold.py
+It agrees with scipy's DOP853 on the same problem to rounding (tests/boundaries/test_manifold.py
 compares the two). The right-hand side is eq. (1) with τ = 0 in reversed time:
 (θ, θ̇, Q)' = (−θ̇, ω0² sin θ + 2αθ̇, θ̇²).
 """
@@ -28,7 +28,7 @@ import math
 import numba as nb
 import numpy as np
 
-from . import cached_njit
+from atlas.kernels import cached_njit
 
 __all__ = ["stable_manifold", "FINISHED", "EVENT", "STEP_TOO_SMALL", "FULL"]
 
@@ -198,7 +198,7 @@ def dense_output(tau, t, t_old, h, y_old, F, out):
     """The dense output of a whole solution at each ``tau`` into ``out`` (components ×
     len(tau)): the step found by bisection in the step ends ``t`` (before the first: the
     first step; after the last: the last), then its polynomial, ``F`` (steps × powers ×
-    components) highest power first, evaluated as :class:`atlas.manifold._DenseOutput` did
+    components) highest power first, evaluated as :class:`atlas.boundaries.manifold._DenseOutput` did
     with numpy (the same operations in the same order: the same doubles)."""
     for i in range(tau.size):
         step = dense_step(tau[i], t, h.size - 1)

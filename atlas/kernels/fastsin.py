@@ -16,7 +16,7 @@ table), so a loop over lanes becomes AVX-512/AVX2 code:
    do for a lone sin; degree 21 keeps |r| ≤ 2 accurate, which the shared reduction below needs.
    Its own error on [−2, 2] is ≈ 3e-16, the rounding of the last Horner steps.
 
-Accuracy (``tests/test_fastsin.py``, against ``numpy.sin`` over dense uniform and random
+Accuracy (``tests/kernels/test_fastsin.py``, against ``numpy.sin`` over dense uniform and random
 samples plus the neighbourhoods of every multiple of π/2, compiled with the kernels' flags):
 max |fast_sin(x) − sin x| ≤ ``ERROR_BOUND`` = 1e-15 for |x| ≤ ``EXACT_RANGE`` = 2²⁰ ≈ 1.0e6
 (measured 5.6e-16). The kernels pass it much less: the trap test's sin(φ/2) has |φ/2| ≤ π/2,
@@ -42,7 +42,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from .rk4 import FASTMATH
+from atlas.kernels.rk4 import FASTMATH
 
 #: Max abs error of fast_sin vs sin for |x| ≤ EXACT_RANGE (and of sin_poly on |r| ≤ POLY_RANGE).
 ERROR_BOUND = 1e-15

@@ -1,7 +1,7 @@
-"""Foot points on the exact basin boundaries: the nearest-boundary kernel of atlas.manifold.
+"""Foot points on the exact basin boundaries: the nearest-boundary kernel of atlas.boundaries.manifold.
 
 The boundaries are copies (2π shifts and point reflections) of one curve, the left branch L
-of the saddle (π, 0), integrated by DOP853 with dense output (:mod:`atlas.manifold`). For each
+of the saddle (π, 0), integrated by DOP853 with dense output (:mod:`atlas.boundaries.manifold`). For each
 query point the kernel
 
 1. finds the nearest *sample* of any copy by a bucket search: samples are binned in square
@@ -29,8 +29,8 @@ import math
 import numba as nb
 import numpy as np
 
-from . import cached_njit
-from .dop853 import dense_component, dense_step
+from atlas.kernels import cached_njit
+from atlas.kernels.dop853 import dense_component, dense_step
 
 #: Newton iterations for a foot point (quadratic convergence from a sample ≤ 0.02 away).
 NEWTON = 6

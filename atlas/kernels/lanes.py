@@ -12,8 +12,8 @@ Two methods share one lane machinery (:func:`make_label_chunk`):
 Both follow the kernel contract of :mod:`atlas.kernels` exactly (same arguments, outputs and
 semantics as :func:`~atlas.kernels.rk4.label_straightforward`), and return how many orbits
 took each path (below), which they also log at debug level (logger ``atlas.kernels.lanes``).
-They are measured by :mod:`atlas.bench` and checked by ``tests/test_lanes.py`` and
-``tests/test_trigfree.py``.
+They are measured by :mod:`atlas.commands.bench` and checked by ``tests/kernels/test_lanes.py`` and
+``tests/kernels/test_trigfree.py``.
 
 Why lanes. Orbits are independent, so ``LANES`` = 32 of them are advanced in lockstep as a
 structure of arrays (``th[LANES]``, ``v[LANES]``, and ``c``, ``s``), the loop over lanes
@@ -37,7 +37,7 @@ Paths. Each orbit is sent, by its initial state, to one of
   measured ≈ 0.8× the SHARED rate, where the scalar libm path (used before) ran at ≈ 1/12;
 * SCALAR — the method's scalar form with libm (``rk4.label_orbit``; ``trigfree.
   label_orbit_trigfree``) for non-finite input, α < 0 and |θ0| beyond half of fast_sin's
-  stated range: orbits no valid configuration has (:mod:`atlas.labels` refuses them).
+  stated range: orbits no valid configuration has (:mod:`atlas.labels.labelling` refuses them).
 
 Fast-math. The kernels here use ``SIN_FASTMATH`` = the project's FASTMATH without
 'reassoc' (which would fold the three-part π of the reduction into one; see
@@ -70,7 +70,7 @@ the input (tested with 1 and N threads).
 
 Torque (θ̈ = −ω0² sin θ − 2αθ̇ + τ). With τ = 0 and no running barrier the kernels run the
 specialisations above, unchanged from earlier versions (bit-identical labels, pinned by
-``tests/test_torque_kernels.py``). Otherwise separate specialisations run the same lane
+``tests/kernels/test_torque_kernels.py``). Otherwise separate specialisations run the same lane
 machinery (:func:`make_label_chunk`, every callable taking a ``model`` tuple from
 :func:`atlas.kernels.rk4.torque_model`) with the τ ≠ 0 step, the tilted trap and the running
 certificate (tested in the scalar pass after the trap). The paths change with the speed bound:
@@ -88,7 +88,7 @@ separatrix (a cell on a basin boundary); t_trap is equal whenever the two kernel
 same check (same ``check_every``), because both test at the same step counts. Between the two
 *methods* trajectories differ by O(dt⁴) (≈ 1e-8 at dt = 0.01), so labels differ on boundary
 cells only, and the RK4 maps' boundaries lie at different distances from the exact ones (the
-measured shift enters d_cert, :mod:`atlas.certificate`).
+measured shift enters d_cert, :mod:`atlas.boundaries.certificate`).
 """
 
 from __future__ import annotations
@@ -99,9 +99,16 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
-from .fastsin import EXACT_RANGE, POLY_RANGE, SIN_FASTMATH, fast_sin, reduce_pi, sin_near
-from .rk4 import (
+from atlas.kernels import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
+from atlas.kernels.fastsin import (
+    EXACT_RANGE,
+    POLY_RANGE,
+    SIN_FASTMATH,
+    fast_sin,
+    reduce_pi,
+    sin_near,
+)
+from atlas.kernels.rk4 import (
     label_orbit,
     label_orbit_torque,
     make_rk4_step,
@@ -112,7 +119,7 @@ from .rk4 import (
     running_test,
     torque_model,
 )
-from .trigfree import (
+from atlas.kernels.trigfree import (
     SYNC_EVERY,
     label_orbit_trigfree,
     label_orbit_trigfree_torque,

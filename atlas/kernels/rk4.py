@@ -21,7 +21,7 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
+from atlas.kernels import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
 
 # Fast-math flags that keep NaN/inf semantics honest (no 'nnan'/'ninf'): the kernels must
 # see a non-finite state to report status NONFINITE.
@@ -147,7 +147,7 @@ def make_well_energy_torque(sin):
     ``shift`` = θ* = arcsin(τ/ω0²), ``vers_shift`` = 1 − cos θ*. k = round((θ + θ*)/2π) is the
     well whose strip −π − θ* ≤ φ < π − θ* (φ = θ − 2πk, between its two saddles) holds θ,
     and E_k = ½θ̇² + 2ω0² sin²(φ/2) − ω0²(1 − cos θ*) − τ(φ − θ*) its energy above the rest
-    state (θ*, 0) (:meth:`atlas.model.Pendulum.energy`)."""
+    state (θ*, 0) (:meth:`atlas.physics.pendulum.Pendulum.energy`)."""
 
     @nb.njit(inline="always", fastmath=FASTMATH)
     def well_energy(theta, theta_dot, omega0, torque, shift, vers_shift):

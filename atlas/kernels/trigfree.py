@@ -9,7 +9,7 @@ Classical RK4 applied to it (:func:`make_trigfree_step`) needs no trigonometric 
 step: ≈ 45 floating-point operations instead of the ≈ 90 of a step with a polynomial sin
 (:mod:`atlas.kernels.lanes`, method "rk4"). It is a different discretisation of the same
 order: RK4 is of order 4 on any smooth system, and the exact flow of the extended system
-restricted to the invariant set is the pendulum's (``tests/test_trigfree.py`` fits the
+restricted to the invariant set is the pendulum's (``tests/kernels/test_trigfree.py`` fits the
 order against DOP853). The RK4 map does not preserve the invariant exactly, so (c, s) is
 *re-synchronised* from θ — c, s ← cos θ, sin θ by :func:`~atlas.kernels.fastsin.sin_cos_vers`
 — at every trap test (every ``check_every`` steps; every ``SYNC_EVERY`` = 16 in the
@@ -34,9 +34,9 @@ import math
 import numba as nb
 import numpy as np
 
-from . import NONFINITE, TRAPPED, UNRESOLVED, cached_njit, uses_torque
-from .fastsin import SIN_FASTMATH, sin_cos_vers
-from .rk4 import (
+from atlas.kernels import NONFINITE, TRAPPED, UNRESOLVED, cached_njit, uses_torque
+from atlas.kernels.fastsin import SIN_FASTMATH, sin_cos_vers
+from atlas.kernels.rk4 import (
     INV_TWO_PI,
     TWO_PI,
     _specialise,

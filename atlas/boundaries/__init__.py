@@ -1,0 +1,1 @@
+"""The exact basin boundaries (stable manifolds), the traced separatrices, the certificate."""

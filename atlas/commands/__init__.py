@@ -1,0 +1,1 @@
+"""Commands beyond the sweep: one orbit, the essay's figures, the benchmarks."""

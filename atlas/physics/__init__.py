@@ -1,0 +1,1 @@
+"""Physics of eq. (1): the pendulum, its critical points, closed forms, the running cycle."""

@@ -1,0 +1,455 @@
+"""Sweep configs: YAML validated by pydantic v2. Every default is written once, here.
+
+A config names the pendulum (α, ω0 — a list for either makes a parameter atlas), the
+(θ0, θ̇0) grid, the integrator, the separatrix tracing, the execution backend and the output
+path. Numbers may be written as π expressions: ``3pi``, ``-pi/2``, ``2*pi``, ``0.5pi``.
+Any problem is raised as :class:`atlas.errors.ConfigError` with one line naming the key.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import itertools
+import json
+import math
+import operator
+import re
+from pathlib import Path
+from typing import Annotated, Literal
+
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from atlas import defaults
+from atlas.errors import ConfigError
+from atlas.kernels import METHODS
+from atlas.layout import PARAMETERS
+from atlas.limits import MAX_RATE, MIN_RATE
+
+__all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash"]
+
+# ---------------------------------------------------------------------------- π expressions
+
+_BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+           ast.Div: operator.truediv}
+_UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+_IMPLICIT_PI = re.compile(r"(\d|\.)\s*(?=pi\b)")
+
+
+def _evaluate(node: ast.AST) -> float:
+    if isinstance(node, ast.Expression):
+        return _evaluate(node.body)
+    if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        return float(node.value)
+    if isinstance(node, ast.Name) and node.id in ("pi", "π"):
+        return math.pi
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
+        return _BINARY[type(node.op)](_evaluate(node.left), _evaluate(node.right))
+    if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
+        return _UNARY[type(node.op)](_evaluate(node.operand))
+    raise ValueError("only numbers, pi, + - * / and parentheses are allowed")
+
+
+def parse_pi_expression(text: str) -> float:
+    """Evaluate a number written with π: ``"3pi"`` → 3π, ``"-pi/2"``, ``"2*pi"``, ``"1.5"``.
+
+    Only numbers, ``pi`` (or ``π``), + − × ÷ and parentheses are accepted; implicit
+    multiplication is allowed only directly before ``pi``.
+    """
+    source = _IMPLICIT_PI.sub(r"\1*", text.strip().replace("π", "pi"))
+    try:
+        value = _evaluate(ast.parse(source, mode="eval"))
+    except (SyntaxError, ValueError, ZeroDivisionError) as exc:
+        detail = "division by zero" if isinstance(exc, ZeroDivisionError) else str(exc)
+        if isinstance(exc, SyntaxError):
+            detail = "not a number or π expression (e.g. 3pi, -pi/2, 2*pi)"
+        raise ValueError(f"cannot read {text!r}: {detail}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{text!r} is not a finite number")
+    return value
+
+
+def _number(value):
+    """Accept ints, floats and π-expression strings; refuse bools, NaN and infinities."""
+    if isinstance(value, bool):
+        raise ValueError("expected a number, got a boolean")
+    if isinstance(value, str):
+        value = parse_pi_expression(value)
+    if isinstance(value, (int, float)):
+        try:
+            value = float(value)
+        except OverflowError:  # an integer beyond double precision
+            raise ValueError("must be a finite number, got an integer beyond the range of "
+                             "double precision") from None
+        if not math.isfinite(value):
+            raise ValueError(f"must be a finite number, got {value}")
+        return value
+    raise ValueError(f"expected a number or π expression, got {type(value).__name__}")
+
+
+def _number_or_list(value):
+    if isinstance(value, list):
+        numbers = []
+        for i, item in enumerate(value):
+            try:
+                numbers.append(_number(item))
+            except ValueError as exc:
+                raise ValueError(f"item {i}: {exc}") from None
+        return numbers
+    return _number(value)
+
+
+Number = Annotated[float, BeforeValidator(_number)]
+#: A number, or a list of numbers for a parameter atlas.
+Numbers = Annotated[float | list[float], BeforeValidator(_number_or_list)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+# ---------------------------------------------------------------------------- sections
+
+
+class PendulumConfig(_Strict):
+    """α [s⁻¹], ω0 [rad s⁻¹] and the constant torque τ [rad s⁻²]; a list for any of them
+    makes it a dim of a parameter atlas (the others stay scalar coordinates)."""
+
+    alpha: Numbers = defaults.ALPHA
+    omega0: Numbers = defaults.OMEGA0
+    torque: Numbers = 0.0
+
+    @staticmethod
+    def _each(value, check) -> None:
+        """Apply ``check`` to a value or to every item of a list (naming the bad item)."""
+        if not isinstance(value, list):
+            check(value)
+            return
+        for i, item in enumerate(value):
+            try:
+                check(item)
+            except ValueError as exc:
+                raise ValueError(f"item {i}: {exc}") from None
+
+    @field_validator("alpha")
+    @classmethod
+    def _alpha(cls, value):
+        def check(a):
+            if a < 0:
+                raise ValueError(f"damping must be >= 0, got {a:g}")
+            if a > MAX_RATE:
+                raise ValueError(f"must be at most {MAX_RATE:g} 1/s, got {a:g}")
+            if a == 0:
+                raise ValueError(
+                    "alpha = 0 makes no basin atlas: without damping the energy is conserved "
+                    "and no orbit ever settles on an attractor"
+                )
+
+        cls._each(value, check)
+        return value
+
+    @field_validator("omega0")
+    @classmethod
+    def _omega0(cls, value):
+        def check(w):
+            if w <= 0:
+                raise ValueError(f"must be > 0, got {w:g}")
+            if not MIN_RATE <= w <= MAX_RATE:
+                raise ValueError(f"must be between {MIN_RATE:g} and {MAX_RATE:g} rad/s, "
+                                 f"got {w:g}")
+
+        cls._each(value, check)
+        return value
+
+    @field_validator("torque")
+    @classmethod
+    def _torque(cls, value):
+        def check(t):
+            if not abs(t) <= MAX_RATE**2:
+                raise ValueError(f"must be between {-MAX_RATE**2:g} and {MAX_RATE**2:g} "
+                                 f"rad/s^2, got {t:g}")
+
+        cls._each(value, check)
+        return value
+
+    @field_validator("alpha", "omega0", "torque")
+    @classmethod
+    def _nonempty(cls, value):
+        if isinstance(value, list) and not value:
+            raise ValueError("an empty list sweeps nothing")
+        if isinstance(value, list) and len(set(value)) != len(value):
+            twice = next(v for i, v in enumerate(value) if v in value[:i])
+            raise ValueError(f"the value {twice:g} is listed twice (each parameter point "
+                             "must be named by its values)")
+        return value
+
+    def values(self, name: str) -> list[float]:
+        """The values of parameter ``name`` (one unless it is swept)."""
+        value = getattr(self, name)
+        return value if isinstance(value, list) else [value]
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The parameters given as lists: the dims of a parameter atlas."""
+        return tuple(name for name in PARAMETERS if isinstance(getattr(self, name), list))
+
+    @property
+    def alphas(self) -> list[float]:
+        return self.values("alpha")
+
+    @property
+    def omega0s(self) -> list[float]:
+        return self.values("omega0")
+
+    @property
+    def torques(self) -> list[float]:
+        return self.values("torque")
+
+    @property
+    def points(self) -> list[dict[str, float]]:
+        """Every parameter point, in C order over the swept dims."""
+        names = list(PARAMETERS)
+        return [dict(zip(names, combo))
+                for combo in itertools.product(*(self.values(n) for n in names))]
+
+
+class Axis(_Strict):
+    """``num`` evenly spaced values from ``start`` to ``stop`` inclusive."""
+
+    start: Number
+    stop: Number
+    num: int = Field(ge=2, le=1 << 20)
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if self.start >= self.stop:
+            raise ValueError(f"start ({self.start:g}) must be less than stop ({self.stop:g})")
+        return self
+
+
+class GridConfig(_Strict):
+    """The grid of initial conditions θ0 [rad] × θ̇0 [rad s⁻¹]."""
+
+    theta0: Axis = Axis(start=defaults.THETA0_WINDOW[0], stop=defaults.THETA0_WINDOW[1],
+                        num=defaults.GRID_NUM)
+    theta_dot0: Axis = Axis(start=defaults.THETA_DOT0_WINDOW[0],
+                            stop=defaults.THETA_DOT0_WINDOW[1], num=defaults.GRID_NUM)
+
+
+class IntegratorConfig(_Strict):
+    """Fixed-step RK4: step ``dt`` [s]; orbits not trapped by ``t_max`` [s] are unresolved;
+    ``method`` the discretisation (:data:`atlas.kernels.METHODS`: "rk4", classical RK4 on
+    (θ, θ̇), or "rk4-trigfree", RK4 on (θ, θ̇, cos θ, sin θ), CPU only)."""
+
+    dt: Number = Field(default=defaults.DT, gt=0)
+    t_max: Number = Field(default=defaults.T_MAX, gt=0)
+    method: Literal[METHODS] = defaults.METHOD
+
+
+class SeparatricesConfig(_Strict):
+    """Stable manifolds of the saddles, located by bisection to ``tol`` with vertices at most
+    ``max_spacing`` apart in the phase plane."""
+
+    enabled: bool = True
+    tol: Number = Field(default=defaults.SEPARATRIX_TOL, gt=0, lt=1e-3)
+    max_spacing: Number = Field(default=defaults.MAX_SPACING, gt=0)
+
+
+class ExecutionConfig(_Strict):
+    """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write; by
+    default ``defaults.TILE_ORBITS``, on the GPU ``defaults.TILE_ORBITS_CUDA``)."""
+
+    backend: Literal["cpu", "cuda", "dask"] = "cpu"
+    tile_orbits: int | None = Field(default=None, ge=1)
+    workers: int | None = Field(default=None, ge=1)
+    scheduler: str | None = None
+
+
+class Config(_Strict):
+    """A whole sweep (see ``configs/default.yaml`` for a commented example)."""
+
+    name: str = "default"
+    pendulum: PendulumConfig = PendulumConfig()
+    grid: GridConfig = GridConfig()
+    integrator: IntegratorConfig = IntegratorConfig()
+    separatrices: SeparatricesConfig = SeparatricesConfig()
+    execution: ExecutionConfig = ExecutionConfig()
+    output: Path = Path(defaults.OUTPUT)
+
+    @model_validator(mode="after")
+    def _runnable(self):
+        """Checks across sections, so that a valid config never fails after work began."""
+        from atlas.labels.labelling import (
+            CHECK_EVERY,
+            check_integration,
+            check_method,
+            check_torque_reach,
+        )
+        from atlas.limits import check_reach, check_separatrix_settings
+
+        dt, t_max = self.integrator.dt, self.integrator.t_max
+        try:
+            check_method(self.integrator.method, self.execution.backend)
+        except ValueError as exc:
+            raise ValueError(f"integrator.{exc}") from None
+        if self.integrator.method != "rk4" and any(self.pendulum.torques):
+            raise ValueError(f"integrator.method: {self.integrator.method!r} is for the "
+                             "pendulum without torque (the running certificate is established "
+                             "for 'rk4' only); use method: rk4 with a torque")
+        g = self.grid
+        theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))
+        speed_abs = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))
+        for point in self.pendulum.points:
+            a, w, t = point["alpha"], point["omega0"], point["torque"]
+            if abs(t) == w * w:
+                raise ValueError(
+                    f"pendulum.torque: |torque| = omega0^2 = {w * w:g} is the saddle-node "
+                    "bifurcation, where the rest state (pi/2, 0) is degenerate and atlas "
+                    "certifies no basin; take |torque| below or above omega0^2")
+            try:
+                check_integration(a, w, dt, t_max, torque=t)
+            except ValueError as exc:
+                raise ValueError(f"integrator.{exc}") from None
+            if t:
+                try:
+                    check_torque_reach(theta_abs, speed_abs, a, w, t,
+                                       t_max + CHECK_EVERY * dt)
+                except ValueError as exc:
+                    raise ValueError(f"grid: {exc}") from None
+        try:
+            check_reach(max(abs(g.theta0.start), abs(g.theta0.stop)),
+                        max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop)),
+                        min(self.pendulum.alphas))
+        except ValueError as exc:
+            raise ValueError(f"grid: {exc}") from None
+        if self.separatrices.enabled:
+            try:
+                check_separatrix_settings((g.theta0.start, g.theta0.stop),
+                                          (g.theta_dot0.start, g.theta_dot0.stop),
+                                          self.separatrices.tol, self.separatrices.max_spacing)
+            except ValueError as exc:
+                raise ValueError(f"separatrices.{exc}") from None
+        return self
+
+    def to_json(self) -> str:
+        """The validated config as canonical JSON (stored in every output file)."""
+        return json.dumps(self.model_dump(mode="json"), sort_keys=True)
+
+
+def integrator_json(integrator: IntegratorConfig) -> dict:
+    """The integrator settings as JSON data for digests: without ``method`` when it is "rk4",
+    the method of every file written before the key existed, so that their config hashes and
+    run identities stay valid."""
+    data = integrator.model_dump(mode="json")
+    if data["method"] == "rk4":
+        del data["method"]
+    return data
+
+
+def config_hash(cfg: Config) -> str:
+    """Digest of the config apart from its name, output and execution settings, recorded in the
+    file as provenance. (Whether a partial run may be continued is decided by the stricter
+    :func:`atlas.pipeline.identity.run_identity`.)"""
+    data = cfg.model_dump(mode="json", exclude={"output", "execution", "name"})
+    data["integrator"] = integrator_json(cfg.integrator)
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def _first_error(exc: ValidationError) -> str:
+    """One line from pydantic's first error: ``<key>: <problem> (got <value>)``."""
+    err = exc.errors()[0]
+    loc = [p for p in err["loc"] if not (isinstance(p, str) and ("[" in p or "-" in p))]
+    kind = err["type"]
+    msg = err["msg"].removeprefix("Value error, ").replace("Input should be", "must be")
+    if kind == "extra_forbidden":
+        msg = "unknown key"
+    elif kind == "missing":
+        msg = "missing"
+    elif kind != "value_error":
+        msg = f"{msg} (got {err.get('input')!r})"
+    if isinstance(loc[-1:] and loc[-1], int):  # an item of a list: name it
+        msg = f"item {loc.pop()}: {msg}"
+    key = ".".join(str(p) for p in loc)
+    return f"{key}: {msg}" if key else msg
+
+
+#: Largest config file read [bytes]: a config is a few hundred bytes, a long parameter list a
+#: few kilobytes.
+MAX_CONFIG_BYTES = 1 << 20
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """YAML's safe loader that refuses a key given twice in one mapping (naming the key and
+    both lines) instead of letting the last one win silently."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
+            try:
+                hash(key)
+            except TypeError:  # SafeLoader itself refuses an unhashable key, with its line
+                continue
+            if key in seen:
+                raise ConfigError(f"line {line}: key {key!r} given twice (first on line "
+                                  f"{seen[key]})")
+            seen[key] = line
+        return super().construct_mapping(node, deep=deep)
+
+
+def _parse_yaml(text: str):
+    """The YAML document in ``text``. Anchors and aliases are refused before anything is
+    built (configs never need them, and nested aliases expand exponentially: the "billion
+    laughs"), so reading takes time linear in the file's size."""
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+            line = event.start_mark.line + 1
+            raise ConfigError(f"line {line}: YAML anchors and aliases (&, *) are not "
+                              "allowed in a config")
+    return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 (a SafeLoader subclass)
+
+
+def load_config(path: str | Path, *, output: str | Path | None = None) -> Config:
+    """Read and validate a YAML config; ``output`` overrides its ``output`` key.
+
+    Raises :class:`ConfigError` with one line ``<file>: <key>: <problem>``.
+    """
+    path = Path(path)
+    try:
+        if path.stat().st_size > MAX_CONFIG_BYTES:
+            raise ConfigError(f"{path}: {path.stat().st_size:,} bytes is too large for a "
+                              f"config (at most {MAX_CONFIG_BYTES:,})")
+        text = path.read_text()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such config file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read config file ({exc.__class__.__name__})") from None
+    try:
+        data = _parse_yaml(text)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}: " if mark is not None else ""
+        problem = getattr(exc, "problem", None) or "invalid YAML"
+        raise ConfigError(f"{path}: {where}YAML syntax error: {problem}") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: a config must be a mapping of keys, got {type(data).__name__}")
+    if output is not None:
+        data = {**data, "output": str(output)}
+    try:
+        return Config.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{path}: {_first_error(exc)}") from None

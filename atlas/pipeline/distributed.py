@@ -1,0 +1,123 @@
+"""The Dask backend: tiles as tasks on a dask.distributed cluster, one writer on the client.
+
+Workers compute tiles (:func:`atlas.pipeline.schedule.compute_tile`) and send the label arrays back; the
+client writes each as it arrives, so HDF5 needs no parallel driver and the file's crash and
+resume guarantees are those of the local backend. At most ``2 × workers`` tiles are in
+flight, which bounds the client's memory by a few tiles.
+
+``execution.scheduler`` names an existing scheduler (``tcp://host:8786``, started with
+``dask scheduler`` and ``dask worker`` on other hosts, or by dask-jobqueue on a batch
+system); otherwise a LocalCluster of ``execution.workers`` processes is started.
+
+Threads: a task runs Numba with (the cores of its host) ÷ (the task slots of all workers on
+that host) threads, found on the worker itself (:func:`numba_threads_here`), so the workers
+of one machine do not oversubscribe it whether the cluster is local or external.
+
+Task keys are ``atlas-tile-<run identity>-<random run token>-<tile>``: unique per run, so
+two runs sharing one scheduler never receive each other's tiles (the scheduler merges tasks
+of equal keys). A worker that dies mid-run takes its tasks with it; the scheduler runs them
+again on the others, and since a tile depends only on its inputs the result is unchanged.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import secrets
+from collections.abc import Callable, Iterator
+from urllib.parse import urlparse
+
+from atlas.errors import BackendUnavailable
+
+log = logging.getLogger(__name__)
+
+
+def _client(scheduler: str | None, workers: int | None):
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise BackendUnavailable("backend 'dask': dask.distributed is not installed; "
+                                 "pip install 'atlas[dask]'") from None
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="10s"), None
+        except (OSError, TimeoutError) as exc:
+            raise BackendUnavailable(f"backend 'dask': cannot reach the scheduler at "
+                                     f"{scheduler} ({exc.__class__.__name__})") from None
+    if not log.isEnabledFor(logging.INFO):  # dask's own INFO chatter only with --verbose
+        for name in ("distributed", "dask"):
+            logging.getLogger(name).setLevel(logging.WARNING)
+    n = workers or max(1, min(4, os.cpu_count() or 1))
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                           dashboard_address=None)
+    return Client(cluster), cluster
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
+def _host(address: str) -> str:
+    return urlparse(address).hostname or address
+
+
+def numba_threads_here(slots_by_host: dict[str, int]) -> int | None:
+    """Numba threads for a task on this Dask worker: this host's cores shared among the task
+    slots (``nthreads``) of every worker on the host, as the scheduler listed them when the
+    run started (a worker that joined later counts its own slots). None outside a worker."""
+    try:
+        from distributed import get_worker
+
+        worker = get_worker()
+    except (ImportError, ValueError):
+        return None
+    slots = slots_by_host.get(_host(worker.address)) or worker.state.nthreads
+    return max(1, _cores() // max(1, slots))
+
+
+def dask_results(cfg, todo, args_of: Callable[[int], tuple], compute_tile, run_identity: str,
+                 ) -> Iterator[tuple[int, tuple]]:
+    """Yield (tile index, (attractor, status, t_trap)) as tiles finish on the cluster."""
+    from distributed import as_completed
+
+    client, cluster = _client(cfg.execution.scheduler, cfg.execution.workers)
+    try:
+        info = client.scheduler_info(n_workers=-1)["workers"]
+        n_workers = max(1, len(info))
+        slots_by_host: dict[str, int] = {}
+        for address, worker in info.items():
+            host = _host(address)
+            slots_by_host[host] = slots_by_host.get(host, 0) + int(worker["nthreads"])
+        prefix = f"atlas-tile-{run_identity}-{secrets.token_hex(6)}"
+        log.info("dask: %d workers, task slots per host %s", n_workers, slots_by_host)
+        pending = iter(todo)
+        window = as_completed()
+
+        def submit(count: int) -> None:
+            for index in (next(pending, None) for _ in range(count)):
+                if index is None:
+                    return
+                future = client.submit(_tile_task, compute_tile, slots_by_host,
+                                       *args_of(int(index)), key=f"{prefix}-{index}",
+                                       pure=False)
+                future.tile_index = int(index)
+                window.add(future)
+
+        submit(2 * n_workers)
+        for future in window:
+            yield future.tile_index, future.result()
+            future.release()
+            del future
+            submit(1)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _tile_task(compute_tile, slots_by_host, *args):
+    """One tile on a worker, with the worker's share of its host's cores."""
+    return compute_tile(*args, numba_threads=numba_threads_here(slots_by_host))

@@ -1,0 +1,134 @@
+"""The tile scheduler: which tiles are computed where, and in what order they come back.
+
+A tile (grid rows of one parameter point) is labelled and certified by :func:`compute_tile`,
+a plain function of picklable arguments. The local scheduler computes one tile ahead in a
+background thread while the caller writes the previous one (:func:`local_results`); the Dask
+scheduler (:mod:`atlas.pipeline.distributed`) sends tiles to workers, which for a Zarr output
+write them themselves (:func:`compute_tile_into_zarr`). Which device labels a tile (CPU or
+CUDA kernels) is the ``backend`` argument, independent of the scheduler.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from concurrent.futures import Future
+
+from atlas import defaults
+from atlas.boundaries.certificate import Certifier
+from atlas.labels.labelling import RunningBarrier, label
+from atlas.layout import Layout
+from atlas.pipeline.config import Config
+from atlas.store.partial import TileStore
+
+__all__ = ["compute_tile", "tile_args", "local_results", "compute_tile_into_zarr",
+           "dask_tile_results"]
+
+
+def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice, dt, t_max,
+                 method=defaults.METHOD, backend="cpu", numba_threads=None):
+    """Label and certify the orbits of one tile: the grid rows ``rows`` of ``certifier``'s
+    parameter point (θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows); ``barrier`` the
+    point's running certificate (None where it has no running limit cycle); ``dt`` [s],
+    ``t_max`` [s] and ``method`` the integrator's.
+
+    Returns ({variable: array shaped (rows, columns)} for every per-orbit variable of the
+    file, the tile's tally). A plain function of picklable arguments, so it can run as a Dask
+    task on another machine.
+    """
+    if numba_threads is not None:
+        import numba
+
+        numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
+    p = certifier.pendulum
+    res = label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
+                omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
+                method=method, running=barrier)
+    status, distance, tally = certifier.tile(rows, res.attractor, res.status)
+    return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
+            "boundary_distance": distance}, tally
+
+
+def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
+    certifier, barrier = certifiers[index // layout.bands]
+    return (certifier, barrier, layout.tile(index)[1], cfg.integrator.dt, cfg.integrator.t_max,
+            cfg.integrator.method)
+
+
+#: Held by the thread computing a tile ahead: a sweep's tile waits for one that an interrupted
+#: sweep left computing, so two never run the kernels at once (Numba's workqueue threading
+#: layer aborts the process on concurrent parallel launches).
+_AHEAD = threading.Lock()
+
+
+def _in_background(fn, *args, **kwargs) -> Future:
+    """``fn(*args, **kwargs)`` started in a daemon thread; its result, or whatever it raised
+    (Ctrl-C included), comes back through the Future. A daemon rather than a
+    ThreadPoolExecutor worker: those are joined at interpreter exit, so a run stopped by
+    Ctrl-C or SIGTERM would wait for its tile in flight before the process could end."""
+    future = Future()
+
+    def work():
+        with _AHEAD:
+            try:
+                future.set_result(fn(*args, **kwargs))
+            except BaseException as exc:  # re-raised in the caller by future.result()
+                future.set_exception(exc)
+
+    threading.Thread(target=work, name="atlas-tile", daemon=True).start()
+    return future
+
+
+def local_results(cfg, layout, certifiers, todo, backend) -> Iterator[tuple[int, tuple]]:
+    """(index, (arrays, tally)) of the tiles ``todo`` in order, each computed one tile ahead
+    in a background thread, so tile i+1 is computed while the caller writes tile i (the
+    Numba kernels run without the GIL, and so do zlib and fsync in the write). At most one
+    tile is ahead: memory holds two tiles' arrays. A tile whose computation failed raises
+    its own exception here, after every tile before it has been yielded; a tile still
+    computing when the caller stops (a failed write, Ctrl-C, SIGTERM) is abandoned, its
+    result dropped."""
+    import numba
+
+    threads = numba.get_num_threads()  # the caller's setting: Numba's is per thread
+
+    def start(index):
+        return _in_background(compute_tile, *tile_args(cfg, layout, certifiers, index),
+                              backend=backend, numba_threads=threads)
+
+    ahead = start(todo[0]) if len(todo) else None
+    for position, index in enumerate(todo):
+        result = ahead.result()
+        if position + 1 < len(todo):
+            ahead = start(todo[position + 1])
+        yield index, result
+
+
+def compute_tile_into_zarr(path, layout, index, *args, numba_threads=None) -> dict:
+    """Label and certify tile ``index`` and write it by region into the Zarr store at
+    ``path`` (on the Dask worker itself); return its tally for the client's record."""
+    from atlas.store import zarrformat as zarrstore
+
+    values, tally = compute_tile(*args, numba_threads=numba_threads)
+    zarrstore.write_tile(path, layout, index, values)
+    return tally
+
+
+def dask_tile_results(cfg, tiles: TileStore, certifiers, todo) -> Iterator[tuple[int, tuple]]:
+    """(index, (arrays, tally)), or for a Zarr output (index, tally) of a tile the worker
+    has written itself."""
+    from atlas.pipeline.distributed import dask_results
+
+    layout = tiles.layout
+    if tiles.format == "zarr":
+        from atlas.store.zarrformat import DATA
+
+        def args_of(i):
+            return (tiles.path / DATA, layout, i, *tile_args(cfg, layout, certifiers, i))
+
+        task = compute_tile_into_zarr
+    else:
+        def args_of(i):
+            return tile_args(cfg, layout, certifiers, i)
+
+        task = compute_tile
+    yield from dask_results(cfg, todo, args_of, task, tiles.manifest["attrs"]["run_identity"])

@@ -1,0 +1,324 @@
+"""The sweep: a config's grid of initial conditions → tiles → a basin atlas on disk.
+
+The grid (θ̇0 rows × θ0 columns, for every α, ω0 of a parameter atlas) is cut into tiles of
+whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled independently
+(:func:`compute_tile`, which any backend can run) and each finished tile is written at once
+(:mod:`atlas.store.partial`, one atomically written file per tile in ``<output>.partial/``) while
+the next tile is computed, so memory is bounded by two tiles and a crash loses only tiles in
+flight; when all are done
+:func:`atlas.store.atlasfile.finalize` assembles the HDF5 file. Orbits never interact, so results do not
+depend on tile size, backend or thread count.
+
+A run continues the partial run at its output if that has the same identity
+(:func:`run_identity`: grid, physics, integrator, kernel check interval, atlas version, kernel
+class) and refuses one of another identity unless ``restart=True`` discards it.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
+from atlas.boundaries.certificate import Certifier, add_tallies
+from atlas.errors import AtlasError, InputFileError, StorageError
+from atlas.labels.labelling import check_method, trap_margin
+from atlas.layout import PARAMETERS, Layout, point_label
+from atlas.pipeline import points
+from atlas.pipeline.config import Config
+from atlas.pipeline.identity import file_attrs, run_identity
+from atlas.pipeline.lock import output_lock
+from atlas.pipeline.schedule import dask_tile_results, local_results
+from atlas.store import atlasfile as store
+from atlas.store import zarrformat as zarrstore
+from atlas.store.partial import (
+    IdentityMismatch,
+    PartialStoreError,
+    TileStore,
+    discard,
+    partial_path,
+)
+
+__all__ = ["run", "layout_of"]
+
+log = logging.getLogger(__name__)
+
+#: Upper bound on the bytes one orbit takes on disk (int16 + int8 + float32, uncompressed).
+BYTES_PER_ORBIT = 7
+
+
+def layout_of(cfg: Config, backend: str | None = None) -> Layout:
+    """The grid axes, parameter axes and tiling of a config run on ``backend`` (default
+    ``execution.backend``): ``execution.tile_orbits`` orbits per tile, or by default
+    ``defaults.TILE_ORBITS`` (``TILE_ORBITS_CUDA`` on the GPU, so that a tile fills it)."""
+    backend = backend or cfg.execution.backend
+    tile = cfg.execution.tile_orbits or (defaults.TILE_ORBITS_CUDA if backend == "cuda"
+                                         else defaults.TILE_ORBITS)
+    g = cfg.grid
+    theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
+    theta_dot0 = np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num)
+    return Layout(
+        theta0=theta0, theta_dot0=theta_dot0,
+        parameters={name: np.array(cfg.pendulum.values(name), np.float64)
+                    for name in PARAMETERS},
+        swept=cfg.pendulum.swept,
+        rows_per_tile=max(1, min(g.theta_dot0.num, tile // g.theta0.num)),
+    )
+
+
+def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.Dataset:
+    """The summary variables from the tiles' tallies (O(tiles) numbers, no label re-read)."""
+    layout = tiles.layout
+    tallies = [[] for _ in certifiers]
+    for index in range(layout.n_tiles):
+        try:
+            tallies[index // layout.bands].append(tiles.read_tally(index))
+        except Exception as exc:  # a damaged record: OSError, ValueError, BadZipFile
+            raise store.DamagedTile(index, exc.__class__.__name__) from None
+    points = []
+    for p, ((cert, _), point) in enumerate(zip(certifiers, tallies)):
+        summary = cert.summary(add_tallies(point))
+        pendulum = cert.pendulum
+        summary["trap_margin"] = trap_margin(cfg.integrator.dt, pendulum.alpha, pendulum.omega0)
+        if summary["side_mismatches"]:
+            log.warning("%s: %d labels farther than d_cert from every boundary disagree with "
+                        "the exact side; they are flagged near_boundary",
+                        point_label(layout.point(p)), summary["side_mismatches"])
+        points.append(summary)
+    return store.summary_dataset(layout, points)
+
+
+def _check_output_path(cfg: Config, layout: Layout) -> None:
+    """Refuse an output that cannot be written or would not fit, before anything is made."""
+    out = cfg.output
+    if out.is_dir() and not (zarrstore.is_zarr(out) and (out / "zarr.json").exists()):
+        raise AtlasError(f"{out}: the output path is a directory")
+    existing = next(p for p in (out.parent, *out.parent.parents) if p.exists())
+    if not existing.is_dir():
+        raise AtlasError(f"{out}: the output folder {existing} is not a directory")
+    if not os.access(existing, os.W_OK):
+        raise AtlasError(f"{out}: the output folder {existing} is not writable")
+    need = layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
+    free = shutil.disk_usage(existing).free
+    if need > free:
+        raise AtlasError(f"{out}: the output may need up to {_size(need)} but only "
+                         f"{_size(free)} is free on that disk")
+
+
+def _size(n_bytes: int) -> str:
+    for unit in ("B", "KB", "MB", "GB"):
+        if n_bytes < 1000:
+            return f"{n_bytes:.3g} {unit}"
+        n_bytes /= 1000
+    return f"{n_bytes:.3g} TB"
+
+
+def _make_output_folder(out: Path) -> None:
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise AtlasError(f"{out}: cannot create the output folder ({exc.strerror})") from None
+
+
+def _progress(total: int, initial: int, quiet: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=initial, unit="orbit", unit_scale=True, smoothing=0.1,
+                disable=quiet or not sys.stderr.isatty(), desc="atlas", leave=False)
+
+
+def _refuse_another(partial: Path, identity: dict, opener=TileStore.open) -> TileStore:
+    """The partial run at ``partial`` if it has ``identity``, else one clear InputFileError
+    naming ``--restart``."""
+    try:
+        return opener(partial, identity)
+    except IdentityMismatch as exc:
+        raise InputFileError(f"{partial}: a partial run of a different config is in the way "
+                             f"({', '.join(exc.differs)} differ); run with --restart to discard "
+                             "it, or write elsewhere with -o") from None
+    except PartialStoreError as exc:
+        raise InputFileError(f"{partial}: cannot continue this partial run ({exc}); run with "
+                             "--restart to discard it") from None
+
+
+def _check_partial(partial: Path, identity: dict) -> None:
+    """Before anything is written (the lock included): refuse a partial run of another
+    identity. Reading is safe without the lock, the manifest being written atomically."""
+    if partial.exists():
+        _refuse_another(partial, identity, lambda path, ident: TileStore.read(path).check(ident))
+
+
+def _open_tiles(cfg: Config, layout: Layout, identity: dict, restart: bool) -> TileStore:
+    """The partial run to write into: the one at the output if it has this identity (said in
+    one line), a new one otherwise. One of another identity is refused, unless ``restart``."""
+    partial = partial_path(cfg.output)
+    TileStore.clear_leftovers(partial)
+    if restart and partial.exists():
+        log.warning("discarding the partial run %s (--restart)", partial)
+        discard(partial)
+    if not partial.exists():
+        return TileStore.create(partial, layout, identity, file_attrs(cfg, identity),
+                                "zarr" if zarrstore.is_zarr(cfg.output) else "hdf5")
+    tiles = _refuse_another(partial, identity)
+    log.warning("resuming %s: %d of %d tiles already done", partial, tiles.done().size,
+                tiles.layout.n_tiles)
+    return tiles
+
+
+def _orbits(layout: Layout, tiles) -> int:
+    return sum((layout.tile(i)[1].stop - layout.tile(i)[1].start) for i in tiles) \
+        * layout.theta0.size
+
+
+def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], backend: str,
+                  quiet: bool) -> None:
+    """Label and certify the tiles still to do and store each as it finishes (the local
+    backends compute the next tile meanwhile, :func:`_local_results`)."""
+    layout, todo = tiles.layout, tiles.todo()
+    written_by_workers = backend == "dask" and tiles.format == "zarr"
+    results = (dask_tile_results(cfg, tiles, certifiers, todo) if backend == "dask"
+               else local_results(cfg, layout, certifiers, todo, backend))
+    total = _orbits(layout, range(layout.n_tiles))
+    with _progress(total, total - _orbits(layout, todo), quiet) as bar:
+        for index, result in results:
+            if written_by_workers:
+                tiles.record(index, result)
+            else:
+                tiles.write(index, *result, store.FILLS)
+            bar.update(_orbits(layout, [index]))
+            log.debug("tile %d of %d written", index + 1, layout.n_tiles)
+
+
+def _process_age() -> float | None:
+    """Seconds since this process started (Linux's /proc; None elsewhere)."""
+    try:
+        start_ticks = int(open("/proc/self/stat").read().rsplit(")", 1)[1].split()[19])
+        uptime = float(open("/proc/uptime").read().split()[0])
+        return uptime - start_ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+class _Phases:
+    """Wall time of the phases of a run, logged at INFO (``atlas run -v``)."""
+
+    def __init__(self):
+        self.last = time.perf_counter()
+
+    def done(self, name: str) -> None:
+        now = time.perf_counter()
+        log.info("%-32s %6.2f s", name, now - self.last)
+        self.last = now
+
+
+def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float,
+            running_certificates: tuple[list, list], phase: _Phases) -> xr.DataTree:
+    """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
+    and certify what is missing, then assemble the file. A tile file found damaged is set
+    aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``).
+    Returns what was written beyond the basin map (:func:`atlas.store.atlasfile.summary_tree`)."""
+    pendulums = points.pendulums(tiles.layout)
+    cycles, barriers = running_certificates
+    tilted = points.tilted_boundaries(cfg, pendulums, cycles)  # timed with the separatrices
+    traced = points.trace_separatrices(cfg, pendulums, tilted, barriers)
+    phase.done("separatrices")
+    certifiers = points.certifiers(tiles.layout, pendulums, traced, tilted, barriers)
+    groups = points.groups(tiles.layout, pendulums, traced, cycles)
+    phase.done("exact boundaries and areas")
+    for _ in range(3):
+        _compute_into(tiles, cfg, certifiers, backend, quiet)
+        phase.done("map (label and certify tiles)")
+        finalize = zarrstore.finalize if tiles.format == "zarr" else store.finalize
+        try:
+            summary = _summary(cfg, tiles, certifiers)
+            phase.done("summary")
+            attrs = {"run_time_s": time.perf_counter() - start, "backend": backend}
+            manifest_attrs = tiles.manifest["attrs"]  # read before finalize removes the tiles
+            finalize(tiles, cfg.output, groups, summary, attrs)
+            phase.done(f"writing ({tiles.layout.n_tiles} tiles assembled)")
+            return store.summary_tree(tiles.layout, summary, groups,
+                                      {**manifest_attrs, **attrs})
+        except store.DamagedTile as exc:
+            log.warning("%s: %s is damaged; computing it again", tiles.path, exc)
+            tiles.set_aside(exc.index)
+    raise StorageError(f"{tiles.path}: tile files keep coming back damaged; check the disk")
+
+
+def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool = False,
+        backend: str | None = None, force: bool = False,
+        config_path: str | Path | None = None, open_result: bool = True) -> xr.DataTree:
+    """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
+
+    An interrupted run of the same identity at the output (``<output>.partial/``) is
+    continued: only its missing tiles are computed, with its own tiling. A partial run of
+    another identity raises :class:`InputFileError`, unless ``restart=True`` discards it
+    first. ``resume`` is accepted for compatibility (continuing is always on). ``backend``
+    overrides ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O
+    error) raises :class:`StorageError`; the tiles finished before it are kept. An output
+    that atlas did not write is refused (:class:`~atlas.errors.OutputInTheWay`) unless
+    ``force``, and one that is the config file ``config_path`` itself always.
+    ``open_result=False`` returns, instead of the file opened (and checked) again, what was
+    written beyond the basin map, from memory (:func:`atlas.store.atlasfile.summary_tree`: what
+    ``atlas run`` prints).
+    """
+    from atlas.store.validate import check_output_target
+
+    check_output_target(cfg.output, config_path, force=force)
+    backend = backend or cfg.execution.backend
+    try:
+        check_method(cfg.integrator.method, backend)
+    except ValueError as exc:  # a --backend override of a valid config: name the config
+        where = f"{config_path}: " if config_path is not None else ""
+        raise AtlasError(f"{where}integrator.{exc}") from None
+    layout = layout_of(cfg, backend)
+    if backend == "cuda":
+        from atlas.kernels.cuda import require_cuda
+
+        require_cuda()
+    _check_output_path(cfg, layout)
+    partial = partial_path(cfg.output)
+    identity = run_identity(cfg, backend)
+    if not restart:
+        _check_partial(partial, identity)
+    running_certificates = points.running_certificates(points.pendulums(layout), cfg.integrator.dt)
+    _make_output_folder(cfg.output)
+    start = time.perf_counter()
+    age = _process_age()
+    if age is not None:
+        log.info("%-32s %6.2f s", "start-up (process, imports)", age)
+    phase = _Phases()
+    with output_lock(cfg.output):
+        try:
+            tiles = _open_tiles(cfg, layout, identity, restart)
+            phase.done("partial run (open or resume)")
+            written = _finish(tiles, cfg, backend, quiet, start, running_certificates, phase)
+        except OverflowError as exc:
+            raise AtlasError(f"{cfg.output}: {exc}") from None
+        except OSError as exc:
+            raise StorageError(f"{partial}: writing failed ({_reason(exc)}); the "
+                               "tiles finished before it are kept: free space or fix the "
+                               "disk, then run the same command again") from None
+    if open_result:
+        written = store.open_atlas(cfg.output)
+        phase.done("opening the result")
+    log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
+    return written
+
+
+def _reason(exc: OSError) -> str:
+    """The system's words for a failed write, on one line (HDF5's own messages are long)."""
+    if exc.errno:
+        return os.strerror(exc.errno)
+    text = str(exc)
+    found = re.search(r"errno = (\d+)", text)  # HDF5 quotes the system's errno
+    if found:
+        return os.strerror(int(found.group(1)))
+    return text.splitlines()[0] if text else exc.__class__.__name__

@@ -1,0 +1,42 @@
+"""The label codes every layer shares: the ``status`` values, what each means, the fill value.
+
+A kernel sets ``trapped``, ``unresolved``, ``nonfinite`` or ``running``; certification
+against the exact basin boundaries (:mod:`atlas.boundaries.certificate`) turns a label that
+lies closer than ``d_cert`` to a boundary into ``near_boundary`` or
+``running_near_boundary``. Values are added, never renumbered: files of every format keep
+their meaning. Written once here; the kernels, the file schema (CF ``flag_values`` /
+``flag_meanings``) and the views read them from this module.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["TRAPPED", "UNRESOLVED", "NONFINITE", "NEAR_BOUNDARY", "RUNNING",
+           "RUNNING_NEAR_BOUNDARY", "ATTRACTOR_FILL", "STATUS_MEANINGS"]
+
+#: Trapped in the energy trap of well k; in a file, also farther than d_cert from every
+#: basin boundary: certified for the exact equation.
+TRAPPED = 0
+#: t_max reached before any certificate held.
+UNRESOLVED = 1
+#: A NaN or inf state was met.
+NONFINITE = 2
+#: Set after labelling (never by a kernel): trapped, but closer than d_cert to a basin
+#: boundary, so certified for the RK4 map only.
+NEAR_BOUNDARY = 3
+#: Certified to converge to the running limit cycle (τ ≠ 0): the orbit entered the running
+#: barrier's forward-invariant region. ``attractor`` keeps its fill value; the direction of
+#: rotation is sign(τ).
+RUNNING = 4
+#: Set after labelling (never by a kernel): running, but not certified for the exact
+#: equation (closer than d_cert to a basin boundary, or on another basin's side).
+RUNNING_NEAR_BOUNDARY = 5
+
+#: ``attractor`` where no well label applies (int16; also the file's _FillValue).
+ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
+
+#: What each status value means, in order: the file's ``flag_meanings`` and every text.
+STATUS_MEANINGS = {TRAPPED: "trapped", UNRESOLVED: "unresolved", NONFINITE: "nonfinite",
+                   NEAR_BOUNDARY: "near_boundary", RUNNING: "running",
+                   RUNNING_NEAR_BOUNDARY: "running_near_boundary"}

@@ -1,0 +1,1 @@
+"""The files: schema, formats (HDF5, Zarr), partial runs, reading and validation."""

@@ -1,0 +1,307 @@
+"""Files are checked before they are believed: the schema check every reader shares.
+
+:func:`atlas.open` (and with it ``atlas info``, ``plot``, ``view`` and ``orbit``) opens an atlas
+file and runs :func:`check_tree` before any view uses it. A file that fails is refused with one
+:class:`~atlas.errors.InputFileError` line naming the file and what is wrong (exit status 2 in
+the CLI). What is checked, from the metadata only (the arrays are not read):
+
+* ``format_version`` (root attribute): the integer :data:`FORMAT_VERSION`. Older files (a
+  file without the attribute is format 1) kept α and ω0 as attributes of a single atlas and
+  merged a parameter atlas's separatrices into one table; they are refused with one line
+  naming their version (run the config again to rewrite them);
+* the basin map: ``attractor`` int16, ``status`` int8, ``t_trap`` float32 and
+  ``boundary_distance`` float32, each on the map's dims (``theta_dot0``, ``theta0``, with
+  the swept parameters leading, :mod:`atlas.layout`);
+* the coordinates ``theta0`` and ``theta_dot0``: float64, 1-D, finite, strictly increasing;
+  every parameter (``alpha`` > 0, ``omega0`` > 0, ``torque``): a float64 coordinate, scalar
+  or 1-D (swept), finite;
+* ``status``'s CF flags: ``flag_values`` and ``flag_meanings`` pair up and each value means
+  what atlas means by it (0 trapped, 1 unresolved, 2 nonfinite, 3 near_boundary, 4 running,
+  5 running_near_boundary);
+* the summary ``atlas info`` prints: the per-basin variables over ``k`` and the per-point
+  figures, floating point, on the parameter dims;
+* the attributes the readers use: ``dt`` and ``t_max`` (finite, > 0), ``check_every`` (a
+  positive integer), and ``config``, which must be a JSON object (:func:`parse_config`);
+* the per-point groups (``/critical_points``, ``/separatrices``, ``/limit_cycle``): each node
+  names its parameter point in its attributes, and holds the vectors and attributes the
+  readers draw from.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+
+import numpy as np
+
+from atlas import defaults
+from atlas.errors import InputFileError
+from atlas.kernels import METHODS
+from atlas.layout import PARAMETERS, point_nodes
+
+__all__ = ["FORMAT_VERSION", "check_tree", "check_dataset", "parse_config", "MAP_VARIABLES"]
+
+#: Version of the atlas file layout written by this atlas (root attribute ``format_version``).
+#: 1: files without the attribute; 2: the attribute is written; 3: every parameter (α, ω0,
+#: τ) is a coordinate, and the per-point groups hold one node per parameter point.
+FORMAT_VERSION = 3
+#: The basin map's variables and their stored dtypes.
+MAP_VARIABLES = {"attractor": np.int16, "status": np.int8, "t_trap": np.float32,
+                 "boundary_distance": np.float32}
+#: What atlas means by each status flag value.
+STATUS_MEANINGS = {0: "trapped", 1: "unresolved", 2: "nonfinite", 3: "near_boundary",
+                   4: "running", 5: "running_near_boundary"}
+_BASIN = ("basin_fraction_exact", "basin_fraction_exact_error", "basin_fraction",
+          "basin_fraction_grid_error_bound", "basin_fraction_grid_error")
+_POINT = ("unresolved_fraction", "running_fraction", "running_fraction_exact",
+          "running_fraction_exact_error", "running_fraction_grid_error_bound",
+          "certified_fraction", "d_cert",
+          "boundary_shift", "boundary_reference_error", "trap_margin", "side_mismatches")
+
+
+def _refuse(path, what: str):
+    raise InputFileError(f"{path}: {what}")
+
+
+def format_version(attrs: dict, path) -> int:
+    """The file's layout version (1 when absent); a newer one than this atlas reads, or a
+    value that is not an integer, is refused."""
+    value = attrs.get("format_version", 1)
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(()).item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        _refuse(path, f"format_version {value!r} is not an integer; not an atlas file this "
+                "atlas can read")
+    value = int(value)
+    if value > FORMAT_VERSION:
+        _refuse(path, f"format_version {value} is newer than this atlas reads (up to "
+                f"{FORMAT_VERSION}); upgrade atlas to read it")
+    if value < 1:
+        _refuse(path, f"format_version {value} is not a version atlas ever wrote")
+    if value < FORMAT_VERSION:
+        _refuse(path, f"format_version {value}, an older layout than this atlas reads "
+                f"({FORMAT_VERSION}); run its config again to rewrite it")
+    return value
+
+
+def file_method(attrs: dict, path) -> str:
+    """The discretisation the file's labels come from: its ``method`` attribute (bytes
+    decoded; "rk4" where absent), or one InputFileError line if it is not one of
+    :data:`atlas.kernels.METHODS` as text."""
+    method = attrs.get("method", defaults.METHOD)
+    if isinstance(method, bytes):
+        method = method.decode("utf-8", "replace")
+    if not isinstance(method, str) or method not in METHODS:
+        _refuse(path, f"attribute method = {str(method)[:40]!r} is not one of "
+                f"{', '.join(METHODS)}")
+    return method
+
+
+def parse_config(attrs: dict, path):
+    """The stored ``config`` attribute as a dict (None if the file has none), or one
+    InputFileError line: it must be a JSON object."""
+    if "config" not in attrs:
+        return None
+    text = attrs["config"]
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "replace")
+    if not isinstance(text, str):
+        _refuse(path, f"the config attribute is not text (a {type(text).__name__})")
+    try:
+        config = json.loads(text)
+    except ValueError as exc:
+        _refuse(path, f"the config attribute is not valid JSON ({getattr(exc, 'msg', exc)} "
+                f"at character {getattr(exc, 'pos', '?')})")
+    except RecursionError:
+        _refuse(path, "the config attribute is not valid JSON (nested too deeply)")
+    if not isinstance(config, dict):
+        _refuse(path, f"the config attribute is not a JSON object (a {type(config).__name__})")
+    return config
+
+
+def _number(attrs: dict, name: str, path, *, positive=False, nonnegative=False, finite=True,
+            where="") -> float:
+    if name not in attrs:
+        _refuse(path, f"no {where}attribute {name}")
+    value = attrs[name]
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(()).item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        _refuse(path, f"{where}attribute {name} is not a number ({str(value)[:40]!r})")
+    value = float(value)
+    if ((finite and not math.isfinite(value)) or (positive and not value > 0)
+            or (nonnegative and not value >= 0)):
+        _refuse(path, f"{where}attribute {name} = {value!r} is out of range")
+    return value
+
+
+def _axis(ds, name: str, path, increasing: bool) -> None:
+    if name not in ds.coords:
+        _refuse(path, f"no {name} coordinate")
+    var = ds.coords[name]
+    if var.dims != (name,):
+        _refuse(path, f"coordinate {name} has dims {var.dims}, not ({name!r},)")
+    if var.dtype != np.float64:
+        _refuse(path, f"coordinate {name} is {var.dtype}, not float64")
+    values = var.values
+    if values.size < 1 or not np.all(np.isfinite(values)):
+        _refuse(path, f"coordinate {name} is empty or not finite")
+    if increasing and (values.size < 2 or not np.all(np.diff(values) > 0)):
+        _refuse(path, f"coordinate {name} is not strictly increasing")
+
+
+def _parameter(ds, name: str, path) -> None:
+    """A physical parameter: a finite float64 coordinate, scalar or its own 1-D dim."""
+    if name not in ds.coords:
+        _refuse(path, f"no {name} coordinate")
+    if name in ds.dims:
+        _axis(ds, name, path, increasing=False)
+    elif ds.coords[name].dims != () or ds.coords[name].dtype != np.float64:
+        _refuse(path, f"coordinate {name} is not a float64 scalar or a dim of its own")
+    values = ds.coords[name].values
+    if not np.all(np.isfinite(values)) or (name != "torque" and not np.all(values > 0)):
+        _refuse(path, f"coordinate {name} is out of range")
+
+
+def _flags(attrs: dict, path) -> None:
+    values, meanings = attrs.get("flag_values"), attrs.get("flag_meanings")
+    if values is None or not isinstance(meanings, str):
+        _refuse(path, "status has no flag_values/flag_meanings attributes")
+    values = np.atleast_1d(np.asarray(values))
+    words = meanings.split()
+    if values.dtype.kind not in "iu" or values.ndim != 1 or values.size != len(words):
+        _refuse(path, "status's flag_values and flag_meanings do not pair up")
+    for value, word in zip(values.tolist(), words):
+        if STATUS_MEANINGS.get(value) != word:
+            _refuse(path, f"status flag {value} means {word!r} in this file, not "
+                    f"{STATUS_MEANINGS.get(value, 'anything atlas writes')!r}")
+
+
+def check_dataset(ds, path) -> None:
+    """Check the root group ``ds`` (an :class:`xarray.Dataset` opened with
+    ``mask_and_scale=False``) of the atlas file at ``path``; InputFileError if it fails."""
+    attrs = ds.attrs
+    format_version(attrs, path)
+    lead = tuple(name for name in PARAMETERS if name in ds.dims)
+    dims = (*lead, "theta_dot0", "theta0")
+    for name in ("theta0", "theta_dot0"):
+        _axis(ds, name, path, increasing=True)
+    for name in PARAMETERS:
+        _parameter(ds, name, path)
+    for name, dtype in MAP_VARIABLES.items():
+        if name not in ds.data_vars:
+            _refuse(path, f"no {name} variable")
+        var = ds[name]
+        if var.dtype != dtype:
+            _refuse(path, f"variable {name} is {var.dtype}, not {np.dtype(dtype)}")
+        if var.dims != dims:
+            _refuse(path, f"variable {name} has dims {var.dims}, not {dims}")
+    _flags(ds["status"].attrs, path)
+    if "k" not in ds.coords or ds["k"].dims != ("k",) or ds["k"].dtype.kind not in "iu":
+        _refuse(path, "no integer k coordinate (the basins' summary)")
+    for names, want in ((_BASIN, (*lead, "k")), (_POINT, lead)):
+        for name in names:
+            if name not in ds.data_vars:
+                _refuse(path, f"no {name} variable (the summary)")
+            if ds[name].dims != want or ds[name].dtype.kind not in "fiu":
+                _refuse(path, f"variable {name} has dims {ds[name].dims} and dtype "
+                        f"{ds[name].dtype}, not numbers on {want}")
+    _number(attrs, "dt", path, positive=True)
+    _number(attrs, "t_max", path, positive=True)
+    if "check_every" in attrs:
+        every = _number(attrs, "check_every", path, positive=True)
+        if every != int(every):
+            _refuse(path, f"attribute check_every = {every!r} is not an integer")
+    file_method(attrs, path)
+    parse_config(attrs, path)
+
+
+def check_tree(tree, path) -> None:
+    """Check an opened atlas (:class:`xarray.DataTree`): the root group
+    (:func:`check_dataset`), then the groups the readers draw from (their small arrays are
+    read: the separatrices' branch codes index a table)."""
+    check_dataset(tree.to_dataset(inherit=False), path)
+    for node in point_nodes(tree, "critical_points"):
+        cp = node.to_dataset(inherit=False)
+        _point_attrs(node, path)
+        _vector(cp, node.path, "theta", "f", path, dim="point")
+        _vector(cp, node.path, "n", "iu", path, dim="point")
+    for node in point_nodes(tree, "separatrices"):
+        _point_attrs(node, path)
+        _check_separatrices(node.to_dataset(inherit=False), node.path, path)
+    for node in point_nodes(tree, "limit_cycle"):
+        _point_attrs(node, path)
+        cycle = node.to_dataset(inherit=False)
+        for name in ("theta", "theta_dot", "time"):
+            _vector(cycle, node.path, name, "f", path, dim="sample")
+        _number(node.attrs, "period", path, positive=True, where=f"{node.path} ")
+        _number(node.attrs, "mean_theta_dot", path, where=f"{node.path} ")
+        direction = _number(node.attrs, "direction", path, where=f"{node.path} ")
+        if direction not in (1.0, -1.0):
+            _refuse(path, f"{node.path} attribute direction = {direction:g} is not +1 or -1")
+
+
+def _point_attrs(node, path) -> None:
+    for name in PARAMETERS:
+        _number(node.attrs, name, path, where=f"{node.path} ")
+
+
+def _vector(ds, group: str, name: str, kinds: str, path, dim: str):
+    if name not in ds.variables:
+        _refuse(path, f"the {group} group has no {name}")
+    var = ds[name]
+    if var.dims != (dim,) or var.dtype.kind not in kinds:
+        _refuse(path, f"{group}/{name} has dims {var.dims} and dtype {var.dtype}, not a "
+                f"{'float' if kinds == 'f' else 'integer'} vector over {dim}")
+    return var.values
+
+
+def _check_separatrices(sep, group: str, path) -> None:
+    branch = _vector(sep, group, "branch", "iu", path, "point")
+    for name in ("saddle_n", "vertex"):
+        _vector(sep, group, name, "iu", path, "point")
+    for name in ("theta", "theta_dot"):
+        _vector(sep, group, name, "f", path, "point")
+    if branch.size and not np.isin(branch, (0, 1)).all():
+        _refuse(path, f"{group}/branch holds codes other than 0 (left) and 1 (right)")
+    for name in ("tol", "max_spacing", "discrepancy_bound"):
+        _number(sep.attrs, name, path, positive=True, where=f"{group} ")
+    if "discrepancy" not in sep.attrs:
+        _refuse(path, f"no {group} attribute discrepancy")
+    _number(sep.attrs, "discrepancy", path, finite=False, where=f"{group} ")
+
+
+def check_output_target(output, config=None, *, force: bool = False) -> None:
+    """Refuse an output path that holds something a run must not write over:
+
+    * the config file being run (``atlas run c.yaml -o c.yaml``), whatever ``force`` says;
+    * an existing file (or Zarr store) that atlas did not write, unless ``force``.
+
+    An atlas file at the output (a finished run of this or another config) may be written
+    over: that is how a changed config is run again. Raises
+    :class:`~atlas.errors.OutputInTheWay` (exit status 2)."""
+    import os
+    from pathlib import Path
+
+    from atlas.errors import OutputInTheWay
+    from atlas.store.atlasfile import is_atlas_file
+
+    output = Path(output)
+    if config is not None and output.exists():
+        try:
+            same = os.path.samefile(output, config)
+        except OSError:
+            same = False
+        if same:
+            raise OutputInTheWay(f"{output}: the output path is the config file being run; "
+                                 "name another output with -o")
+    if force or not output.exists():
+        return
+    if output.is_dir() and not (output / "zarr.json").exists():
+        return  # not a store: the run refuses a directory with its own line
+    if not is_atlas_file(output):
+        what = "Zarr store" if output.is_dir() else "file"
+        raise OutputInTheWay(f"{output}: an existing {what} that atlas did not write is in "
+                             "the way; run with --force to write over it, or name another "
+                             "output with -o")

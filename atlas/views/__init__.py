@@ -1,0 +1,1 @@
+"""Views read files and draw: plots, the interactive page, text reports. They compute no labels."""

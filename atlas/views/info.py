@@ -1,0 +1,144 @@
+"""``atlas info`` and ``atlas run``'s summary: what an atlas holds, in a few lines."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import xarray as xr
+
+from atlas import lazy_dask  # noqa: F401 (lazy_dask installs itself)
+from atlas.layout import at_point, point_group, point_label, points
+from atlas.store import atlasfile as store
+
+
+def summary_lines(tree: xr.DataTree) -> list[str]:
+    """Grid, then for every parameter point its parameters, exact basin fractions, grid
+    fractions with their error, d_cert and the certified share, and its separatrices'
+    summary; then the unresolved count and the run time."""
+    ds = tree.to_dataset(inherit=False)
+    n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+    every = points(ds)
+    lines = [f"grid      {ds.sizes['theta0']} x {ds.sizes['theta_dot0']} (theta0 x theta_dot0)"
+             f" = {n_orbits:,} orbits per parameter point, {len(every)} parameter point"
+             f"{'s' if len(every) != 1 else ''} (alpha [1/s], omega0 [rad/s], "
+             "torque [rad/s^2])"]
+    for point in every:
+        lines.append(f"pendulum  {point_label(point)}")
+        lines += ["  " + line for line in _basin_lines(at_point(ds, point))]
+        lines += ["  " + line for line in _torque_lines(tree, point)]
+        sep = point_group(tree, "separatrices", point)
+        if sep is not None:
+            lines += ["  " + line for line in _separatrix_lines(sep)]
+    unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
+    lines.append(f"unresolved {unresolved} orbits")
+    if "run_time_s" in ds.attrs:
+        lines.append(f"time      {float(ds.attrs['run_time_s']):.2f} s")
+    return lines
+
+
+def _basin_lines(ds: xr.Dataset) -> list[str]:
+    """The basins of one parameter point: exact area fractions first, then the grid counts
+    with their error bound and measured error, then d_cert and the certified share."""
+    present = (ds["basin_fraction_exact"].values > 0) | (ds["basin_fraction"].values > 0)
+    ks = ds["k"].values[present]
+    exact = ds["basin_fraction_exact"].values[present]
+    exact_err = ds["basin_fraction_exact_error"].values[present]
+    grid = ds["basin_fraction"].values[present]
+    bound = ds["basin_fraction_grid_error_bound"].values[present]
+    measured = ds["basin_fraction_grid_error"].values[present]
+    lines = ["basins    k   area fraction (exact)        grid count   grid error: bound, "
+             "measured"]
+    lines += [f"          {int(k):+d}  "
+              + (f"{e:.14f} ± {ee:.0e}" if e == e else f"{'not computed':<22}")
+              + f"   {g:.6f}     "
+              + (f"{b:.1e}, {m:.1e}" if b == b else "not computed")
+              for k, e, ee, g, b, m in zip(ks, exact, exact_err, grid, bound, measured)]
+    running, running_exact = float(ds["running_fraction"]), float(ds["running_fraction_exact"])
+    if running or running_exact:
+        lines.append(f"          run {running_exact:.14f} ± "
+                     f"{float(ds['running_fraction_exact_error']):.0e}   {running:.6f}     "
+                     f"{float(ds['running_fraction_grid_error_bound']):.1e}, "
+                     f"{abs(running - running_exact):.1e}   (the running limit cycle)")
+    d_cert = float(ds["d_cert"])
+    n = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+    certified = int(round(float(ds["certified_fraction"]) * n))
+    if d_cert == 0.0:  # no rest state, no boundary (|torque| > omega0^2)
+        lines.append(f"certified {certified:,} of {n:,} labels ({certified / n:.2%}) hold for "
+                     "the exact equation: without rest states there is no basin boundary and "
+                     "the running cycle attracts every orbit (status running); the others "
+                     "are unresolved")
+    elif d_cert == d_cert:  # not NaN
+        lines.append(f"certified {certified:,} of {n:,} labels ({certified / n:.2%}) hold for "
+                     f"the exact equation: farther than d_cert = {d_cert:.1e} from every "
+                     "basin boundary (status trapped or running); the others for the RK4 "
+                     "map only")
+    else:
+        lines.append("certified d_cert not measured (separatrices disabled): labels are "
+                     "certified for the RK4 map only (status near_boundary)")
+    if int(ds["side_mismatches"]):
+        lines.append(f"warning   {int(ds['side_mismatches'])} labels beyond d_cert disagree "
+                     "with the exact boundaries")
+    return lines
+
+
+def _torque_lines(tree: xr.DataTree, point: dict) -> list[str]:
+    """For a pendulum with torque: its rest states or their absence, and its running limit
+    cycle."""
+    if not point.get("torque"):
+        return []
+    lines = []
+    cp = point_group(tree, "critical_points", point)
+    if cp is not None and cp.sizes.get("point", 0) == 0:
+        lines.append("critical  none: |torque| > omega0^2, every orbit runs")
+    elif cp is not None:
+        kinds = sorted(set(cp["kind"].values.tolist()))
+        lines.append(f"critical  {cp.sizes['point']} in the window (" + ", ".join(kinds)
+                     + "), tilted: rest states at theta = asin(torque/omega0^2) + 2 pi k")
+    cycle = point_group(tree, "limit_cycle", point)
+    if cycle is None:
+        lines.append("cycle     no running limit cycle (below the homoclinic torque)")
+    else:
+        lines.append(f"cycle     running limit cycle: period {float(cycle.attrs['period']):.10g} "
+                     f"s, mean angular velocity {float(cycle.attrs['mean_theta_dot']):.10g} "
+                     f"rad/s (relative error {float(cycle.attrs['relative_error']):.0e})")
+    return lines
+
+
+def _separatrix_lines(sep: xr.Dataset) -> list[str]:
+    from atlas.boundaries.separatrices import summary
+
+    return summary(sep)
+
+
+def info_lines(path: str | Path) -> list[str]:
+    """Completeness, then :func:`summary_lines` for a complete file (opened and checked by
+    :func:`atlas.store.atlasfile.open_atlas`), then provenance. A file that fails the check raises
+    :class:`~atlas.errors.InputFileError`."""
+    path = Path(path)
+    d = store.describe(path)
+    attrs = d["attrs"]
+    state = ("complete" if d["complete"] else
+             f"partial: {d['tiles_done']} of {d['tiles']} tiles done (run the same config "
+             "again to continue)")
+    lines = [f"{path}: atlas file, {state}"]
+    if d["complete"]:
+        tree = store.open_atlas(path)
+        try:
+            lines += ["  " + line for line in summary_lines(tree)]
+            attrs = tree.attrs
+        finally:
+            tree.close()
+    lines.append(f"  created   {_text(attrs, 'created')} by atlas "
+                 f"{_text(attrs, 'atlas_version')} (numba {_text(attrs, 'numba_version')}, "
+                 f"numpy {_text(attrs, 'numpy_version')})")
+    lines.append(f"  method    {_text(attrs, 'method')}, dt = {_text(attrs, 'dt')} s, "
+                 f"t_max = {_text(attrs, 't_max')} s, config hash "
+                 f"{_text(attrs, 'config_hash')}")
+    return lines
+
+
+def _text(attrs: dict, name: str) -> str:
+    """An attribute for display, on one line and not too long (a file's text is untrusted)."""
+    value = attrs.get(name, "?")
+    text = " ".join(str(value).split())
+    return text if len(text) <= 80 else text[:77] + "..."

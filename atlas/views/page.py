@@ -1,0 +1,324 @@
+"""``atlas view``: one self-contained HTML page to look at an atlas and click orbits.
+
+The page (no server, no network: every script, style and image is inline) shows the basin map
+of each parameter point as a PNG at the grid's native resolution with its separatrices and
+critical points (and, with a torque τ, the running basin and the running limit cycle). Clicking
+a point integrates that orbit in the browser — the same RK4 step of θ̈ = −ω0² sin θ − 2αθ̇ + τ
+(of the file's method: :mod:`atlas.kernels.rk4` or :mod:`atlas.kernels.trigfree`), the same
+(tilted) energy trap and the same running certificate as atlas's kernels
+(:mod:`atlas.kernels.rk4`, :func:`atlas.labels.labelling.energy_cap`, the barrier of
+:func:`atlas.physics.running.running_barrier` that the sweep built for the file), tested every
+``check_every`` steps — draws its phase curve, animates the pendulum along it, and shows the
+stored label, status, t_trap and boundary distance of the nearest grid point next to the
+orbit's own end state. A parameter atlas gets a slider over its parameter points.
+
+Size: the per-point arrays the readout needs are packed as little-endian typed arrays,
+zlib-compressed and base64-encoded (the browser inflates them with ``DecompressionStream``):
+``attractor`` int16, ``status`` int8, ``t_trap`` as uint32 counts of trap tests (exact; NaN as
+0xFFFFFFFF), ``boundary_distance`` as uint16 log2-quantised at 256 steps per octave (relative
+error ≤ 0.14 %; 0 for 0, 0xFFFF for NaN). A 512 × 512 atlas gives a page of about 1 MB. With a
+torque, each point with a running limit cycle adds its running barrier (rebuilt here from the
+file's ``/limit_cycle``, exactly as the sweep built it: :func:`atlas.commands.orbit.running_barrier_for`)
+with the lower curve g as float64, zlib-compressed (never rounded: the certificate is verified
+for these numbers only; about 40 kB), and the cycle itself, rounded to 1e-4, for the picture.
+
+Safety: every string taken from the file (config name, attributes, file name) travels inside
+one JSON ``<script type="application/json">`` block with ``<``, ``>``, ``&`` and the JavaScript
+line separators escaped as ``\\uXXXX``, and the page writes it with ``textContent`` only.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import io
+import json
+import math
+import os
+import zlib
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from atlas import lazy_dask  # noqa: F401 (installs itself)
+from atlas.errors import AtlasError, InputFileError
+from atlas.kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
+from atlas.labels.labelling import CHECK_EVERY, energy_cap, trap_margin
+from atlas.layout import at_point, point_group
+from atlas.layout import points as parameter_points
+from atlas.store.validate import STATUS_MEANINGS, file_method
+
+__all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json",
+           "DIST_STEPS"]
+
+#: Steps per octave of the log2-quantised boundary distance.
+DIST_STEPS = 256
+_DIST_OFFSET = 128  # log2 d from -128 to +128 fits uint16 at 256 steps per octave
+_T_NAN = np.iinfo(np.uint32).max
+#: The name of each status code (as the file's CF flag_meanings say).
+STATUS_NAMES = STATUS_MEANINGS
+#: matplotlib's tab10, the colour of well k being TAB10[k mod 10] as in atlas.views.plotting.
+TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+         "#7f7f7f", "#bcbd22", "#17becf"]
+#: The running basin's colour (atlas.views.plotting's RUNNING_COLOR, grey 0.82).
+RUNNING_RGB = (209, 209, 209)
+
+
+def pack_distance(d: np.ndarray) -> np.ndarray:
+    """boundary_distance → uint16: 0 for 0, 0xFFFF for NaN, else log2-quantised."""
+    d = np.asarray(d, np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = np.round((np.log2(d) + _DIST_OFFSET) * DIST_STEPS)
+    q = np.clip(np.nan_to_num(q, nan=1, neginf=1, posinf=65534), 1, 65534)
+    q = np.where(d == 0, 0, q)
+    return np.where(np.isnan(d), 65535, q).astype("<u2")
+
+
+def unpack_distance(q: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`pack_distance` (what the page computes)."""
+    q = np.asarray(q, np.float64)
+    d = 2.0 ** (q / DIST_STEPS - _DIST_OFFSET)
+    return np.where(q == 0, 0.0, np.where(q == 65535, np.nan, d))
+
+
+def _blob(array: np.ndarray) -> str:
+    return base64.b64encode(zlib.compress(np.ascontiguousarray(array).tobytes(), 9)).decode()
+
+
+def _uniform(values: np.ndarray, name: str, path) -> list[float]:
+    """[first, last, n] of a uniformly spaced axis (the page maps pixels linearly)."""
+    values = np.asarray(values, float)
+    if values.size < 2 or not np.allclose(np.diff(values), values[1] - values[0],
+                                           rtol=1e-9, atol=0):
+        raise InputFileError(f"{path}: {name} is not a uniformly spaced axis")
+    return [float(values[0]), float(values[-1]), int(values.size)]
+
+
+def _map_png(attractor: np.ndarray, status: np.ndarray) -> str:
+    """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward: well k
+    in TAB10[k mod 10], running in grey, no certified label white."""
+    from PIL import Image
+
+    labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
+    index = np.where(labelled, np.mod(attractor.astype(np.int64), 10), 10).astype(np.uint8)
+    index[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = 11
+    image = Image.fromarray(index[::-1], mode="P")
+    palette = ([int(c[i:i + 2], 16) for c in TAB10 for i in (1, 3, 5)] + [255, 255, 255]
+               + list(RUNNING_RGB))
+    image.putpalette(palette)
+    buffer = io.BytesIO()
+    image.save(buffer, format="PNG", optimize=True)
+    return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode()
+
+
+def _curves(tree: xr.DataTree, point: dict[str, float]) -> list[list[list[float]]]:
+    """Separatrix polylines of one parameter point as [[θ…], [θ̇…]], rounded to 1e-4."""
+    from atlas.boundaries.separatrices import branches
+
+    sep = point_group(tree, "separatrices", point)
+    if sep is None or sep.sizes.get("point", 0) == 0:
+        return []
+    return [[np.round(theta, 4).tolist(), np.round(theta_dot, 4).tolist()]
+            for _, _, theta, theta_dot in branches(sep) if len(theta) > 1]
+
+
+def _critical(tree: xr.DataTree, point: dict[str, float]) -> dict[str, list[float]]:
+    cp = point_group(tree, "critical_points", point)
+    if cp is None:
+        return {"attractors": [], "saddles": []}
+    theta, n = cp["theta"].values, cp["n"].values
+    return {"attractors": theta[n % 2 == 0].tolist(), "saddles": theta[n % 2 != 0].tolist()}
+
+
+#: About how many segments of the limit cycle the page draws (a picture only).
+CYCLE_DRAWN = 256
+
+
+def _running(tree: xr.DataTree, point: dict[str, float], dt: float) -> dict:
+    """The running barrier and the limit cycle of one parameter point for the page (None
+    each where the point has no running cycle): the barrier the sweep gave its kernels,
+    rebuilt from the stored cycle, g as a float64 blob; the cycle (about ``CYCLE_DRAWN``
+    segments, rounded to 1e-4) to draw."""
+    from atlas.commands.orbit import running_barrier_for
+
+    torque = point.get("torque", 0.0)
+    stored = point_group(tree, "limit_cycle", point) if torque else None
+    if stored is None:
+        return {"barrier": None, "cycle": None}
+    barrier, cycle = running_barrier_for(point["alpha"], point["omega0"], torque, dt, stored)
+    n = cycle.theta.size
+    drawn = np.unique(np.r_[0:n:max(1, (n - 1) // CYCLE_DRAWN), n - 1])  # both ends: one turn
+    return {
+        "barrier": {"theta0": barrier.theta0, "top": barrier.top,
+                    "direction": barrier.direction, "n": int(barrier.g.size),
+                    "g": _blob(barrier.g.astype("<f8"))},
+        "cycle": {"theta": np.round(cycle.theta[drawn], 4).tolist(),
+                  "theta_dot": np.round(cycle.theta_dot[drawn], 4).tolist(),
+                  "period": float(cycle.period)},
+    }
+
+
+def _tilt(point: dict[str, float], dt: float) -> dict:
+    """What the page's trap needs for the point's torque: the kernels' cap
+    (:func:`atlas.labels.labelling.energy_cap`; None when no well can trap, |τ| ≥ ω0²), θ* and
+    1 − cos θ* as :func:`atlas.kernels.rk4.torque_model` computes them, and the lower
+    saddle's energy above the rest state (the pictures follow a trapped orbit until it has
+    nearly settled, E_k below 1e-3 of it)."""
+    from atlas.physics.pendulum import Pendulum
+
+    alpha, omega0, torque = point["alpha"], point["omega0"], point.get("torque", 0.0)
+    cap = energy_cap(dt, alpha, omega0, torque)
+    shift = math.asin(min(1.0, max(-1.0, torque / (omega0 * omega0)))) if torque else 0.0
+    pendulum = Pendulum(alpha, omega0, torque)
+    return {"torque": torque, "cap": cap if math.isfinite(cap) else None, "shift": shift,
+            "vers": 2.0 * math.sin(0.5 * shift) ** 2,
+            "saddle_energy": pendulum.saddle_energy if pendulum.has_rest_states else None}
+
+
+def _text(value) -> str:
+    return value if isinstance(value, str) else str(value)
+
+
+def _name(ds: xr.Dataset) -> str:
+    try:
+        return _text(json.loads(ds.attrs["config"])["name"])
+    except (KeyError, TypeError, ValueError):
+        return _text(ds.attrs.get("title", "atlas"))
+
+
+def payload(tree: xr.DataTree, path: Path) -> dict:
+    """Everything the page shows, as JSON-ready data."""
+    ds = tree.to_dataset(inherit=False)
+    dt, t_max = float(ds.attrs["dt"]), float(ds.attrs["t_max"])
+    check_every = int(ds.attrs.get("check_every", CHECK_EVERY))
+    points = []
+    for params in parameter_points(ds):
+        point = at_point(ds, params)
+        alpha, omega0 = params["alpha"], params["omega0"]
+        attractor = point["attractor"].values.astype("<i2")
+        status = point["status"].values.astype("<i1")
+        t_trap = point["t_trap"].values.astype(np.float64)
+        n_check = np.round(t_trap / (dt * check_every))
+        n_check = np.where(np.isfinite(n_check), n_check, _T_NAN).astype("<u4")
+        d_cert = float(point["d_cert"]) if "d_cert" in point else math.nan
+        distance = (point["boundary_distance"].values if "boundary_distance" in point
+                    else np.full(attractor.shape, np.nan))
+        points.append({
+            "alpha": alpha, "omega0": omega0, "margin": trap_margin(dt, alpha, omega0),
+            "d_cert": d_cert if math.isfinite(d_cert) else None,
+            "png": _map_png(attractor, status),
+            "attractor": _blob(attractor), "status": _blob(status),
+            "t_trap": _blob(n_check), "distance": _blob(pack_distance(distance)),
+            "curves": _curves(tree, params), **_critical(tree, params),
+            **_tilt(params, dt), **_running(tree, params, dt),
+        })
+    return {
+        "name": _name(ds), "file": Path(path).name, "title": _text(ds.attrs.get("title", "")),
+        "created": _text(ds.attrs.get("created", "")),
+        "atlas_version": _text(ds.attrs.get("atlas_version", "")),
+        "dt": dt, "t_max": t_max, "check_every": check_every,
+        "method": file_method(ds.attrs, path),
+        "theta0": _uniform(ds["theta0"].values, "theta0", path),
+        "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
+        "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
+        "status_names": {str(k): v for k, v in STATUS_NAMES.items()},
+        "colors": TAB10, "points": points,
+    }
+
+
+def safe_json(data) -> str:
+    """JSON that cannot end its ``<script>`` element or start markup: ``<``, ``>``, ``&``
+    and U+2028/U+2029 as \\uXXXX escapes (valid JSON and JavaScript either way)."""
+    text = json.dumps(data, ensure_ascii=True, allow_nan=False, separators=(",", ":"))
+    for char, escape in (("<", "\\u003c"), (">", "\\u003e"), ("&", "\\u0026")):
+        text = text.replace(char, escape)
+    return text
+
+
+def build_page(tree: xr.DataTree, path: Path) -> str:
+    """The whole HTML page for the atlas ``tree`` read from ``path``."""
+    assets = Path(__file__).with_name("view_assets")
+    script = (assets / "view.js").read_text(encoding="utf-8")
+    # The page may run this one script and nothing else (no other inline script, no network).
+    digest = base64.b64encode(hashlib.sha256(script.encode("utf-8")).digest()).decode()
+    return (_TEMPLATE.replace("/*STYLE*/", (assets / "view.css").read_text(encoding="utf-8"))
+            .replace("/*HASH*/", digest)
+            .replace("/*SCRIPT*/", script)
+            .replace("/*DATA*/", safe_json(payload(tree, path))))  # last: never rescanned
+
+
+def write_view(path: str | Path, output: str | Path | None = None) -> Path:
+    """Write the page of the atlas file ``path`` to ``output`` (default: next to it, .html);
+    returns the page's path. Bad files raise :class:`InputFileError`."""
+    from atlas.store.atlasfile import open_atlas
+
+    path = Path(path)
+    output = Path(output) if output is not None else path.with_suffix(".html")
+    if output.is_dir():
+        raise AtlasError(f"{output}: the output path is a directory")
+    if not output.parent.is_dir():
+        raise AtlasError(f"{output}: the output folder {output.parent} is not a directory")
+    tree = open_atlas(path)
+    try:
+        for name in ("attractor", "status", "t_trap"):
+            if name not in tree.to_dataset(inherit=False):
+                raise InputFileError(f"{path}: no {name} variable in this atlas")
+        page = build_page(tree, path)
+    finally:
+        tree.close()
+    tmp = output.with_name(f".{output.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(page, encoding="utf-8")
+        os.replace(tmp, output)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise AtlasError(f"{output}: cannot write the page ({exc.strerror or exc})") from None
+    return output
+
+
+_TEMPLATE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src data:; \
+style-src 'unsafe-inline'; script-src 'sha256-/*HASH*/'">
+<title>atlas view</title>
+<style>/*STYLE*/</style>
+</head>
+<body>
+<header>
+  <h1>Basins of the damped pendulum: <span id="name"></span></h1>
+  <p id="subtitle"></p>
+</header>
+<div id="controls" hidden>
+  <label for="point">parameter point</label>
+  <input id="point" type="range" min="0" max="0" step="1" value="0">
+  <span id="point-label"></span>
+</div>
+<main>
+  <div id="stage">
+    <canvas id="map"></canvas>
+    <canvas id="overlay" title="click to integrate the orbit from here"></canvas>
+  </div>
+  <aside>
+    <canvas id="pendulum" width="220" height="220"></canvas>
+    <p id="clock"></p>
+    <div id="readout" data-ready="0">
+      <p class="hint">Click anywhere on the map: the orbit from that initial condition is
+      integrated here in the browser (RK4 with the file's α, ω0, τ, dt and method, the energy trap
+      and the running certificate of atlas) and drawn in black.</p>
+    </div>
+  </aside>
+</main>
+<footer>
+  <p><span id="legend">θ̈ = −ω0² sin θ − 2αθ̇. Colour: the well k (rest state (2πk, 0)) each
+  initial condition reaches; white: no certified label. Red: the separatrices (basin
+  boundaries); open circles: saddles; dots: attractors.</span> <span id="provenance"></span></p>
+</footer>
+<script type="application/json" id="atlas-data">/*DATA*/</script>
+<script>/*SCRIPT*/</script>
+</body>
+</html>
+"""

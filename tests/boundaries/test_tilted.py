@@ -1,0 +1,380 @@
+"""The exact basin boundaries of the pendulum with torque (atlas.boundaries.tilted) against independent
+references.
+
+References: scipy's DOP853 on θ̈ = τ − ω0² sin θ − 2αθ̇ in the actual coordinates (forward
+time; orbits classified by the energy trap of a well or by running); the running limit cycle
+of atlas.physics.running (which decides the topology); the kernels' attractor index (atlas.label);
+brute-force distances; Monte-Carlo and grid estimates of the areas; the symmetries
+θ → θ + 2π (well k → k + 1) and (θ, θ̇, τ) → (−θ, −θ̇, −τ) (well k → −k); and the published
+basin stability of the bSTAB pendulum (Stender & Hoffmann, Nonlinear Dyn. 107, 1451–1468
+(2022), doi:10.1007/s11071-021-06786-5).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import atlas
+from atlas.boundaries.tilted import RUNNING_SIDE, TiltedBoundaries
+from atlas.physics.pendulum import Pendulum
+from atlas.physics.running import homoclinic_threshold, limit_cycle, running_barrier
+
+TWO_PI = 2 * math.pi
+BSTAB_WINDOW = ((-5 * math.pi / 6, 7 * math.pi / 6), (-10.0, 10.0))
+
+
+def _window(p: Pendulum, speed: float):
+    """The window θ ∈ [−π + θ*, π + θ*] (one well, between its saddles), θ̇ ∈ [−speed, speed]."""
+    return ((-math.pi + p.rest_angle, math.pi + p.rest_angle), (-speed, speed))
+
+
+#: (α, ω0, τ, window speed): the bSTAB pendulum (bistable), another bistable case, a case of
+#: monostable wells (below the homoclinic torque: no running basin), and the bSTAB case
+#: mirrored.
+CASES = {
+    "bstab": (0.05, 1.0, 0.5, 10.0),
+    "bistable": (0.1, 1.0, 0.4, 6.0),
+    "monostable": (0.1, 1.0, 0.1, 4.0),
+    "reversed": (0.05, 1.0, -0.5, 10.0),
+}
+
+
+@pytest.fixture(scope="module")
+def built():
+    out = {}
+    for name, (alpha, omega0, torque, speed) in CASES.items():
+        p = Pendulum(alpha, omega0, torque)
+        out[name] = TiltedBoundaries(p, *_window(p, speed))
+    return out
+
+
+def dop853_side(p: Pendulum, theta, theta_dot, t_end=400.0):
+    """Reference basins: the orbits integrated by DOP853 (rtol 1e-11, all at once) to t_end;
+    well k where the final state is in well k's energy trap (below the lower saddle energy,
+    so it never leaves), running where θ̇ kept the sign of τ over the last 50 s, else None
+    (unresolved)."""
+    n = theta.size
+    w2, a2, tau = p.omega0**2, 2 * p.alpha, p.torque
+
+    def rhs(_, y):
+        return np.concatenate([y[n:], tau - w2 * np.sin(y[:n]) - a2 * y[n:]])
+
+    sol = solve_ivp(rhs, (0.0, t_end), np.concatenate([theta, theta_dot]), method="DOP853",
+                    rtol=1e-11, atol=1e-11, t_eval=np.linspace(t_end - 50, t_end, 101))
+    th, v = sol.y[:n], sol.y[n:]
+    k = p.well(th[:, -1])
+    trapped = p.energy(th[:, -1], v[:, -1], k) < p.saddle_energy
+    running = np.all(np.sign(tau) * v > 0, axis=1)
+    return [int(kk) if t else (RUNNING_SIDE if r else None)
+            for kk, t, r in zip(k, trapped, running)]
+
+
+def branch_points(tb: TiltedBoundaries, n: int, seed: int):
+    """n random vertices of the branches in the window (not the saddles' neighbourhoods),
+    with the unit normal there (from the neighbouring vertices) and their saddle index."""
+    rng = np.random.default_rng(seed)
+    runs = [c for c in tb.curves() if c[2].size > 20]
+    points = []
+    for _ in range(n):
+        j, _, theta, theta_dot = runs[rng.integers(len(runs))]
+        i = rng.integers(5, theta.size - 5)
+        t = np.array([theta[i + 1] - theta[i - 1], theta_dot[i + 1] - theta_dot[i - 1]])
+        t /= np.hypot(*t)
+        points.append((theta[i], theta_dot[i], -t[1], t[0], j))
+    return np.array(points).T
+
+
+# --------------------------------------------------------------------------- topology
+
+@pytest.mark.parametrize("case", CASES)
+def test_topology_agrees_with_the_limit_cycle(case, built):
+    """A running basin exactly where a running limit cycle exists (above the homoclinic
+    torque); the left branch folds (θ̇ changes sign) exactly then."""
+    tb = built[case]
+    alpha, omega0, torque, _ = CASES[case]
+    cycle = limit_cycle(alpha, omega0, torque)
+    assert tb.bistable == (cycle is not None)
+    assert tb.bistable == (abs(torque) > homoclinic_threshold(alpha, omega0))
+    arriving_up = "left" if torque > 0 else "right"  # the branch that arrives with θ̇·τ > 0
+    for _, branch, _, theta_dot in tb.curves(clip=False):
+        if branch == arriving_up:
+            assert np.any(np.sign(torque) * theta_dot < 0) == tb.bistable
+
+
+def test_monostable_case_has_no_running_basin(built):
+    tb = built["monostable"]
+    assert limit_cycle(0.1, 1.0, 0.1) is None and not tb.bistable
+    theta = np.linspace(*tb.window[0], 200)
+    speed = np.linspace(*tb.window[1], 200)
+    assert not np.any(tb.side(theta[None, :], speed[:, None]) == RUNNING_SIDE)
+    a = tb.areas()
+    assert a.running == 0.0 and a.fraction.sum() == pytest.approx(1.0, abs=1e-12)
+
+
+# --------------------------------------------------------------------------- the branches
+
+@pytest.mark.parametrize("case", CASES)
+def test_branches_end_at_their_saddles(case, built):
+    tb = built[case]
+    p = tb.pendulum
+    seen = set()
+    for j, branch, theta, theta_dot in tb.curves(clip=False):
+        seen.add(branch)
+        assert math.hypot(theta[0] - tb.saddle_theta(j), theta_dot[0]) < 1e-6
+        # 'left' arrives from θ < saddle with θ̇ > 0, 'right' from θ > saddle with θ̇ < 0
+        side = -1 if branch == "left" else 1
+        assert np.all(side * (theta[1:50] - tb.saddle_theta(j)) > 0)
+        assert np.all(side * theta_dot[1:50] < 0)
+        assert tb.saddle_theta(j) == pytest.approx(
+            math.pi - math.asin(p.torque / p.omega0**2) + TWO_PI * j)
+    assert seen == {"left", "right"}
+    assert 0 < tb.chord_error <= 1.1e-8 and 0 < tb.reference_error < 1e-8
+
+
+@pytest.mark.parametrize("case", ["bstab", "monostable", "reversed"])
+def test_branches_are_orbits_into_the_saddle(case, built):
+    """Points of the branches, integrated forward by DOP853, come within 1e-4 of their saddle
+    (a point 1e-2 off the branch does not)."""
+    tb = built[case]
+    p = tb.pendulum
+    theta, theta_dot, n0, n1, j = branch_points(tb, 5, seed=1)
+    start = np.concatenate([theta, theta + 1e-2 * n0, theta_dot, theta_dot + 1e-2 * n1])
+    m = start.size // 2
+    w2, a2, tau = p.omega0**2, 2 * p.alpha, p.torque
+
+    def rhs(_, y):
+        return np.concatenate([y[m:], tau - w2 * np.sin(y[:m]) - a2 * y[m:]])
+
+    sol = solve_ivp(rhs, (0.0, 100.0), start, method="DOP853", rtol=1e-12, atol=1e-12,
+                    dense_output=True)
+    y = sol.sol(np.linspace(0.0, 100.0, 10_001))
+    saddle = np.tile([tb.saddle_theta(int(jj)) for jj in j], 2)
+    closest = np.hypot(y[:m] - saddle[:, None], y[m:]).min(axis=1)
+    assert np.all(closest[:5] < 1e-4) and np.all(closest[5:] > 1e-3)
+
+
+# --------------------------------------------------------------------------- sides
+
+def test_well_index_is_the_kernels_attractor(built):
+    """Well k is the rest state (arcsin(τ/ω0²) + 2πk, 0): what atlas.label reports as
+    ``attractor`` and side() returns, for both signs of τ."""
+    for case in ("bstab", "reversed"):
+        tb = built[case]
+        p = tb.pendulum
+        k = np.arange(-3, 4)
+        theta = p.rest_angle + TWO_PI * k + 0.01
+        res = atlas.label(theta, np.zeros(k.size), alpha=p.alpha, omega0=p.omega0,
+                          torque=p.torque)
+        np.testing.assert_array_equal(res.attractor, k)
+        np.testing.assert_array_equal(tb.side(theta, np.zeros(k.size)), k)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_side_agrees_with_dop853(case, built):
+    """Random points of the window, and points 2e-3 to 1e-2 off the branches on either side,
+    all farther than 1e-3 from every boundary: side() is the basin DOP853 reaches."""
+    tb = built[case]
+    rng = np.random.default_rng(7)
+    (a, b), (lo, hi) = tb.window
+    theta, theta_dot = rng.uniform(a, b, 60), rng.uniform(lo, hi, 60)
+    bt, bv, n0, n1, _ = branch_points(tb, 40, seed=3)
+    off = rng.uniform(2e-3, 1e-2, bt.size) * rng.choice([-1, 1], bt.size)
+    theta = np.concatenate([theta, bt + off * n0])
+    theta_dot = np.concatenate([theta_dot, bv + off * n1])
+    dist, _ = tb.distance(theta, theta_dot)
+    keep = dist > 1e-3
+    assert keep.sum() >= 90
+    side = tb.side(theta[keep], theta_dot[keep])
+    assert dop853_side(tb.pendulum, theta[keep], theta_dot[keep]) == side.tolist()
+    assert len(set(side.tolist())) >= 3
+
+
+def test_side_agrees_with_the_certified_kernel_labels(built):
+    """Certified RK4 labels (energy trap, running barrier) of random bSTAB points farther
+    than 1e-3 from the boundaries are the exact sides."""
+    tb = built["bstab"]
+    p = tb.pendulum
+    rng = np.random.default_rng(11)
+    (a, b), (lo, hi) = tb.window
+    theta, theta_dot = rng.uniform(a, b, 3000), rng.uniform(lo, hi, 3000)
+    far = tb.distance(theta, theta_dot)[0] > 1e-3
+    theta, theta_dot = theta[far], theta_dot[far]
+    res = atlas.label(theta, theta_dot, alpha=p.alpha, omega0=p.omega0, torque=p.torque,
+                      running=running_barrier(p.alpha, p.omega0, p.torque, dt=0.01), dt=0.01)
+    side = tb.side(theta, theta_dot)
+    trapped, running = res.status == 0, res.status == 4
+    assert trapped.sum() > 300 and running.sum() > 2000
+    np.testing.assert_array_equal(res.attractor[trapped], side[trapped])
+    assert np.all(side[running] == RUNNING_SIDE)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_shift_by_two_pi_is_the_next_well(case, built):
+    tb = built[case]
+    rng = np.random.default_rng(5)
+    (a, b), (lo, hi) = tb.window
+    theta, theta_dot = rng.uniform(a, b, 20_000), rng.uniform(lo, hi, 20_000)
+    side = tb.side(theta, theta_dot)
+    for turns in (1, -2):
+        shifted = tb.side(theta + TWO_PI * turns, theta_dot)
+        expected = np.where(side == RUNNING_SIDE, RUNNING_SIDE, side + turns)
+        np.testing.assert_array_equal(shifted, expected)
+
+
+def test_reversed_torque_mirrors_everything(built):
+    """(θ, θ̇, τ) → (−θ, −θ̇, −τ): well k ↦ −k, the running basin to itself, distances and
+    area fractions unchanged."""
+    tb, mirror = built["bstab"], built["reversed"]
+    rng = np.random.default_rng(9)
+    (a, b), (lo, hi) = tb.window
+    theta, theta_dot = rng.uniform(a, b, 20_000), rng.uniform(lo, hi, 20_000)
+    side, side_m = tb.side(theta, theta_dot), mirror.side(-theta, -theta_dot)
+    np.testing.assert_array_equal(side_m, np.where(side == RUNNING_SIDE, side, -side))
+    d, j = tb.distance(theta[:1000], theta_dot[:1000])
+    d_m, j_m = mirror.distance(-theta[:1000], -theta_dot[:1000])
+    np.testing.assert_allclose(d_m, d, rtol=0, atol=1e-12)
+    # the mirror of the saddle s_j = π − θ* + 2πj is −s_j, the reversed pendulum's s_{−j−1}
+    np.testing.assert_array_equal(j_m, -j - 1)
+    areas, areas_m = tb.areas(), mirror.areas()
+    np.testing.assert_array_equal(areas_m.k, -areas.k[::-1])
+    np.testing.assert_allclose(areas_m.fraction, areas.fraction[::-1], rtol=1e-12)
+    assert areas_m.running == pytest.approx(areas.running, rel=1e-12)
+
+
+def test_side_refuses_points_beyond_the_band(built):
+    tb = built["bstab"]
+    with pytest.raises(ValueError, match="band"):
+        tb.side([0.0], [tb.band[0] - 1.0])
+
+
+def test_refuses_untilted_and_runaway_pendulums():
+    for torque in (0.0, 1.0, -1.5):
+        with pytest.raises(ValueError, match="torque"):
+            TiltedBoundaries(Pendulum(0.1, 1.0, torque), (-3, 3), (-3, 3))
+    with pytest.raises(ValueError, match="alpha"):
+        TiltedBoundaries(Pendulum(0.0, 1.0, 0.5), (-3, 3), (-3, 3))
+
+
+# --------------------------------------------------------------------------- distances
+
+@pytest.mark.parametrize("case", ["bstab", "monostable"])
+@pytest.mark.parametrize("offset", [1e-2, 1e-4])
+def test_distance_of_points_off_a_branch_along_its_normal(case, offset, built):
+    """A point at distance d along a branch's normal is d from it (where no other branch
+    comes nearer), to the polylines' chord error, and names the branch's saddle."""
+    tb = built[case]
+    theta, theta_dot, n0, n1, j = branch_points(tb, 100, seed=2)
+    checked = 0
+    for sign in (1, -1):
+        x, v = theta + sign * offset * n0, theta_dot + sign * offset * n1
+        dist, saddle = tb.distance(x, v)
+        mask = dist > offset - 1e-6  # no other branch nearer than d
+        np.testing.assert_allclose(dist[mask], offset, rtol=0, atol=3e-8)
+        np.testing.assert_array_equal(saddle[mask], j[mask])
+        checked += mask.sum()
+    assert checked >= 150
+
+
+def brute_distance(tb: TiltedBoundaries, theta, theta_dot, reach=1.0):
+    """Distance to every segment of every branch (curves(clip=False)) that comes within
+    ``reach`` of the window, point by point."""
+    (a, b), (lo, hi) = tb.window
+    segments = []
+    for _, _, x, y in tb.curves(clip=False):
+        seg = np.stack([x[:-1], y[:-1], x[1:], y[1:]])
+        near = ((np.minimum(seg[0], seg[2]) < b + reach) & (np.maximum(seg[0], seg[2]) > a - reach)
+                & (np.minimum(seg[1], seg[3]) < hi + reach)
+                & (np.maximum(seg[1], seg[3]) > lo - reach))
+        segments.append(seg[:, near])
+    ax, ay, bx, by = np.concatenate(segments, axis=1)
+    out = []
+    for px, py in zip(theta, theta_dot):
+        dx, dy = bx - ax, by - ay
+        s = np.clip(((px - ax) * dx + (py - ay) * dy) / np.maximum(dx * dx + dy * dy, 1e-300),
+                    0, 1)
+        out.append(np.hypot(px - ax - s * dx, py - ay - s * dy).min())
+    return np.array(out)
+
+
+@pytest.mark.parametrize("case", ["bstab", "monostable"])
+def test_distance_equals_brute_force(case, built):
+    """The pruned nearest-segment search equals the minimum over all segments, for points
+    in the middle of the window (whose nearest boundary passes through the window)."""
+    tb = built[case]
+    rng = np.random.default_rng(4)
+    (a, b), (lo, hi) = tb.window
+    theta, theta_dot = rng.uniform(a + 1, b - 1, 200), rng.uniform(lo + 1, hi - 1, 200)
+    dist, _ = tb.distance(theta, theta_dot)
+    near = dist < 1.0
+    theta, theta_dot, dist = theta[near][:25], theta_dot[near][:25], dist[near][:25]
+    np.testing.assert_allclose(dist, brute_distance(tb, theta, theta_dot), rtol=1e-12,
+                               atol=1e-15)
+
+
+# --------------------------------------------------------------------------- areas
+
+@pytest.mark.parametrize("case", CASES)
+def test_areas_against_monte_carlo(case, built):
+    """Exact fractions against side() on 2e5 uniform random points (no integration), within
+    4 binomial standard errors; they sum to 1 with the running basin."""
+    tb = built[case]
+    areas = tb.areas()
+    assert areas.fraction.sum() + areas.running == pytest.approx(1.0, abs=1e-12)
+    assert np.all(areas.fraction > 0) and np.all(areas.error < 1e-8)
+    n = 200_000
+    rng = np.random.default_rng(13)
+    (a, b), (lo, hi) = tb.window
+    side = tb.side(rng.uniform(a, b, n), rng.uniform(lo, hi, n))
+    fractions = dict(zip(areas.k.tolist(), areas.fraction.tolist()))
+    if tb.bistable:
+        fractions[RUNNING_SIDE] = areas.running
+    assert set(np.unique(side).tolist()) <= set(fractions)
+    for k, f in fractions.items():
+        sigma = math.sqrt(f * (1 - f) / n)
+        assert abs(np.mean(side == k) - f) <= 4 * sigma + 1e-12, k
+
+
+@pytest.mark.parametrize("case", ["bstab", "monostable"])
+def test_areas_against_grid_refinement(case, built):
+    """Cell-centre counts on N×N grids converge to the exact fractions, at least at first
+    order in the cell size (only cells cut by a boundary are miscounted): 16-fold smaller
+    cells, a 16-fold smaller error."""
+    tb = built[case]
+    areas = tb.areas()
+    exact = np.append(areas.fraction, areas.running)
+    (a, b), (lo, hi) = tb.window
+    errors = []
+    for n in (100, 400, 1600):
+        theta = a + (np.arange(n) + 0.5) * (b - a) / n
+        theta_dot = lo + (np.arange(n) + 0.5) * (hi - lo) / n
+        side = tb.side(theta[None, :], theta_dot[:, None])
+        grid = np.array([np.mean(side == k) for k in areas.k] + [np.mean(side == RUNNING_SIDE)])
+        errors.append(np.abs(grid - exact).max())
+    assert errors[2] < errors[0] / 16 and errors[2] < 1e-4
+
+
+def test_published_basin_stability_of_the_bstab_pendulum(built):
+    """S_B(FP) = 0.152 with standard error 0.0036 (N = 10 000) for θ̈ = −0.1θ̇ + 0.5 − sin θ on
+    θ ∈ [−π + asin 0.5, π + asin 0.5] × θ̇ ∈ [−10, 10] (Stender & Hoffmann, Nonlinear Dyn.
+    107, 1451–1468 (2022), the pendulum case): the exact fraction of all wells lies within
+    three standard errors, and is far more precise."""
+    tb = built["bstab"]
+    np.testing.assert_allclose(tb.window, BSTAB_WINDOW, rtol=1e-15)
+    areas = tb.areas()
+    assert abs(areas.fraction.sum() - 0.152) < 3 * 0.0036
+    assert areas.error.sum() < 1e-7 and areas.running_error < 1e-7
+
+
+@pytest.mark.parametrize("torque, published", [(0.16, 0.483), (0.36, 0.238), (0.56, 0.1279),
+                                               (0.76, 0.0545), (0.96, 0.0071)])
+def test_published_torque_sweep_of_the_bstab_pendulum(torque, published):
+    """The T-sweep of the same paper (N = 10 000 per T, window fixed at the T = 0.5 one):
+    every fourth entry, within three binomial standard errors √(S(1 − S)/10⁴)."""
+    tb = TiltedBoundaries(Pendulum(0.05, 1.0, torque), *BSTAB_WINDOW)
+    assert tb.bistable
+    sigma = math.sqrt(published * (1 - published) / 1e4)
+    assert abs(tb.areas().fraction.sum() - published) < 3 * sigma

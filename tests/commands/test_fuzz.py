@@ -1,0 +1,241 @@
+"""Property-based hostile input (Hypothesis, seeded): random configs built from the schema's
+keys with random types and values, random mutations of a valid config (values and raw
+text), and random byte-level damage to a valid atlas file, fed to the real CLI.
+
+Invariant: exit 0 with a sound file, or exit 2 with one ``atlas: error:`` line and nothing
+created or overwritten; never a traceback, never a signal. The CLI runs in-process
+(``atlas.cli.main``) for speed, a few cases in a subprocess (signals, core dumps).
+
+``make test`` runs a small, fixed number of examples (well under a minute on two cores);
+``ATLAS_FUZZ_SCALE=10`` (``make faults`` sets it) runs ten times as many.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import random
+import shutil
+import subprocess
+import sys
+import tempfile
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import atlas
+from atlas import defaults
+from atlas.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+SCALE = max(1, int(os.environ.get("ATLAS_FUZZ_SCALE", "1")))
+FUZZ = settings(max_examples=40 * SCALE, deadline=None, derandomize=True, database=None,
+                suppress_health_check=list(HealthCheck))
+
+BASE = {"name": "fuzz", "pendulum": {"alpha": 0.1, "omega0": 1.0},
+        "grid": {"theta0": {"start": "-3pi", "stop": "3pi", "num": 6},
+                 "theta_dot0": {"start": -4, "stop": 4, "num": 4}},
+        "integrator": {"dt": 0.05, "t_max": 20},
+        "separatrices": {"enabled": False}, "execution": {"tile_orbits": 8}}
+#: Every key of the config schema, as paths (and the sections themselves).
+KEYS = [("name",), ("output",), ("pendulum",), ("pendulum", "alpha"), ("pendulum", "omega0"),
+        ("grid",), ("grid", "theta0"), ("grid", "theta_dot0"),
+        *[("grid", axis, key) for axis in ("theta0", "theta_dot0")
+          for key in ("start", "stop", "num")],
+        ("integrator",), ("integrator", "dt"), ("integrator", "t_max"), ("separatrices",),
+        ("separatrices", "enabled"), ("separatrices", "tol"), ("separatrices", "max_spacing"),
+        ("execution",), ("execution", "backend"), ("execution", "tile_orbits"),
+        ("execution", "workers"), ("execution", "scheduler")]
+
+scalars = st.one_of(
+    st.none(), st.booleans(), st.integers(-3, 40),
+    st.sampled_from([0, -1, 1 << 20, 2**31, 2**63, 10**12, 10**400]),
+    st.floats(-50, 50),
+    st.sampled_from([math.nan, math.inf, -math.inf, 1e300, -1e300, 5e-324, 1e-7, 1e7]),
+    st.text(max_size=8),
+    st.sampled_from(["3pi", "-pi/2", "2*pi", "pi/0", "1e309", "nan", "-inf", "3pie", "~",
+                     "</script>", "cpu", "cuda", "dask", "tpu", "/", "..", "\x00"]))
+values = st.recursive(scalars, lambda inner: st.lists(inner, max_size=3)
+                      | st.dictionaries(st.text(max_size=6), inner, max_size=3), max_leaves=6)
+#: Text that YAML or the loader must refuse, spliced into a config.
+YAML_SNIPPETS = ["&a [1, 2]\nx: *a", "!!python/object/apply:os.system ['true']", "{", "]",
+                 "name: a\nname: b", "\t- x", "? [1]\n: 2", "%TAG !x! y", "--- \n---", "\ufeff",
+                 "pendulum: {alpha: 0.1, alpha: 0.2}", "'" * 3, "\x00", "@x"]
+
+
+def cli(*args) -> tuple[int, str]:
+    """``atlas ARGS`` in-process: (exit status, stderr). Any exception escapes (a bug)."""
+    err = io.StringIO()
+    with redirect_stdout(io.StringIO()), redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return code, err.getvalue()
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {p.name: (p.read_bytes() if p.is_file() else b"<dir>") for p in folder.iterdir()}
+
+
+def _one_line(code: int, err: str) -> None:
+    lines = err.strip().splitlines()
+    assert code == 2, (code, err)
+    assert len(lines) == 1 and lines[0].startswith("atlas: error: "), err
+    assert "Traceback" not in err
+
+
+def _set(config: dict, path: tuple, value, delete: bool) -> None:
+    node = config
+    for key in path[:-1]:
+        if not isinstance(node.get(key), dict):
+            node[key] = {}
+        node = node[key]
+    if delete:
+        node.pop(path[-1], None)
+    else:
+        node[path[-1]] = value
+
+
+def _cheap_enough(text: str, folder: Path) -> bool:
+    """Run only what a unit test can afford: a valid config whose run is tiny, on the CPU,
+    without separatrices (a refused config always runs: refusing is quick)."""
+    cfg_path = folder / "probe.yaml"
+    cfg_path.write_text(text, encoding="utf-8", errors="surrogateescape")
+    try:
+        cfg = atlas.load_config(cfg_path, output=folder / "probe.h5")
+    except atlas.AtlasError:
+        return True
+    finally:
+        cfg_path.unlink()
+    orbits = cfg.grid.theta0.num * cfg.grid.theta_dot0.num * len(cfg.pendulum.alphas) \
+        * len(cfg.pendulum.omega0s)
+    steps = cfg.integrator.t_max / cfg.integrator.dt
+    return (orbits * steps <= 2e5 and orbits <= 4096 and cfg.execution.backend == "cpu"
+            and not cfg.separatrices.enabled
+            and (cfg.execution.tile_orbits or defaults.TILE_ORBITS) >= 4)
+
+
+def _run_config(text: str, good: Path) -> None:
+    """``atlas run`` on ``text`` over an earlier atlas file; check the invariant."""
+    with tempfile.TemporaryDirectory(prefix="atlas-fuzz-") as tmp:
+        folder = Path(tmp)
+        if not _cheap_enough(text, folder):
+            return
+        cfg = folder / "c.yaml"
+        cfg.write_text(text, encoding="utf-8", errors="surrogateescape")
+        out = folder / "out.h5"
+        shutil.copyfile(good, out)
+        before = _snapshot(folder)
+        code, err = cli("run", cfg, "-o", out, "--quiet")
+        if code == 0:
+            atlas.open(out).close()
+            assert set(_snapshot(folder)) <= {*before, "out.h5.lock"}, err
+        else:
+            _one_line(code, err)
+            assert _snapshot(folder) == before, err
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory) -> Path:
+    """A valid atlas (12 x 8 orbits, separatrices on: its groups are damaged too)."""
+    tmp = tmp_path_factory.mktemp("fuzz")
+    cfg = {**BASE, "grid": {"theta0": {"start": "-3pi", "stop": "3pi", "num": 12},
+                            "theta_dot0": {"start": -4, "stop": 4, "num": 8}},
+           "integrator": {"dt": 0.01, "t_max": 100}, "separatrices": {"enabled": True},
+           "output": str(tmp / "good.h5")}
+    (tmp / "good.yaml").write_text(yaml.safe_dump(cfg))
+    code, err = cli("run", tmp / "good.yaml", "--quiet")
+    assert code == 0, err
+    return tmp / "good.h5"
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.dictionaries(st.sampled_from(KEYS), values, max_size=6)
+       | st.dictionaries(st.text(max_size=8), values, max_size=4).map(lambda d: {(k,): v
+                                                                                for k, v in
+                                                                                d.items()}))
+def test_random_configs_from_the_schema(good, entries):
+    config: dict = {}
+    for path, value in entries.items():
+        _set(config, path, value, delete=False)
+    _run_config(yaml.safe_dump(config, allow_unicode=True), good)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.lists(st.tuples(st.sampled_from(KEYS), values, st.booleans()), min_size=1,
+                max_size=3))
+def test_mutated_valid_configs(good, mutations):
+    config = yaml.safe_load(yaml.safe_dump(BASE))
+    for path, value, delete in mutations:
+        _set(config, path, value, delete)
+    _run_config(yaml.safe_dump(config, allow_unicode=True), good)
+
+
+@FUZZ
+@given(st.lists(st.tuples(st.floats(0, 1), st.sampled_from(YAML_SNIPPETS) | st.text(max_size=4),
+                          st.integers(0, 3)), min_size=1, max_size=3))
+def test_mutated_config_text(good, edits):
+    text = yaml.safe_dump(BASE)
+    for where, snippet, cut in edits:
+        i = int(where * len(text))
+        text = text[:i] + snippet + text[i + cut:]
+    _run_config(text, good)
+
+
+def _damage(data: bytes, edits, truncate) -> bytes:
+    out = bytearray(data)
+    n = len(out)
+    for region, offset, byte in edits:  # metadata sits near both ends of an HDF5 file
+        i = {0: offset % 4096, 1: offset % n, 2: n - 1 - offset % 4096}[region]
+        out[i] = byte
+    return bytes(out[: int(truncate * n)] if truncate else out)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.lists(st.tuples(st.integers(0, 2), st.integers(0, 2**31), st.integers(0, 255)),
+                min_size=1, max_size=12),
+       st.one_of(st.none(), st.floats(0.0, 1.0, exclude_max=True)))
+def test_damaged_atlas_files(good, edits, truncate):
+    with tempfile.TemporaryDirectory(prefix="atlas-fuzz-") as tmp:
+        bad = Path(tmp) / "bad.h5"
+        bad.write_bytes(_damage(good.read_bytes(), edits, truncate))
+        try:
+            atlas.open(bad).close()
+        except atlas.InputFileError:
+            pass
+        for args in (["info", bad], ["plot", bad], ["view", bad, "-o", Path(tmp) / "v.html"]):
+            before = _snapshot(Path(tmp))
+            code, err = cli(*args)
+            if code != 0:
+                _one_line(code, err)
+                assert _snapshot(Path(tmp)) == before, (args, err)
+
+
+@pytest.mark.slow
+def test_damaged_files_and_configs_in_a_subprocess(good, tmp_path):
+    """No signal, no core dump, no traceback: a few cases through the real executable."""
+    rng = random.Random(2026)
+    data = good.read_bytes()
+    cases = []
+    for i in range(2):
+        bad = tmp_path / f"bad{i}.h5"
+        bad.write_bytes(_damage(data, [(rng.randrange(3), rng.randrange(2**31),
+                                        rng.randrange(256)) for _ in range(16)], None))
+        cases.append(["info", bad])
+    cases.append(["plot", tmp_path / "bad0.h5"])
+    hostile = tmp_path / "c.yaml"
+    hostile.write_text("pendulum: {omega0: 1e300, alpha: &a [1, *a]}\n")
+    cases.append(["run", hostile, "-o", tmp_path / "x.h5"])
+    for args in cases:
+        proc = subprocess.run([sys.executable, "-m", "atlas.cli", *map(str, args)],
+                              capture_output=True, text=True, cwd=REPO, timeout=120)
+        assert proc.returncode in (0, 2), (args, proc.returncode, proc.stderr)
+        assert "Traceback" not in proc.stderr
+        if proc.returncode == 2:
+            assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr

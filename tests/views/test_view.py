@@ -1,0 +1,393 @@
+"""``atlas view``: the page is self-contained, small and safe, and — in a real headless
+browser — the orbits it integrates end in the wells atlas labelled.
+
+The browser tests need a Chromium-family browser (Debian's ``chromium``, or $ATLAS_BROWSER);
+without one they are skipped with the reason. ``ATLAS_UPDATE_SCREENSHOT`` makes the
+screenshot test write ``docs/images/view.png`` (see :func:`test_screenshot`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from browser import Browser, find_browser
+
+import atlas
+from atlas.cli import main
+from atlas.views.page import pack_distance, safe_json, unpack_distance, write_view
+from tests.helpers import SWING
+
+pytestmark = pytest.mark.slow  # two atlas runs for the page, a browser
+
+REPO = Path(__file__).resolve().parents[2]
+XSS = "</script><script>alert(1)</script>"
+BROWSER = find_browser()
+# CI (.ci/run) installs a browser and sets ATLAS_REQUIRE_BROWSER: there a missing one fails.
+needs_browser = pytest.mark.skipif(
+    BROWSER is None and not os.environ.get("ATLAS_REQUIRE_BROWSER"),
+    reason="no Chromium-family browser found (install Debian's chromium: apt-get install "
+    "chromium, or set ATLAS_BROWSER); the page itself is still tested without one")
+
+
+def _run(tmp, name, alpha=0.1, num=(160, 96), sep=True, t_max=200.0, method="rk4"):
+    cfg = atlas.Config.model_validate({
+        "name": name, "pendulum": {"alpha": alpha, "omega0": 1.0},
+        "grid": {"theta0": {"start": "-3pi", "stop": "3pi", "num": num[0]},
+                 "theta_dot0": {"start": -4, "stop": 4, "num": num[1]}},
+        "integrator": {"dt": 0.01, "t_max": t_max, "method": method},
+        "separatrices": {"enabled": sep},
+        "output": str(tmp / f"{abs(hash(name))}.h5")})
+    atlas.run(cfg, quiet=True)
+    return cfg.output
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("view")
+    single = _run(tmp, "a quick look")
+    sweep = _run(tmp, "two dampings", alpha=[0.1, 0.5], num=(48, 32), sep=False)
+    xss = _run(tmp, XSS, num=(24, 16), sep=False)
+    pages = {key: write_view(path) for key, path in
+             (("single", single), ("sweep", sweep), ("xss", xss))}
+    return {"single": single, "sweep": sweep, "xss": xss, "pages": pages}
+
+
+def _data(page: Path) -> dict:
+    html = page.read_text(encoding="utf-8")
+    block = re.search(r'<script type="application/json" id="atlas-data">(.*?)</script>',
+                      html, re.S)
+    return json.loads(block.group(1))
+
+
+# ---- the page, without a browser ------------------------------------------------------
+
+def test_page_is_self_contained_and_small(files):
+    page = files["pages"]["single"]
+    html = page.read_text(encoding="utf-8")
+    assert page == files["single"].with_suffix(".html")
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:|//)""", html, re.I)
+    assert "<link" not in html and not re.search(r"<script[^>]*\ssrc=", html)
+    assert "default-src 'none'" in html  # the page may not fetch anything
+    assert html.count("<script") == 2  # the data block and the one script
+    # bytes per grid point, fixed overhead included: a 512² page stays well under 5 MB
+    n = 160 * 96
+    assert len(html.encode()) / n < 8, len(html.encode()) / n
+
+
+def test_strings_from_the_file_are_data_not_markup(files):
+    html = files["pages"]["xss"].read_text(encoding="utf-8")
+    assert XSS not in html and "<script>alert" not in html
+    assert html.count("<script") == 2 and html.count("</script>") == 2
+    assert _data(files["pages"]["xss"])["name"] == XSS
+    for text in ("<", ">", "&", "\u2028", "</script>"):
+        encoded = safe_json({"s": text})
+        assert not set("<>&\u2028") & set(encoded) and json.loads(encoded) == {"s": text}
+
+
+def test_packed_arrays_round_trip(files):
+    d = np.array([0.0, np.nan, 1e-9, 5e-6, 0.035, 1.0, 7.5, 1e30, 1e-40])
+    back = unpack_distance(pack_distance(d))
+    assert back[0] == 0 and np.isnan(back[1])
+    np.testing.assert_allclose(back[2:-2], d[2:-2], rtol=np.exp2(1 / 512) - 1)
+    data = _data(files["pages"]["single"])
+    assert data["dt"] == 0.01 and data["theta0"][2] == 160 and data["theta_dot0"][2] == 96
+    assert len(data["points"]) == 1 and data["points"][0]["curves"]
+    assert len(_data(files["pages"]["sweep"])["points"]) == 2
+
+
+def test_view_cli(files, tmp_path, capsys):
+    out = tmp_path / "page.html"
+    assert main(["view", str(files["single"]), "-o", str(out)]) == 0
+    assert out.stat().st_size > 0 and f"wrote {out}" in capsys.readouterr().out
+    for args, fragment in ((["view", str(tmp_path / "missing.h5")], "missing.h5: no such file"),
+                           (["view", str(out)], "not a readable HDF5 file"),
+                           (["view", str(files["single"]), "-o", str(tmp_path)], "directory"),
+                           (["view", str(files["single"]), "-o", str(tmp_path / "x" / "p.html")],
+                            "not a directory")):
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("atlas: error: ") and fragment in err and "\n" not in err
+
+
+# ---- in a real browser ----------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def browser():
+    if BROWSER is None:
+        pytest.fail("ATLAS_REQUIRE_BROWSER is set but no Chromium-family browser was found")
+    b = Browser(BROWSER, width=1180, height=660)
+    yield b
+    b.close()
+
+
+def _open(browser, page: Path) -> None:
+    browser.goto(page.resolve().as_uri())
+    browser.evaluate("atlasView.ready")
+    assert browser.evaluate("document.getElementById('readout').dataset.ready") == "1"
+
+
+def _readout(browser) -> dict:
+    return browser.evaluate("Object.assign({}, document.getElementById('readout').dataset)")
+
+
+def _far_points(point, n, min_distance, rng):
+    """Grid indices (row j, column i) of trapped labels far from every boundary."""
+    status, dist = point["status"].values, point["boundary_distance"].values
+    j, i = np.nonzero((status == 0) & (dist > min_distance))
+    pick = rng.choice(j.size, size=min(n, j.size), replace=False)
+    return j[pick], i[pick]
+
+
+@needs_browser
+def test_clicked_orbits_end_where_atlas_says(files, browser):
+    """Real clicks on grid points far from the boundaries (farther than a few pixels, so the
+    click's rounding to whole pixels cannot cross one): the page's orbit ends in the stored
+    well, and its readout shows the stored values of that grid point."""
+    ds = atlas.open(files["single"]).to_dataset(inherit=False)
+    _open(browser, files["pages"]["single"])
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    rows, cols = _far_points(ds, 10, 0.15, np.random.default_rng(1))
+    for j, i in zip(rows, cols):
+        xy = browser.evaluate(f"atlasView.clientXY({float(th[i])!r}, {float(v[j])!r})")
+        browser.click(xy["x"], xy["y"])
+        r = _readout(browser)
+        assert abs(float(r["theta0"]) - th[i]) < 0.05 and abs(float(r["thetaDot0"]) - v[j]) < 0.05
+        k = int(ds["attractor"].values[j, i])
+        assert r["orbitStatus"] == "trapped" and int(r["orbitK"]) == k, (th[i], v[j], r)
+        assert int(r["gridK"]) == k and r["gridStatus"] == "trapped"
+        assert float(r["gridTTrap"]) == pytest.approx(float(ds["t_trap"].values[j, i]))
+        assert float(r["gridDistance"]) == pytest.approx(
+            float(ds["boundary_distance"].values[j, i]), rel=2e-3)
+    assert int(_readout(browser)["clicks"]) == len(rows)
+    assert browser.dialogs() == [] and browser.console_errors() == []
+
+
+@needs_browser
+def test_page_orbits_match_atlas_labels_at_grid_points(files, browser):
+    """The page's integrator from exact grid points away from the boundaries: the same well
+    and the same t_trap (same RK4 step, same trap every check_every steps) as the file."""
+    ds = atlas.open(files["single"]).to_dataset(inherit=False)
+    _open(browser, files["pages"]["single"])
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    rows, cols = _far_points(ds, 300, 1e-6, np.random.default_rng(2))
+    pairs = json.dumps([[float(th[i]), float(v[j])] for j, i in zip(rows, cols)])
+    got = browser.evaluate(f"{pairs}.map(([a, b]) => atlasView.orbit(a, b))")
+    k = ds["attractor"].values[rows, cols]
+    t = ds["t_trap"].values[rows, cols]
+    assert [g["status"] for g in got] == ["trapped"] * len(got)
+    np.testing.assert_array_equal([g["k"] for g in got], k)
+    # t_trap can differ only where the energy sits within rounding of the trap level at a test
+    np.testing.assert_allclose([g["t_trap"] for g in got], t, atol=16 * 0.01 + 1e-9)
+    assert np.mean(np.isclose([g["t_trap"] for g in got], t)) > 0.95
+    # and the very same RK4 map: the state at the trap equals atlas's integrator's to rounding
+    # (atlas.commands.orbit.integrate repeats the kernel's step; tests/commands/test_orbit.py ties it to the kernel)
+    from atlas.commands.orbit import integrate
+
+    for g in got[:40]:
+        ref = integrate(g["theta0"], g["theta_dot0"], alpha=0.1, omega0=1.0)
+        assert ref.k == g["k"] and ref.t_trap == pytest.approx(g["t_trap"])
+        i = ref.trap_index
+        assert abs(ref.theta[i] - g["theta_trap"]) + abs(ref.theta_dot[i] - g["theta_dot_trap"]) \
+            < 1e-9
+
+
+@needs_browser
+def test_a_trigfree_page_integrates_with_the_files_method(tmp_path, browser):
+    """An atlas computed with method "rk4-trigfree": the page steps (θ, θ̇, cos θ, sin θ) as
+    the file's kernels did, so its orbits end in the stored wells with the stored t_trap, and
+    the state at the trap is atlas.commands.orbit.integrate's with that method (not classical RK4's,
+    which differs by the methods' O(dt⁴) gap, far above rounding)."""
+    from atlas.commands.orbit import integrate
+
+    path = _run(tmp_path, "trig-free", num=(48, 32), method="rk4-trigfree")
+    page = write_view(path)
+    assert _data(page)["method"] == "rk4-trigfree"
+    ds = atlas.open(path).to_dataset(inherit=False)
+    _open(browser, page)
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    rows, cols = _far_points(ds, 60, 1e-6, np.random.default_rng(5))
+    pairs = json.dumps([[float(th[i]), float(v[j])] for j, i in zip(rows, cols)])
+    got = browser.evaluate(f"{pairs}.map(([a, b]) => atlasView.orbit(a, b))")
+    np.testing.assert_array_equal([g["k"] for g in got], ds["attractor"].values[rows, cols])
+    assert np.mean(np.isclose([g["t_trap"] for g in got], ds["t_trap"].values[rows, cols])) \
+        > 0.95
+    gaps = []
+    for g in got[:20]:
+        ref = integrate(g["theta0"], g["theta_dot0"], alpha=0.1, omega0=1.0,
+                        method="rk4-trigfree")
+        rk4 = integrate(g["theta0"], g["theta_dot0"], alpha=0.1, omega0=1.0)
+        i = ref.trap_index
+        assert ref.k == g["k"] and ref.t_trap == pytest.approx(g["t_trap"])
+        assert abs(ref.theta[i] - g["theta_trap"]) \
+            + abs(ref.theta_dot[i] - g["theta_dot_trap"]) < 1e-9
+        if rk4.trap_index == i:
+            gaps.append(abs(rk4.theta[i] - g["theta_trap"]))
+    assert gaps and max(gaps) > 1e-8  # the check above can tell the methods apart
+
+
+@needs_browser
+def test_a_malicious_name_is_shown_as_text_and_never_runs(files, browser):
+    # the detector works: a page that does open a dialog is seen
+    browser.goto("data:text/html,<script>alert(1)</script>")
+    assert len(browser.dialogs()) == 1
+    _open(browser, files["pages"]["xss"])
+    time.sleep(0.2)
+    assert browser.dialogs() == []
+    assert browser.evaluate("document.getElementById('name').textContent") == XSS
+    assert browser.evaluate("document.title").startswith(XSS)
+    assert browser.evaluate("document.scripts.length") == 2
+    assert browser.console_errors() == []
+
+
+@needs_browser
+def test_parameter_slider(files, browser):
+    ds = atlas.open(files["sweep"]).to_dataset(inherit=False)
+    _open(browser, files["pages"]["sweep"])
+    assert browser.evaluate("document.getElementById('controls').hidden") is False
+    assert browser.evaluate("document.getElementById('point').max") == "1"
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    # a grid point whose stored well differs between α = 0.1 and 0.5, inside a uniform patch
+    k = ds["attractor"].values  # dims (alpha, theta_dot0, theta0): only α is swept
+    assert ds["attractor"].dims == ("alpha", "theta_dot0", "theta0")
+    same = np.ones(k.shape[1:], bool)
+    for a in range(2):
+        for dj in (-1, 0, 1):
+            for di in (-1, 0, 1):
+                same &= np.roll(k[a], (dj, di), axis=(0, 1)) == k[a]
+    j, i = np.argwhere(same & (k[0] != k[1]) & (ds["status"].values != 1).all(0))[0]
+    for a in range(2):
+        browser.evaluate(f"atlasView.select({a})")
+        label = browser.evaluate("document.getElementById('point-label').textContent")
+        assert f"α = {ds['alpha'].values[a]:g}" in label
+        xy = browser.evaluate(f"atlasView.clientXY({float(th[i])!r}, {float(v[j])!r})")
+        browser.click(xy["x"], xy["y"])
+        r = _readout(browser)
+        assert r["point"] == str(a) and int(r["orbitK"]) == int(k[a, j, i]) == int(r["gridK"])
+
+
+@needs_browser
+def test_screenshot(files, browser, tmp_path):
+    """A picture of the page after a click. ATLAS_UPDATE_SCREENSHOT=1 keeps it as
+    docs/images/view.png for the README; ATLAS_UPDATE_SCREENSHOT=outputs/default.h5 takes it
+    of that atlas instead of the test's."""
+    update = os.environ.get("ATLAS_UPDATE_SCREENSHOT", "")
+    page = files["pages"]["single"]
+    if update.endswith(".h5"):
+        page = write_view(update, tmp_path / "shown.html")
+    browser.call("Emulation.setDeviceMetricsOverride",
+                 {"width": 1180, "height": 720, "deviceScaleFactor": 1, "mobile": False})
+    _open(browser, page)
+    xy = browser.evaluate("atlasView.clientXY(-1.0, 2.5)")
+    browser.click(xy["x"], xy["y"])
+    assert _readout(browser)["orbitStatus"] == "trapped"
+    time.sleep(1.2)  # let the pendulum swing a little
+    png = browser.screenshot()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+    target = REPO / "docs" / "images" / "view.png" if update else tmp_path / "view.png"
+    target.write_bytes(png)
+
+
+# ---- a torque atlas -------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def swing(swing_atlas, tmp_path_factory):
+    """A small atlas of the bistable swing pendulum (tilted wells and the running cycle:
+    conftest's, shared) and its page."""
+    return swing_atlas, write_view(swing_atlas, tmp_path_factory.mktemp("swing") / "swing.html")
+
+
+def test_torque_page_carries_the_sweeps_certificates(swing):
+    """τ, the kernels' tilted trap level and the very running barrier the sweep gave its
+    kernels (g bit for bit, rebuilt from the stored cycle), the cycle to draw; still small."""
+    import base64
+    import zlib
+
+    from atlas.labels.labelling import energy_cap
+    from atlas.physics.running import limit_cycle, running_barrier
+
+    path, page = swing
+    p = _data(page)["points"][0]
+    assert p["torque"] == 0.5 and p["cap"] == energy_cap(0.01, 0.05, 1.0, 0.5)
+    assert p["shift"] == pytest.approx(np.arcsin(0.5), abs=0)
+    ref = running_barrier(0.05, 1.0, 0.5, limit_cycle(0.05, 1.0, 0.5), dt=0.01)
+    b = p["barrier"]
+    g = np.frombuffer(zlib.decompress(base64.b64decode(b["g"])), "<f8")
+    np.testing.assert_array_equal(g, ref.g)
+    assert (b["theta0"], b["top"], b["direction"]) == (ref.theta0, ref.top, 1)
+    cycle = atlas.open(path)["limit_cycle"].to_dataset()
+    assert p["cycle"]["theta"][0] == round(float(cycle["theta"][0]), 4)
+    assert p["cycle"]["theta"][-1] == round(float(cycle["theta"][-1]), 4)
+    assert len(p["cycle"]["theta"]) < 300 and page.stat().st_size < 100_000
+    assert "running" in _data(page)["status_names"].values()
+
+
+def _uniform_cells(ds, code, k=None):
+    """Grid indices (j, i) whose 3 × 3 neighbourhood all has status ``code`` (and well k)."""
+    status, att = ds["status"].values, ds["attractor"].values
+    good = status == code if k is None else (np.isin(status, (0, 3)) & (att == k))
+    inner = np.zeros_like(good)
+    inner[1:-1, 1:-1] = True
+    for dj in (-1, 0, 1):
+        for di in (-1, 0, 1):
+            inner &= np.roll(good, (dj, di), axis=(0, 1))
+    return np.argwhere(inner)
+
+
+@pytest.mark.slow
+@needs_browser
+def test_torque_page_clicks_agree_with_the_file(swing, browser):
+    """Clicks on a torque page: a point the file labels running is certified running in the
+    browser (and shown as the file's), a point in a well's basin ends in the file's well; the
+    page's orbits from grid points inside uniform patches get the file's labels, and the
+    state at the certificate equals atlas.commands.orbit.integrate's (the same RK4 map and tests)."""
+    from atlas.commands.orbit import integrate, running_barrier_for
+
+    path, page = swing
+    ds = atlas.open(path).to_dataset(inherit=False)
+    th, v = ds["theta0"].values, ds["theta_dot0"].values
+    _open(browser, page)
+    assert "θ* + 2πk" in browser.evaluate("document.getElementById('legend').textContent")
+    running = _uniform_cells(ds, 4)
+    well = _uniform_cells(ds, None, k=0)
+    assert len(running) and len(well)
+    for (j, i), expect in ((running[len(running) // 2], "running"),
+                           (well[len(well) // 2], "trapped")):
+        xy = browser.evaluate(f"atlasView.clientXY({float(th[i])!r}, {float(v[j])!r})")
+        browser.click(xy["x"], xy["y"])
+        r = _readout(browser)
+        assert r["orbitStatus"] == expect, (th[i], v[j], r)
+        if expect == "running":
+            assert r["gridStatus"] == "running" and r["orbitDirection"] == "1"
+            assert r["orbitK"] == "" and r["gridK"] == ""
+            assert browser.evaluate("document.querySelector('#readout .agree').textContent") \
+                == "running, as the stored label"
+        else:
+            k = int(ds["attractor"].values[j, i])
+            assert int(r["orbitK"]) == k == int(r["gridK"])
+    # the page's integrator from exact grid points of uniform patches: the file's labels
+    rng = np.random.default_rng(4)
+    cells = np.concatenate([running[rng.choice(len(running), 20, replace=False)],
+                            _uniform_cells(ds, None, k=0)[:10]])
+    pairs = json.dumps([[float(th[i]), float(v[j])] for j, i in cells])
+    got = browser.evaluate(f"{pairs}.map(([a, b]) => atlasView.orbit(a, b))")
+    status = ds["status"].values[cells[:, 0], cells[:, 1]]
+    names = {0: "trapped", 3: "trapped", 4: "running"}
+    assert [g["status"] for g in got] == [names[int(s)] for s in status]
+    assert [g["k"] for g in got if g["status"] == "trapped"] == \
+        ds["attractor"].values[cells[:, 0], cells[:, 1]][status != 4].tolist()
+    np.testing.assert_allclose([g["t_trap"] for g in got],
+                               ds["t_trap"].values[cells[:, 0], cells[:, 1]], atol=0.16 + 1e-9)
+    barrier, _ = running_barrier_for(0.05, 1.0, 0.5, 0.01)
+    for g in got[::3]:
+        ref = integrate(g["theta0"], g["theta_dot0"], running=barrier, **SWING)
+        assert ref.t_trap == pytest.approx(g["t_trap"]) and ref.k == g["k"]
+        i = ref.trap_index
+        assert abs(ref.theta[i] - g["theta_trap"]) + abs(ref.theta_dot[i] - g["theta_dot_trap"]) \
+            < 1e-9
+    assert browser.dialogs() == [] and browser.console_errors() == []
