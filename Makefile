@@ -39,7 +39,8 @@ atlas: $(OUT) ## compute any config: make atlas CONFIG=configs/x.yaml
 # idle, the whole suite takes about 5 min 30 s in one process and 3 min 20 s in two.
 TEST_WORKERS ?= auto
 
-test: $(STAMP) ## run the whole test suite (on every core; TEST_WORKERS=0 in one process)
+test: $(STAMP) ## check the import rules, then run the whole test suite (TEST_WORKERS=0: one process)
+	$(BIN)/lint-imports --no-cache
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 test-fast: $(STAMP) ## the fast subset: every test not marked slow (under a minute)
@@ -55,7 +56,7 @@ faults: $(STAMP) ## soak: kill -9, SIGTERM, disk full, lock races, Dask faults; 
 	$(BIN)/python -m tools.faults
 
 lint: $(STAMP) ## ruff
-	$(BIN)/ruff check atlas tests
+	$(BIN)/ruff check atlas tests tools
 
 clean: ## remove generated outputs and caches (keeps .venv)
 	find outputs -mindepth 1 ! -name .gitkeep -exec rm -rf {} +

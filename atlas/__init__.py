@@ -22,7 +22,7 @@ __all__ = ["label", "linear", "LabelResult", "load_config", "Config", "run", "op
 
 _LAZY = {"load_config": ("atlas.pipeline.config", "load_config"),
          "Config": ("atlas.pipeline.config", "Config"),
-         "run": ("atlas.pipeline.sweep", "run"), "open": ("atlas.store.atlasfile", "open_atlas")}
+         "run": ("atlas.pipeline.sweep", "run"), "open": ("atlas.store.reader", "open_atlas")}
 
 
 def __getattr__(name: str):

@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 from atlas.errors import EXIT_BAD_INPUT, AtlasError, Terminated
+from atlas.labels.backends import BACKENDS, WORDS
 
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
@@ -45,6 +46,7 @@ def _cmd_run(args) -> int:
     cfg = load_config(args.config, output=args.output)  # a bad config is refused before
     from atlas.pipeline import sweep  # the heavy imports (xarray, Numba kernels)
 
+
     try:
         tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend,
                          force=args.force, config_path=args.config, open_result=False)
@@ -55,6 +57,9 @@ def _cmd_run(args) -> int:
         print(f"atlas: {what}; finished tiles are kept in {partial_path(cfg.output)}; "
               "run the same command again to continue", file=sys.stderr)
         return _interrupted(exc)
+    if args.resume:  # said after the run, so that bad input still gets its one line
+        print("atlas: --resume is deprecated and does nothing (an interrupted run is always "
+              "continued); it will be removed", file=sys.stderr)
     if not args.quiet:
         from atlas.views.info import summary_lines
 
@@ -116,13 +121,8 @@ def _cmd_view(args) -> int:
 
 
 def _cmd_orbit(args) -> int:
-    from atlas.commands.orbit import (
-        check_file_argument,
-        default_output,
-        parse_number,
-        plot_orbit,
-        report,
-    )
+    from atlas.commands.orbit import check_file_argument, default_output, parse_number, report
+    from atlas.commands.orbit_figure import plot_orbit
 
     if len(args.values) not in (2, 3):
         raise AtlasError("orbit: give THETA0 THETA_DOT0, or FILE THETA0 THETA_DOT0 "
@@ -184,16 +184,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("config", help="YAML config, e.g. configs/default.yaml")
     p.add_argument("-o", "--output", help="output file (overrides the config's output key)")
     p.add_argument("--resume", action="store_true",
-                   help="continue an interrupted run of the same config (the default; "
-                   "kept for old scripts)")
+                   help="deprecated, does nothing: an interrupted run of the same config is "
+                   "always continued (accepted so that old scripts keep working)")
     p.add_argument("--restart", action="store_true",
                    help="discard an interrupted run at the output (its finished tiles) and "
                    "start over")
     p.add_argument("--force", action="store_true",
                    help="write over an existing file at the output that atlas did not write "
                    "(never over the config itself)")
-    p.add_argument("--backend", choices=["cpu", "cuda", "dask"],
-                   help="override execution.backend")
+    p.add_argument("--backend", choices=tuple(WORDS),
+                   help="override execution.backend: the device (cpu, cuda) or the CPU on a "
+                   "Dask cluster (dask)")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     p.set_defaults(func=_cmd_run)
 
@@ -212,7 +213,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", parents=[common],
                        help="benchmark table, written to outputs/bench.json")
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions")
-    p.add_argument("--backend", choices=["cpu", "cuda"], default="cpu")
+    p.add_argument("--backend", choices=tuple(BACKENDS), default="cpu",
+                   help="the device to benchmark (cuda: the GPU rows)")
     p.add_argument("--output", default="outputs/bench.json")
     p.add_argument("--gpu-sweep", type=int, action="append", metavar="N",
                    help="with a GPU: also time atlas run --backend cuda of the N x N default "

@@ -15,7 +15,10 @@ THETA_DOT0_WINDOW = (-4.0, 4.0)             #: θ̇0 range of the grid [rad s⁻
 GRID_NUM = 512                              #: points along each grid axis
 DT = 0.01                                   #: RK4 step [s]
 T_MAX = 200.0                               #: integration limit: unresolved after it [s]
-METHOD = "rk4"                              #: the discretisation (atlas.kernels.METHODS)
+METHOD = "rk4"                              #: the discretisation (one of METHODS)
+#: Discretisations the CPU kernels offer (a config's ``integrator.method``; :data:`METHOD`,
+#: "rk4", is the CUDA kernels' method too); re-exported as ``atlas.kernels.METHODS``.
+METHODS = ("rk4", "rk4-trigfree")
 SEPARATRIX_TOL = 1e-12                      #: bisection bracket width of a separatrix point
 MAX_SPACING = 0.05                          #: largest vertex spacing of a separatrix polyline
 TILE_ORBITS = 1 << 18                       #: orbits per tile of a sweep

@@ -18,7 +18,7 @@ MIN_RATE, MAX_RATE = 1e-6, 1e6
 MAX_STEPS = int(np.iinfo(np.int32).max)
 #: Largest |k| of an attractor (2πk, 0): ``attractor`` is int16 in the file.
 MAX_WELL = int(np.iinfo(np.int16).max)
-#: Largest relative safety margin m of the energy trap (:func:`atlas.labels.labelling.trap_margin`):
+#: Largest relative safety margin m of the energy trap (:func:`atlas.labels.trap.trap_margin`):
 #: beyond it dt is so coarse that the trap would certify little or nothing.
 MAX_TRAP_MARGIN = 0.1
 
@@ -61,7 +61,7 @@ def _round_up(x: float) -> float:
 def check_separatrix_settings(theta_window, theta_dot_window, tol: float,
                               max_spacing: float) -> None:
     """Raise ValueError, with a one-line reason naming the setting, unless
-    :func:`atlas.boundaries.separatrices.trace` can honour ``tol`` and ``max_spacing`` [rad-ish] in
+    :func:`atlas.boundaries.trace.trace` can honour ``tol`` and ``max_spacing`` [rad-ish] in
     this window ([rad], [rad s⁻¹]).
 
     Pure and cheap: run it before any work. Bounds: 0 < ``tol``, and tol ≥ ``MIN_TOL_ULPS``

@@ -361,7 +361,7 @@ def _same_zarr_in_child(path: Path, ref: dict) -> bool:
     if pid == 0:
         code = 1
         try:
-            from atlas.store.atlasfile import open_atlas
+            from atlas.store.reader import open_atlas
 
             root = open_atlas(path).to_dataset(inherit=False)
             code = 0 if _same({n: root[n].values for n in COMPARED}, ref) else 1
@@ -434,8 +434,8 @@ def _tmpfs_trial(cfg: Path, work: Path, size_kib: int) -> tuple[int, str, bool]:
 #: Where :func:`_taken_trial` lets another process fill the disk: the function of atlas that
 #: is about to write when the space goes.
 PHASES = {"tiles": ("atlas.store.partial", "TileStore", "record", 3),
-          "assembly": ("atlas.store.atlasfile", None, "_copy_tiles", 1),
-          "summary": ("atlas.store.atlasfile", None, "_write_summary", 1),
+          "assembly": ("atlas.store.hdf5", None, "_copy_tiles", 1),
+          "summary": ("atlas.store.hdf5", None, "_write_summary", 1),
           "groups": ("h5netcdf", "Group", "create_group", 1)}
 _TAKER = """\
 import importlib, subprocess, sys

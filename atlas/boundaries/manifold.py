@@ -1,43 +1,16 @@
-"""The exact basin boundaries: the stable manifolds of the saddles, integrated by DOP853.
+"""The exact basin boundaries without torque: the stable manifolds of the saddles, by DOP853.
 
-Every basin boundary of eq. (1) is the stable manifold of a saddle ((2j+1)π, 0) (essay §3,
-Figure 9). Eq. (1) is invariant under θ → θ + 2π and under (θ, θ̇) → (−θ, −θ̇), so one curve
-determines them all: the *left branch* L of the saddle (π, 0), which arrives at the saddle
-with θ̇ > 0 from θ < π. Followed away from the saddle (reversed time τ) its energy
-E = ½θ̇² + ω0²(1 − cos θ) grows (dE/dτ = 2αθ̇² ≥ 0) and stays above 2ω0², so θ̇ > 0 and θ
-decreases monotonically: L is a graph θ̇ = L(u) over u ∈ (−∞, π]. The boundary through the
-saddle nπ (n odd) is then the graph over all θ
-
-    S_n(θ) = L(θ − (n − 1)π)        for θ ≤ nπ   (left branch, the shift of L),
-    S_n(θ) = −L((n + 1)π − θ)       for θ ≥ nπ   (right branch, the point reflection),
-
-with S_n < S_{n+2} everywhere; the basin of the rest state (2πk, 0) is the strip
-S_{2k−1}(θ) < θ̇ < S_{2k+1}(θ).
-
-:class:`StableManifold` integrates L once — DOP853 (rtol = atol = 1e-13, dense output;
-compiled, :mod:`atlas.kernels.dop853`, the method of scipy's ``solve_ivp(method="DOP853")``)
-in reversed time from 10⁻⁷ along the stable eigenvector (essay eqs. 22, 24; the neglected
-curvature is O(10⁻¹⁴)) until θ̇ exceeds a stated speed (:meth:`StableManifold.extended`
-continues it) — together with the quadrature Q(τ) = ∫₀^τ θ̇² dτ' = ∫ θ̇ dθ (Green's theorem
-along the curve); the vector field is :class:`atlas.physics.pendulum.Pendulum`'s. From it:
-
-* :meth:`StableManifold.at`, :meth:`StableManifold.tau_at`, :meth:`StableManifold.left` — the
-  curve itself: its point at reversed time τ, the τ and the θ̇ = L(u) where it passes θ = u;
-* :meth:`StableManifold.boundary` — S_n(θ) by Newton's method on the dense output;
-* :meth:`StableManifold.foot_points` — the nearest point of L, and its distance, for points
-  near L (Newton's method for the foot point on the dense output); :func:`to_left_branch` maps
-  points of any boundary branch onto L's frame (an isometry);
-* :meth:`StableManifold.index` — :meth:`BoundaryIndex.nearest`: the Euclidean distance in the
-  (θ, θ̇) plane from any point to the nearest basin boundary, and which one;
-* :meth:`StableManifold.side` — the basin k of the exact equation each point lies in;
-* :func:`basin_areas` — the area fraction of a window in each basin, from
-  ∫ clip(S_n(θ), θ̇min, θ̇max) dθ, integrated exactly piecewise (Q between the points where a
-  boundary crosses the window's θ̇ edges, constants outside); the error estimate is the change
-  from rtol = 1e-12 to 1e-13.
-
-References: Krauskopf et al., "A survey of methods for computing (un)stable manifolds of
-vector fields", Int. J. Bifurcation Chaos 15 (2005) 763; Hairer, Nørsett & Wanner, *Solving
-ODEs I*, §II.5–6 (DOP853 and its dense output).
+Every basin boundary of eq. (1) (τ = 0) is the stable manifold of a saddle ((2j+1)π, 0), and
+by θ → θ + 2π and (θ, θ̇) → (−θ, −θ̇) each is a copy of one curve, the left branch L of
+(π, 0): a graph θ̇ = L(u), u ≤ π, so the boundary through nπ is S_n(θ) = L(θ − (n − 1)π) left
+of the saddle, −L((n + 1)π − θ) right of it, and the basin of the rest state (2πk, 0) is the
+strip S_{2k−1} < θ̇ < S_{2k+1}. :class:`StableManifold` integrates L once (DOP853, rtol =
+atol = 1e-13, dense output: :mod:`atlas.kernels.dop853`; from 1e-7 along the stable
+eigenvector, essay eqs. 22, 24) with Q(τ) = ∫ θ̇ dθ; from it come foot points and distances
+(:class:`BoundaryIndex`, ≈ 1e-13), sides, and the exact area of each basin in a window
+(:func:`basin_areas`, piecewise from Q; error: the change from rtol 1e-12 to 1e-13).
+References: Krauskopf et al., Int. J. Bifurcation Chaos 15 (2005) 763; Hairer, Nørsett &
+Wanner, *Solving ODEs I*, §II.5–6. Derivation: docs/design/stable-manifolds.md.
 """
 
 from __future__ import annotations
@@ -49,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from atlas.physics.pendulum import Pendulum
+from atlas.physics.pendulum import START_DISTANCE, Pendulum
 
 __all__ = ["StableManifold", "BoundaryIndex", "to_left_branch", "basin_areas", "BasinAreas",
            "RTOL", "START_DISTANCE"]
@@ -58,8 +31,6 @@ __all__ = ["StableManifold", "BoundaryIndex", "to_left_branch", "basin_areas", "
 RTOL = 1e-13
 #: The tolerance whose result is compared with :data:`RTOL`'s for the error estimate.
 RTOL_CHECK = 1e-12
-#: Distance from the saddle of the first integrated point [rad-ish].
-START_DISTANCE = 1e-7
 #: Arc-length spacing of the samples used to seed foot-point searches [rad-ish].
 SAMPLE_SPACING = 0.02
 _NEWTON = 6  # iterations for foot points and inverse functions (quadratic convergence)
@@ -538,9 +509,9 @@ def basin_areas(pendulum: Pendulum, theta_window, theta_dot_window,
                 manifolds: tuple[StableManifold, StableManifold] | None = None) -> BasinAreas:
     """Exact area fractions of the window θ ∈ ``theta_window`` [rad] × θ̇ ∈
     ``theta_dot_window`` [rad s⁻¹] in each basin: (G_{2k+1} − G_{2k−1}) / area with
-    G_n = ∫ clip(S_n(θ), θ̇min, θ̇max) dθ (module docstring). ``manifolds``: the left branch
-    integrated at rtol :data:`RTOL` and :data:`RTOL_CHECK`, each at least as fast as the
-    window's θ̇ (integrated here if not given)."""
+    G_n = ∫ clip(S_n(θ), θ̇min, θ̇max) dθ (docs/design/stable-manifolds.md). ``manifolds``:
+    the left branch integrated at rtol :data:`RTOL` and :data:`RTOL_CHECK`, each at least as
+    fast as the window's θ̇ (integrated here if not given)."""
     speed = max(abs(x) for x in theta_dot_window)
     width = theta_window[1] - theta_window[0]
     area = width * (theta_dot_window[1] - theta_dot_window[0])

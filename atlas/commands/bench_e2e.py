@@ -1,23 +1,12 @@
 """End to end: what a user waits for in ``atlas run`` of the default config, against a budget.
 
-The budget is the speed goal for the whole command: the time Python needs to import atlas's
-dependencies (numba, xarray, h5netcdf: a fresh interpreter that imports them and exits), plus
-3 × the default method's own kernel time on the 512² map (measured in the same ``atlas
-bench`` run), plus 0.5 s. Measured here, each in a fresh interpreter and each the median of
-``repeats`` runs after a warm-up run (which also fills Numba's on-disk cache):
-
-* ``atlas run`` of the default problem (:mod:`atlas.defaults`: the essay's Figure 9 on the
-  512² grid, separatrices on, a new output file each time), the whole command, with the
-  phases it logs under ``-v`` (start-up, separatrices, exact boundaries, map, summary,
-  writing);
-* the imports alone, and the imports plus one call of a cached atlas kernel: Numba sets up
-  its type registries on the first call in a process (importing scipy.linalg for BLAS among
-  others), a cost every command that computes pays and the import time does not show.
-
-"Warm" includes Python's bytecode cache of atlas itself (:func:`warm_bytecode`): a run
-writes it for the next one, unless ``PYTHONDONTWRITEBYTECODE`` is set (as on the development
-machines), where every process would compile atlas's sources again (about 0.1 s) while the
-dependencies it is measured against come with theirs.
+The budget: the time Python needs to import atlas's dependencies (numba, xarray, h5netcdf),
+plus 3 × the default method's own kernel time on the 512² map (the same ``atlas bench`` run),
+plus 0.5 s. Measured each in a fresh interpreter (:func:`run_python`), the median of
+``repeats`` warm runs: ``atlas run`` of the default problem, the whole command, with the phases
+it logs; the imports alone; the imports plus one call of a cached kernel (Numba's first-call
+set-up). "Warm" includes atlas's own bytecode cache (:func:`warm_bytecode`). Why each part is
+measured so: ``docs/design/bench.md``.
 """
 
 from __future__ import annotations

@@ -1,26 +1,13 @@
 """GPU benchmark: the CUDA kernels of :mod:`atlas.kernels.cuda` on the default problem.
 
-The default problem of :mod:`atlas.defaults` (``defaults.problem()``) on an n × n grid of its
-window (``defaults.grid``). For each kernel variant ("fast": wrapped θ and a
-reduced-range polynomial sin; "straightforward": one orbit per thread with libdevice sin):
-
-* basin map: kernel time by CUDA events (median of ``repeats`` after one warm-up launch,
-  device arrays, no transfers), the wall time of :func:`label_cuda` from host arrays to host
-  arrays (transfers, chunking and staging included), and effective steps/s = RK4 steps the
-  orbits actually took before trapping (or to t_max) / kernel time;
-* bulk: steps/s of a fixed-steps run (``propagate``, no early exit);
-* the GPU's labels against the CPU's (:func:`atlas.label` with the default method, the
-  lane kernels) on the same grid: the share of orbits with the same status and well, and
-  for those that differ the largest distance to the exact basin boundaries (they should
-  all lie on a boundary: decided by rounding);
-* sweep: the wall time of one :func:`atlas.run` of the default atlas with backend "cuda",
-  end to end (separatrices; tiles labelled on the GPU, certified on the CPU and written while
-  the next tile computes; the assembled HDF5 file), in a temporary folder: on the same n × n
-  grid, and on request on larger ones (:func:`sweep_rows`, ``atlas bench --backend cuda
-  --gpu-sweep 16384``: the target of ≤ 10 s).
-
-Plus a JAX peer (``vmap`` over orbits of a ``lax.fori_loop`` RK4, float64, fixed steps) when
-JAX imports and sees a GPU. Without a CUDA GPU :func:`run_gpu_bench` returns None.
+On an n × n grid of the default window (:mod:`atlas.defaults`), for each kernel variant
+("fast": wrapped θ and a reduced-range polynomial sin; "straightforward": libdevice sin): the
+basin map (kernel time by CUDA events, the wall time of :func:`label_cuda` host to host, and
+effective steps/s), bulk steps/s without early exit, the GPU's labels against the CPU's on
+the same grid (the share equal; the largest exact-boundary distance of those that differ),
+and :func:`atlas.run` with backend "cuda" end to end (:func:`sweep_rows`; 16384² on request:
+``atlas bench --backend cuda --gpu-sweep 16384``). Plus a JAX peer when JAX sees a GPU.
+Without a CUDA GPU :func:`run_gpu_bench` returns None. Details: ``docs/design/bench.md``.
 """
 
 from __future__ import annotations
@@ -37,7 +24,7 @@ from atlas import defaults
 from atlas.kernels import TRAPPED, UNRESOLVED
 from atlas.kernels.cuda import VARIANTS, cuda_status, kernels
 from atlas.kernels.cuda_host import label_cuda
-from atlas.labels.labelling import CHECK_EVERY, energy_cap, n_checks_for
+from atlas.labels.trap import CHECK_EVERY, energy_cap, n_checks_for
 
 __all__ = ["run_gpu_bench", "format_gpu_rows", "TARGETS"]
 
@@ -173,10 +160,10 @@ def _cpu_agreement(theta0, theta_dot0, p, attractor, status) -> dict:
     differ = np.flatnonzero((cpu.status != status) | (cpu_k != gpu_k))
     nearest = math.nan
     if differ.size:
-        from atlas.boundaries.certificate import exact_boundaries
+        from atlas.boundaries.exact import exact_boundaries
 
         window = (defaults.THETA0_WINDOW, defaults.THETA_DOT0_WINDOW)
-        exact = exact_boundaries(Pendulum(p["alpha"], p["omega0"]), window, None)
+        exact = exact_boundaries(Pendulum(p["alpha"], p["omega0"]), window)
         nearest = float(exact.distance(theta0[differ], theta_dot0[differ])[0].max())
     return {"agree_fraction": 1.0 - differ.size / theta0.size, "differ": int(differ.size),
             "differ_max_boundary_distance": nearest}

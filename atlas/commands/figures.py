@@ -1,25 +1,18 @@
 """The essay's Figures 1–12, redrawn from this package's own mathematics.
 
-A leaf layer: every curve comes from :mod:`atlas.physics.linear` (closed forms, essay eqs. 2–19 and
-25–26, errata fixed), from RK4 integration of eq. (1) with the kernels' step
+A leaf layer: every curve comes from :mod:`atlas.physics.linear` (closed forms, essay eqs.
+2–19 and 25–26, errata fixed), from RK4 integration of eq. (1) with the kernels' step
 (:mod:`atlas.kernels.rk4`; only :func:`rk4_orbits`, which records the figure's trajectories,
-is added here), from :mod:`atlas.boundaries.separatrices` (Figure 9's red curves) or from the vector
+is added here), from :mod:`atlas.boundaries.trace` (Figure 9's red curves) or from the vector
 fields of eqs. (20)–(24).
 
 Each ``figN_<what>(ax_or_fig=None, *, small=False, **parameters)`` returns a matplotlib
 Figure; the keyword defaults are the parameters of the essay's caption (ω in Figures 1–4 is
 the damped frequency, so ω0 = √(ω² + α²)). ``ax_or_fig`` may be an Axes (single-panel
-figures; a 3-D Axes for Figure 6) or a Figure to draw into; ``small=True`` draws fewer
-curves and points (for tests). :func:`write_all` writes all twelve as PNG files.
-
-Where the essay is silent this module chooses (and says in the titles):
-Figure 4 uses the two damping constants of Figure 3 (α = 0.4, 0.9 s⁻¹, ω = 2 s⁻¹);
-Figures 7–8 use ω0 = 2 rad/s with α = 0.4 (underdamped), 2 (critical), 4 s⁻¹ (overdamped);
-Figure 5 starts its curves on the ellipse θ0² + (θ̇0/ω0)² = 1; Figure 9 starts curves on all
-four edges of the window and next to each saddle, runs them 40 s, and draws in red both
-branches of the stable manifolds of (±π, 0) (together they bound the basin of (0, 0));
-Figures 10–11 show stream lines of the vector fields in a ±1 rad, ±1 rad/s box; Figure 12
-shows the box π ± 0.3 rad.
+figures; a 3-D Axes for Figure 6) or a Figure to draw into; ``small=True`` draws fewer curves
+and points (for tests). :func:`write_all` writes all twelve as PNG files. Where the essay is
+silent (parameters, windows, starting points) the choices are said in the titles and in
+``docs/design/figures.md``.
 """
 
 from __future__ import annotations
@@ -40,7 +33,7 @@ from atlas import defaults  # noqa: E402
 from atlas.kernels.rk4 import record_straightforward  # noqa: E402
 from atlas.physics import linear
 from atlas.physics.pendulum import Pendulum, critical_points  # noqa: E402
-from atlas.views.plotting import STYLE, critical_point_markers, pi_ticks  # noqa: E402
+from atlas.views.style import STYLE, critical_point_markers, pi_ticks  # noqa: E402
 
 __all__ = [
     "fig1_underdamped_angle",
@@ -321,14 +314,15 @@ def fig9_nonlinear_phase_portrait(ax_or_fig=None, *, small=False, alpha=defaults
                                   dt=defaults.DT) -> Figure:
     """Figure 9: phase portrait of the full eq. (1) by RK4 (blue), with the separatrices of
     the origin's basin — both branches of the stable manifolds of the saddles (±π, 0), from
-    :func:`atlas.boundaries.separatrices.trace` — in red, saddles as open red circles and the attractors
+    :func:`atlas.boundaries.trace.trace` — in red, saddles as open red circles and the attractors
     (0, 0), (±2π, 0) as dots.
 
     Initial conditions: on the window's four edges (θ̇0 at its top and bottom values there;
     θ̇0 > 0 on the left and < 0 on the right edge, so that every curve enters the window) and at
     θ0 = nπ ± 0.3 rad, θ̇0 = 0 next to each saddle.
     """
-    from atlas.boundaries.separatrices import branches, trace
+    from atlas.boundaries.trace import trace
+    from atlas.store.separatrices import branches
 
     fig, (ax,) = _axes(ax_or_fig, figsize=(9.0, 5.0))
     pendulum = Pendulum(alpha, omega0)

@@ -1,39 +1,16 @@
 """CUDA backend: the labelling kernel of :mod:`atlas.kernels` on an NVIDIA GPU (numba-cuda).
 
-One orbit per thread. The method is the CPU kernels' own: the RK4 step and the trap test are
-built by the factories of :mod:`atlas.kernels.rk4` and compiled for the device from the same
-Python source (``cuda.jit(device=True)`` on the factories' ``py_func``, so they get CUDA's
-floating-point options rather than the CPU fast-math set; no copied method). Two variants:
+One orbit per thread. The RK4 step and the trap test are the CPU kernels' own factories of
+:mod:`atlas.kernels.rk4`, compiled for the device from the same Python source. Variants:
+``"straightforward"`` (libdevice sin, the CPU straightforward kernel line for line) and
+``"fast"`` (θ kept near [−π, π] with the winding counted apart, polynomial sin). Method "rk4"
+only; :func:`kernels` compiles the τ = 0 kernels, :func:`torque_kernels` the tilted one. The
+host side (chunks, streams, pinned staging) is :mod:`atlas.kernels.cuda_host`; numba.cuda is
+imported only when a function here is called.
 
-* ``"straightforward"``: ``math.sin`` (libdevice), θ unbounded — the CPU kernel
-  :func:`atlas.kernels.rk4.label_straightforward` line for line;
-* ``"fast"`` (default): θ is kept near [−π, π] by subtracting 2πk at every trap test and the
-  winding k is counted separately, so sin only ever needs a short range reduction: the
-  polynomial :func:`atlas.kernels.fastsin.sin_poly` after one Cody–Waite step by π (max abs
-  error 1e-15 vs sin, see :mod:`atlas.kernels.fastsin`). The label is winding + the well index
-  of the reduced angle, which is the CPU's k = round(θ/2π) exactly (both are the nearest well;
-  they could differ only at θ ≡ π mod 2π, where E_k ≥ 2ω0² and nothing is trapped).
-
-The method is "rk4" (:data:`atlas.kernels.METHODS`), the default; "rk4-trigfree" has no CUDA
-kernel (a config asking for it on the cuda backend is refused). A GPU run's d_cert comes from
-the separatrix bisection on the CPU kernels of the same method. Labels, status and n_trap
-agree with the CPU kernel of method "rk4" exactly except for orbits whose fate is decided by
-rounding (within ~1e-12 of a separatrix, or an energy within ~1e-13 of the cap at a test):
-libdevice's sin, the polynomial sin and FMA contraction each round differently from the CPU's
-libm sin.
-``tests/kernels/test_cuda.py`` checks equality on a grid and hand-picked orbits.
-
-Torque. :func:`kernels` compiles the τ = 0 kernels of earlier versions, unchanged;
-:func:`torque_kernels` (compiled on first use) the tilted one, built the same way from the
-τ ≠ 0 factories of :mod:`atlas.kernels.rk4` (tilted trap and running certificate, contract
-in :mod:`atlas.kernels`). In the "fast" variant θ is wrapped by the tilted well index
-k = round((θ + θ*)/2π), which the running test does not mind (it reduces θ mod 2π itself).
-
-This module holds the device side (availability, device functions, compiled kernels); the
-host orchestration — chunks, streams, pinned staging, :func:`label_cuda` on host arrays — is
-:mod:`atlas.kernels.cuda_host`. numba.cuda is imported only when a function here is called:
-the CPU path never imports it. Under ``NUMBA_ENABLE_CUDASIM=1`` the kernels run in numba's
-simulator (tests).
+Accuracy: labels, status and n_trap equal the CPU's method "rk4" except for orbits decided by
+rounding (within ~1e-12 of a separatrix, or an energy within ~1e-13 of the cap); checked by
+tests/kernels/test_cuda.py. Details: docs/design/kernels.md#cuda.
 """
 
 from __future__ import annotations

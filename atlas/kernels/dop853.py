@@ -1,36 +1,31 @@
 """DOP853 for the stable manifold of the saddle (π, 0), compiled: :func:`stable_manifold`.
 
-The exact basin boundaries (:mod:`atlas.boundaries.manifold`) are one curve, the left branch L of the
-saddle (π, 0), integrated in reversed time at rtol = atol = 1e-13 with dense output, together
-with Q(τ) = ∫ θ̇² dτ. That used to be scipy's ``solve_ivp(method="DOP853")``, whose import
-alone (scipy.integrate pulls in scipy.optimize, special, sparse and linalg) took about a tenth
-of a whole ``atlas run``. This is the same method, step for step, compiled:
-
-* the Dormand–Prince 8(5,3) pair with its 7th-order dense output (E. Hairer, S. P. Nørsett,
-  G. Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993, §II.5–6;
-  the coefficients of Hairer's ``dop853.f``, http://www.unige.ch/~hairer/software.html);
-* the step-size control of that code as scipy implements it (Hairer & Wanner's error norm
-  |err5|²/√(|err5|² + 0.01|err3|²), safety 0.9, factors in [0.2, 10], exponent −1/8, no
-  growth right after a rejection) and scipy's initial step (Hairer, Nørsett & Wanner §II.4);
-* a terminal event g(y) = min(E(θ, θ̇) − e_stop, θ_min − θ) crossing zero upwards, located on
-  the dense output by bisection to 4 ulp; the last step's dense output is kept whole and the
-  solution ends at the event, as ``solve_ivp`` does.
-
-It agrees with scipy's DOP853 on the same problem to rounding (tests/boundaries/test_manifold.py
-compares the two). The right-hand side is eq. (1) with τ = 0 in reversed time:
-(θ, θ̇, Q)' = (−θ̇, ω0² sin θ + 2αθ̇, θ̇²).
+The exact basin boundaries without torque (:mod:`atlas.boundaries.manifold`) are one curve,
+the left branch L of (π, 0), integrated in reversed time at rtol = atol = 1e-13 with dense
+output together with Q(τ) = ∫ θ̇² dτ: eq. (1) with τ = 0 reversed, (θ, θ̇, Q)' = (−θ̇,
+ω0² sin θ + 2αθ̇, θ̇²). The method is scipy's ``solve_ivp(method="DOP853")`` step for step
+(scipy's import alone took a tenth of an ``atlas run``): the Dormand–Prince 8(5,3) pair with
+its 7th-order dense output (Hairer, Nørsett & Wanner, *Solving ODEs I*, 2nd ed., §II.5–6; the
+coefficients of Hairer's ``dop853.f``), held as a :class:`Tableau` that checks its own
+consistency; that code's step-size control as scipy implements it (error norm
+|err5|²/√(|err5|² + 0.01|err3|²), safety 0.9, factors in [0.2, 10], exponent −1/8) and its
+initial step (§II.4); a terminal event min(E − e_stop, θ_min − θ) located on the dense output
+by bisection to 4 ulp, where the solution ends, as ``solve_ivp``'s does. Accuracy: scipy's
+DOP853 on the same problem to rounding (tests/kernels/test_dop853.py).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
 
 from atlas.kernels import cached_njit
 
-__all__ = ["stable_manifold", "FINISHED", "EVENT", "STEP_TOO_SMALL", "FULL"]
+__all__ = ["stable_manifold", "FINISHED", "EVENT", "STEP_TOO_SMALL", "FULL", "Tableau",
+           "TABLEAU"]
 
 #: Statuses of :func:`stable_manifold`: reached t_bound; stopped at the event; the step
 #: fell below 10 ulp of τ; more steps than the output arrays hold (call again with more).
@@ -40,6 +35,51 @@ _EXPONENT = -1.0 / 8.0  # −1/(order of the error estimator + 1)
 _STAGES = 12  # stages of a step; 13 … 15 are the dense output's extra stages
 _POWER = 7  # terms of the dense output's polynomial
 _EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True, eq=False)
+class Tableau:
+    """An explicit Runge–Kutta pair as data, after diffrax's ``ButcherTableau``: the nodes
+    ``c``, the stage weights ``a`` (row s: the weights of stages 0 … s − 1 in stage s), the
+    solution weights ``b``, the error weights ``e3`` and ``e5`` (b minus an embedded
+    solution's weights) and the dense output's coefficients ``d``.
+
+    It checks its own consistency on construction, so that a mistyped coefficient fails at
+    import instead of in a result: each row sum of ``a`` is its node (stage s is evaluated at
+    t + c_s·h), ``b`` sums to 1 (consistency: order ≥ 1) and ``e3``, ``e5`` sum to 0 (both
+    solutions consistent) — each to ``ULPS`` ulps of the sum of the magnitudes added, i.e.
+    to rounding (this pair's defects are below 0.2 ulp; one coefficient off by 1e-14 of its
+    row's magnitude makes a defect of 45 ulps).
+    Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1 (the conditions), §II.5 (this pair)."""
+
+    c: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    e3: np.ndarray
+    e5: np.ndarray
+    d: np.ndarray
+
+    #: Largest accepted defect of a consistency condition, in ulps of its magnitude.
+    ULPS = 4.0
+
+    def __post_init__(self) -> None:
+        bad = {name: round(ulps, 1) for name, ulps in self.defects().items()
+               if not ulps <= self.ULPS}
+        if bad:
+            raise ValueError(f"inconsistent Runge-Kutta tableau (defects in ulps): {bad}")
+
+    def defects(self) -> dict[str, float]:
+        """Each consistency condition's defect, in ulps of the magnitude of its terms:
+        ``a[s]`` for the row sums (stage s), ``b``, ``e3``, ``e5`` for the weight sums."""
+        def ulps(terms, target):
+            terms = np.asarray(terms, float)
+            scale = np.finfo(float).eps * max(float(np.abs(terms).sum()), abs(target), 1e-300)
+            return float(abs(terms.sum() - target) / scale)
+
+        out = {f"a[{s}]": ulps(self.a[s, :s], self.c[s]) for s in range(1, self.c.size)}
+        out.update(b=ulps(self.b, 1.0), e3=ulps(self.e3, 0.0), e5=ulps(self.e5, 0.0))
+        return out
+
 
 # The Dormand–Prince 8(5,3) tableau and dense output of dop853.f (module docstring).
 _C = np.array([0.0, 0.05260015195876773, 0.0789002279381516, 0.1183503419072274,
@@ -102,6 +142,9 @@ _D = np.array([
      357.6391179106141, 93.40532418362432, -37.45832313645163, 104.0996495089623, 29.8402934266605,
      -43.53345659001114, 96.32455395918828, -39.17726167561544, -149.72683625798564],
 ])
+#: The DOP853 pair above as one checked object (:class:`Tableau`); the compiled step reads
+#: the same arrays.
+TABLEAU = Tableau(c=_C, a=_A, b=_B, e3=_E3, e5=_E5, d=_D)
 
 
 @nb.njit
@@ -198,8 +241,9 @@ def dense_output(tau, t, t_old, h, y_old, F, out):
     """The dense output of a whole solution at each ``tau`` into ``out`` (components ×
     len(tau)): the step found by bisection in the step ends ``t`` (before the first: the
     first step; after the last: the last), then its polynomial, ``F`` (steps × powers ×
-    components) highest power first, evaluated as :class:`atlas.boundaries.manifold._DenseOutput` did
-    with numpy (the same operations in the same order: the same doubles)."""
+    components) highest power first, evaluated as
+    :class:`atlas.boundaries.manifold._DenseOutput` did with numpy (the same operations in the
+    same order: the same doubles)."""
     for i in range(tau.size):
         step = dense_step(tau[i], t, h.size - 1)
         x = (tau[i] - t_old[step]) / h[step]

@@ -1,40 +1,15 @@
 """A branch-free polynomial sin that Numba inlines and LLVM vectorises.
 
-``math.sin`` is a scalar libm call and blocks vectorisation of the lane loops in
-:mod:`atlas.kernels.lanes` (Numba's SVML path is off with current llvmlite).
-This module computes sin x from float arithmetic only (no int conversion, no branch, no
-table), so a loop over lanes becomes AVX-512/AVX2 code:
+``math.sin`` is a scalar libm call that blocks vectorisation of the lane loops
+(:mod:`atlas.kernels.lanes`). Here sin x is float arithmetic only: a Cody–Waite reduction by π
+(Cody & Waite 1980; :func:`reduce_pi`), then an odd polynomial of degree 21 interpolating
+(sin r − r)/r³ at Chebyshev nodes (Muller, *Elementary Functions*, 3rd ed., ch. 3–4;
+:func:`sin_poly`). :func:`sin_cos_vers` gives sin, cos and 1 − cos from one reduction.
 
-1. range reduction by π (Cody & Waite 1980): q = ⌊x/π + ½⌋ (a float), then
-   r = ((x − q·P1) − q·P2) − q·P3 with π = P1 + P2 + P3 + O(1e-34). P1 and P2 carry 27
-   significant bits, so q·P1 and q·P2 are exact for |q| < 2²⁶ and r ∈ [−π/2, π/2] is
-   x − qπ to about one rounding of r;
-2. sin x = (−1)^q · sin r, the sign from the parity of q computed in floats;
-3. sin r by an odd polynomial r + r³·Q(r²) of degree 21: the coefficients of Q interpolate
-   (sin r − r)/r³ at 10 Chebyshev nodes of r² ∈ [0, 4] (near-minimax; Muller, *Elementary
-   Functions*, 3rd ed., ch. 3–4, and §11.1 for the reduction). Degree 17 on [−π/2, π/2] would
-   do for a lone sin; degree 21 keeps |r| ≤ 2 accurate, which the shared reduction below needs.
-   Its own error on [−2, 2] is ≈ 3e-16, the rounding of the last Horner steps.
-
-Accuracy (``tests/kernels/test_fastsin.py``, against ``numpy.sin`` over dense uniform and random
-samples plus the neighbourhoods of every multiple of π/2, compiled with the kernels' flags):
-max |fast_sin(x) − sin x| ≤ ``ERROR_BOUND`` = 1e-15 for |x| ≤ ``EXACT_RANGE`` = 2²⁰ ≈ 1.0e6
-(measured 5.6e-16). The kernels pass it much less: the trap test's sin(φ/2) has |φ/2| ≤ π/2,
-and the RK4 stage angles are θ along an orbit, |θ| ≤ |θ0| + the angle swept while the energy
-decays, < 40 rad on the default window (|θ0| ≤ 3π, |θ̇0| ≤ 4, α = 0.1). Beyond EXACT_RANGE: with
-FMA contraction x − q·P1 is exact and the error stays ≈ 6e-16 (measured to |x| = 1e12); on a
-CPU without FMA q·P1 is exact only for |x| < 2²⁶π ≈ 2e8, beyond which r carries the rounding of
-q·P1 (up to ulp(x), the uncertainty of x itself). NaN and ±inf give NaN.
-
-``sin_cos_vers`` gives sin x, cos x and the versine 1 − cos x from one reduction (cos r and
-1 − cos r by the half angle, 1 − cos r = 2 sin²(r/2): no cancellation anywhere), for the
-trig-free kernel's re-synchronisation and energy test (:mod:`atlas.kernels.trigfree`); its
-errors are within ``ERROR_BOUND`` on the same range (tested).
-
-``reduce_pi`` and ``sin_poly`` are exported so a kernel can share one reduction between
-nearby arguments (:mod:`atlas.kernels.lanes` does it for the four RK4 stage angles);
-``sin_poly`` stays within ``ERROR_BOUND`` for |r| ≤ ``POLY_RANGE`` = 2.0, which leaves room
-for stage offsets up to 2 − π/2 ≈ 0.43 rad.
+Accuracy (tests/kernels/test_fastsin.py, against ``numpy.sin``): |fast_sin(x) − sin x| ≤
+``ERROR_BOUND`` = 1e-15 for |x| ≤ ``EXACT_RANGE`` = 2²⁰ (measured 5.6e-16); ``sin_poly`` within
+the same bound for |r| ≤ ``POLY_RANGE`` = 2. NaN and ±inf give NaN.
+Derivation and ranges: docs/design/kernels.md#fastsin.
 """
 
 from __future__ import annotations

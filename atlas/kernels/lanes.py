@@ -1,94 +1,17 @@
 """Lane-blocked SIMD labelling kernels: the CPU backend of :func:`atlas.label`.
 
-Two methods share one lane machinery (:func:`make_label_chunk`):
+Two methods share one lane machinery (:func:`make_label_chunk`): :func:`label_lanes` (method
+"rk4": classical RK4 on (θ, θ̇) with the polynomial sin of :mod:`atlas.kernels.fastsin`) and
+:func:`label_trigfree` (method "rk4-trigfree", :mod:`atlas.kernels.trigfree`). ``LANES`` = 32
+orbits advance in lockstep as a structure of arrays, which LLVM vectorises (AVX-512/AVX2);
+orbits are sent by their initial state to the SHARED, FULL or SCALAR path. Both follow the
+kernel contract of :mod:`atlas.kernels` exactly and return how many orbits took each path.
 
-* :func:`label_trigfree` — method "rk4-trigfree": RK4 on (θ, θ̇, cos θ, sin θ)
-  with no trigonometric function in a step (:mod:`atlas.kernels.trigfree`); (c, s) are
-  re-synchronised from θ at every trap test, where the energy needs cos θ anyway. Measured
-  side by side (``atlas bench``) ≈ 2× the bulk RK4 steps/s of ``label_lanes``.
-* :func:`label_lanes` — method "rk4", the default: classical RK4 on (θ, θ̇) with a polynomial
-  sin per stage, the same definition as the straightforward kernel (``make_rk4_step``).
-
-Both follow the kernel contract of :mod:`atlas.kernels` exactly (same arguments, outputs and
-semantics as :func:`~atlas.kernels.rk4.label_straightforward`), and return how many orbits
-took each path (below), which they also log at debug level (logger ``atlas.kernels.lanes``).
-They are measured by :mod:`atlas.commands.bench` and checked by ``tests/kernels/test_lanes.py`` and
-``tests/kernels/test_trigfree.py``.
-
-Why lanes. Orbits are independent, so ``LANES`` = 32 of them are advanced in lockstep as a
-structure of arrays (``th[LANES]``, ``v[LANES]``, and ``c``, ``s``), the loop over lanes
-innermost: LLVM turns one RK4 step of 32 orbits into AVX-512 (zmm) code, four 8-wide vectors
-per variable, which also gives the FMA pipes enough independent work. For "rk4", 16 lanes are
-≈ 13 % slower, 48 or 64 no faster, 8 do not vectorise (measured side by side, bulk throughput).
-
-Why this sin ("rk4"). ``math.sin`` is a scalar libm call that blocks vectorisation;
-:mod:`atlas.kernels.fastsin` is branch-free float arithmetic (Cody–Waite reduction by π,
-degree-21 odd polynomial). The four RK4 stage angles θ + δ (δ = 0, ½dt·k1θ, ½dt·k2θ, dt·k3θ)
-share one reduction of θ (``make_rk4_step(sin_near, reduce_pi)``), which needs |δ| ≤ 0.43 rad;
-that sharing is ≈ 1.33× faster than four full reductions (``make_rk4_step(fast_sin)``).
-
-Paths. Each orbit is sent, by its initial state, to one of
-
-* SHARED — the method's fast lanes: for "rk4" the shared reduction, admitted when the stage
-  offsets provably stay below ``MAX_STAGE_OFFSET`` (:func:`_rk4_path`; at dt = 0.01 about
-  |θ̇| ≲ 30 rad/s); for "rk4-trigfree" every orbit but those of SCALAR (no stage offsets);
-* FULL ("rk4" only) — lanes with a full reduction per stage (``make_rk4_step(fast_sin)``),
-  for faster orbits: a second pass of the chunk, run only when the chunk has such orbits;
-  measured ≈ 0.8× the SHARED rate, where the scalar libm path (used before) ran at ≈ 1/12;
-* SCALAR — the method's scalar form with libm (``rk4.label_orbit``; ``trigfree.
-  label_orbit_trigfree``) for non-finite input, α < 0 and |θ0| beyond half of fast_sin's
-  stated range: orbits no valid configuration has (:mod:`atlas.labels.labelling` refuses them).
-
-Fast-math. The kernels here use ``SIN_FASTMATH`` = the project's FASTMATH without
-'reassoc' (which would fold the three-part π of the reduction into one; see
-:mod:`atlas.kernels.fastsin`). Vectorising the lane loop needs no reassociation: there is no
-reduction across lanes.
-
-Trap check. Every ``check_every`` steps the energies of all lanes are computed in one vector
-loop (the re-synchronisation of c, s with it), then a scalar pass over the lanes retires
-finished orbits (trapped, non-finite, or at the last check) and refills their lane with the
-next orbit of the chunk. Refill happens only at check boundaries and a new orbit starts its
-own count there, so every orbit is tested at steps 0, c, 2c, … of *its own* step count,
-exactly as the contract says. At c = 16 the check costs a few % of the step work; the useful
-steps of the 512² default map run at ≈ 85–90 % of the bulk rate (the rest: steps past the
-trap up to the next check, and lanes idle at the end of a chunk).
-
-Work balance and locality. ``prange`` runs over :func:`n_chunks` chunks — ``CHUNKS_PER_THREAD``
-per Numba thread (``numba.get_num_threads()`` at the call, so every core is used however many
-there are), fewer for small batches; the orbits are cut into tiles of ``TILE`` = 256
-consecutive orbits dealt to the chunks in turn (chunk b serves tiles b, b + n_chunks, …) with
-one lane block each. Dealing makes every chunk a sample of the whole grid, so chunks cost
-about the same although orbits exit early and the static split of chunks between threads
-stays balanced; tiles keep the loads and the output writes sequential and shared cache lines
-between threads rare.
-
-Determinism. A lane's arithmetic never depends on the other lanes (the same vector code runs
-for every lane: ``LANES`` is a compile-time constant, so there is no scalar remainder loop;
-idle lanes hold (0, 0)), and an orbit's path depends on its initial state only, so results
-are bit-identical for any thread count, chunking, input length and position of an orbit in
-the input (tested with 1 and N threads).
-
-Torque (θ̈ = −ω0² sin θ − 2αθ̇ + τ). With τ = 0 and no running barrier the kernels run the
-specialisations above, unchanged from earlier versions (bit-identical labels, pinned by
-``tests/kernels/test_torque_kernels.py``). Otherwise separate specialisations run the same lane
-machinery (:func:`make_label_chunk`, every callable taking a ``model`` tuple from
-:func:`atlas.kernels.rk4.torque_model`) with the τ ≠ 0 step, the tilted trap and the running
-certificate (tested in the scalar pass after the trap). The paths change with the speed bound:
-with τ the energy no longer bounds |θ̇|, but the band |θ̇| ≤ B = max(|θ̇0|, (ω0² + |τ|)/2α) is
-forward-invariant (above it θ̈ points back), so "rk4" takes SHARED when the stage offset at
-speed B stays below ``MAX_STAGE_OFFSET``, FULL otherwise; and since a running orbit's θ grows
-without bound, an orbit goes to SCALAR unless |θ0| + B·(the run's length) stays within half
-of fast_sin's EXACT_RANGE (α > 0 is needed for B).
-
-What may differ from the straightforward kernel of the same method, and why. The polynomial
-sin differs from libm by ≤ 1e-15 abs (≈ a few ulp), and without 'reassoc' the RK4 sums are
-rounded in written order; trajectories therefore differ by ~1e-11 after 1000 steps. A label
-can differ only for an orbit whose trajectory passes within about that distance of a
-separatrix (a cell on a basin boundary); t_trap is equal whenever the two kernels trap at the
-same check (same ``check_every``), because both test at the same step counts. Between the two
-*methods* trajectories differ by O(dt⁴) (≈ 1e-8 at dt = 0.01), so labels differ on boundary
-cells only, and the RK4 maps' boundaries lie at different distances from the exact ones (the
-measured shift enters d_cert, :mod:`atlas.boundaries.certificate`).
+Accuracy: the polynomial sin differs from libm by ≤ 1e-15, so trajectories differ from the
+straightforward kernel's by ~1e-11 after 1000 steps and labels only on basin-boundary cells.
+Results are bit-identical for any thread count, chunking and input order; τ = 0 runs the
+specialisations of earlier versions unchanged (pinned by tests/kernels/test_torque_kernels.py).
+Design, paths, measurements: docs/design/kernels.md#lanes.
 """
 
 from __future__ import annotations

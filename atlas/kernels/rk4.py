@@ -21,7 +21,16 @@ import math
 import numba as nb
 import numpy as np
 
-from atlas.kernels import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
+from atlas.kernels import (
+    NONFINITE,
+    RUNNING,
+    TRAPPED,
+    UNRESOLVED,
+    cached_njit,
+    tilt,
+    tilt_versine,
+    uses_torque,
+)
 
 # Fast-math flags that keep NaN/inf semantics honest (no 'nnan'/'ninf'): the kernels must
 # see a non-finite state to report status NONFINITE.
@@ -198,14 +207,14 @@ NO_BARRIER.flags.writeable = False
 def torque_model(omega0, torque, running_theta0=0.0, running_g=None, running_top=math.inf,
                  span=0.0):
     """The tuple ``model`` the τ ≠ 0 kernels take: (τ, θ*, 1 − cos θ*, sign, running_theta0,
-    running_g, running_top, span). θ* = arcsin(τ/ω0²), clamped to ±π/2 when |τ| ≥ ω0² (then
-    there is no well and the caller passes an energy cap that no state reaches); sign = −1.0
-    for τ < 0 (the running barrier is mirrored), +1.0 otherwise; running_g float64 (empty:
-    no running certificate); span = the longest run [s], for the lane kernels' choice of path
-    (:mod:`atlas.kernels.lanes`)."""
+    running_g, running_top, span). θ* = arcsin(τ/ω0²) (:func:`atlas.kernels.tilt`), clamped to
+    ±π/2 when |τ| ≥ ω0² (then there is no well and the caller passes an energy cap that no
+    state reaches); sign = −1.0 for τ < 0 (the running barrier is mirrored), +1.0 otherwise;
+    running_g float64 (empty: no running certificate); span = the longest run [s], for the
+    lane kernels' choice of path (:mod:`atlas.kernels.lanes`)."""
     torque = float(torque)
-    shift = math.asin(min(1.0, max(-1.0, torque / (omega0 * omega0))))
-    vers = 2.0 * math.sin(0.5 * shift) ** 2
+    shift = tilt(omega0, torque)
+    vers = tilt_versine(shift)
     g = NO_BARRIER if running_g is None else np.ascontiguousarray(running_g, dtype=np.float64)
     if g.ndim != 1:
         raise ValueError("running_g must be one-dimensional")

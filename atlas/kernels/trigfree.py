@@ -1,30 +1,16 @@
 """Trig-free RK4: eq. (1) integrated with cos θ and sin θ carried as state.
 
-With c = cos θ and s = sin θ the pendulum is the polynomial system
+With c = cos θ, s = sin θ the pendulum is the polynomial system θ' = θ̇,
+θ̇' = −ω0² s − 2αθ̇ + τ, c' = −s·θ̇, s' = c·θ̇; classical RK4 on it (:func:`make_trigfree_step`)
+needs no trigonometric function in a step (≈ 45 flops instead of ≈ 90). (c, s) is
+re-synchronised from θ at every trap test (:func:`~atlas.kernels.fastsin.sin_cos_vers`), which
+is part of the method. :func:`label_orbit_trigfree` is its scalar form (libm), for the orbits
+the lane kernel does not take.
 
-    θ' = θ̇,   θ̇' = −ω0² s − 2αθ̇,   c' = −s·θ̇,   s' = c·θ̇,
-
-whose flow leaves c² + s² = 1 and c = cos θ, s = sin θ invariant; on that set it is eq. (1).
-Classical RK4 applied to it (:func:`make_trigfree_step`) needs no trigonometric function in a
-step: ≈ 45 floating-point operations instead of the ≈ 90 of a step with a polynomial sin
-(:mod:`atlas.kernels.lanes`, method "rk4"). It is a different discretisation of the same
-order: RK4 is of order 4 on any smooth system, and the exact flow of the extended system
-restricted to the invariant set is the pendulum's (``tests/kernels/test_trigfree.py`` fits the
-order against DOP853). The RK4 map does not preserve the invariant exactly, so (c, s) is
-*re-synchronised* from θ — c, s ← cos θ, sin θ by :func:`~atlas.kernels.fastsin.sin_cos_vers`
-— at every trap test (every ``check_every`` steps; every ``SYNC_EVERY`` = 16 in the
-fixed-steps kernels). Between two of them c² + s² drifts by O(dt⁵) per step, below the
-method's own local error; the re-synchronisation is part of the method (a trajectory depends
-on where it happens, at the level of RK4's local error).
-
-The energy trap needs only cos θ, which the re-synchronisation computes anyway:
-E_k = ½θ̇² + ω0²(1 − cos(θ − 2πk)) = ½θ̇² + ω0²·(1 − cos θ) with k = round(θ/2π), 1 − cos θ
-taken cancellation-free from the same reduction (:func:`sin_cos_vers`).
-
-The method's scalar form (:func:`label_orbit_trigfree`, libm sin/cos at the
-re-synchronisation) labels the orbits the lane kernel does not take (non-finite input,
-α < 0, |θ0| beyond half of fast_sin's stated range); it is the same discretisation, rounded
-differently.
+Accuracy: a different discretisation of the same order 4 (Hairer, Nørsett & Wanner, *Solving
+ODEs I*, §II.1); tests/kernels/test_trigfree.py fits the order against DOP853. Between
+re-synchronisations c² + s² drifts by O(dt⁵) per step.
+Derivation: docs/design/kernels.md#trig-free-rk4.
 """
 
 from __future__ import annotations

@@ -10,17 +10,8 @@ and near a saddle ((2j+1)π, 0), with φ = θ − (2j+1)π,
 
 Units throughout: θ, φ [rad], θ̇ [rad s⁻¹], t [s], α [s⁻¹], ω0 [rad s⁻¹].
 
-Errata of the essay handled here (see also the README):
-
-- eq. (7) drops the factors ω and α; the right derivative is eq. (8),
-  θ̇ = A e^{−αt}[ω cos(ωt + Φ) − α sin(ωt + Φ)].
-- eq. (10) repeats "θ(0) =" on its left; it is θ̇(0) = θ̇0 = A[ω cos Φ − α sin Φ].
-- Φ = cot⁻¹[(θ̇0/θ0 + α)/ω] divides by θ0 = 0 and fixes Φ only modulo π, so A = θ0/sin Φ can
-  come out negative; :func:`amplitude_phase` uses A sin Φ = θ0, A cos Φ = (θ̇0 + αθ0)/ω with
-  atan2, which gives A ≥ 0 and the right quadrant for every initial condition.
-- §3 writes "r2 = −α − √(α² + ω0²) = 0"; the "= 0" is a typo (r2 = −u2 < 0).
-- eq. (26) reads "− C u2 e^{u2 t}"; the derivative of eq. (25) is
-  θ̇ = B u1 e^{u1 t} − C u2 e^{−u2 t}.
+The essay's errata in eqs. (7), (10), §3 and (26), and the quadrant of Φ, are corrected here
+(:func:`amplitude_phase` uses atan2): docs/design/essay-errata.md lists them.
 """
 
 from __future__ import annotations

@@ -8,15 +8,10 @@ complements the linear-stability paradigm", Nature Physics 9, 89–92, 2013).
 
 Units throughout: θ [rad], θ̇ [rad s⁻¹], t [s], α [s⁻¹], ω0 [rad s⁻¹], τ [rad s⁻²].
 
-Tilted wells. For 0 ≤ |τ| < ω0² let θ* = arcsin(τ/ω0²) ∈ (−π/2, π/2). The rest states are
-(θ* + 2πk, 0), the saddles (π − θ* + 2πk, 0); well k is the strip between its two saddles,
-−π − θ* + 2πk ≤ θ ≤ π − θ* + 2πk (so k = round((θ + θ*)/2π)), whose rest state is
-θ* + 2πk. The linearisation of −ω0² sin θ about a point θc is −ω0² cos θc·(θ − θc); with
-κ = ω0² cos θ* = √(ω0⁴ − τ²) ≥ 0 the characteristic equations are r² + 2αr + κ = 0 at a rest
-state and r² + 2αr − κ = 0 at a saddle (cos(π − θ*) = −cos θ*). For |τ| ≥ ω0² there is no
-critical point (|τ| = ω0² exactly is the saddle-node where rest state and saddle merge, a
-degenerate point with a zero eigenvalue: atlas treats it as none, since no orbit can be
-certified to settle there).
+Tilted wells: for |τ| < ω0² the rest states are (θ* + 2πk, 0) with θ* = arcsin(τ/ω0²)
+(:func:`tilt`) and the saddles (π − θ* + 2πk, 0); well k is the strip between its two
+saddles, so k = round((θ + θ*)/2π). The linearisation has κ = ω0² cos θ* in place of ω0².
+For |τ| ≥ ω0² there is no critical point (|τ| = ω0² is the saddle-node, treated as none).
 """
 
 from __future__ import annotations
@@ -27,7 +22,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Pendulum", "CriticalPoint", "critical_points", "rk4_stable"]
+from atlas.kernels import tilt, tilt_versine
+
+__all__ = ["Pendulum", "CriticalPoint", "critical_points", "rk4_stable", "tilt", "tilt_versine",
+           "START_DISTANCE"]
+
+#: Distance [rad, in the (θ, θ̇) plane] from a saddle at which its invariant manifolds are
+#: started along their eigenvectors (the stable ones in reversed time by
+#: :mod:`atlas.boundaries.manifold` and :mod:`atlas.boundaries.tilted`, the unstable one by
+#: :mod:`atlas.physics.running`). The neglected curvature of the manifold there is
+#: O(START_DISTANCE²) ≈ 1e-14.
+START_DISTANCE = 1e-7
 
 
 @dataclass(frozen=True)
@@ -63,9 +68,7 @@ class Pendulum:
         """θ* = arcsin(τ/ω0²) [rad], the rest state of well 0 (0 when τ = 0). Raises
         ValueError when |τ| ≥ ω0² (no rest state)."""
         self._require_rest_states()
-        if self.torque == 0.0:
-            return 0.0
-        return math.asin(self.torque / self.omega0**2)
+        return tilt(self.omega0, self.torque)
 
     @property
     def saddle_angle(self) -> float:
@@ -136,14 +139,37 @@ class Pendulum:
         :meth:`energy` below it never leaves the well."""
         return min(self.saddle_energies)
 
+    # ----------------------------------------------------------------- the vector field
+    def _acceleration(self, sin, theta, theta_dot):
+        # the one formula of θ̈ for Python callers; evaluated as (τ − ω0² sin θ) − 2αθ̇ (at
+        # τ = 0 that is −ω0² sin θ − 2αθ̇ exactly, up to the sign of a zero)
+        return self.torque - self.omega0**2 * sin(theta) - 2.0 * self.alpha * theta_dot
+
     def acceleration(self, theta, theta_dot):
-        """θ̈ [rad s⁻²] = −ω0² sin θ − 2αθ̇ + τ."""
-        acc = -self.omega0**2 * np.sin(theta) - 2.0 * self.alpha * theta_dot
-        return acc + self.torque if self.torque != 0.0 else acc
+        """θ̈ [rad s⁻²] = τ − ω0² sin θ − 2αθ̇ (scalars or arrays, numpy's sin)."""
+        return self._acceleration(np.sin, theta, theta_dot)
 
     def field(self, theta, theta_dot):
         """The vector field f = (θ̇, θ̈) [rad s⁻¹, rad s⁻²] (scalars or arrays)."""
         return theta_dot, self.acceleration(theta, theta_dot)
+
+    def rhs(self, _t, y) -> list[float]:
+        """f(y) = [θ̇, θ̈] for ``scipy.integrate.solve_ivp`` (y = (θ [rad], θ̇ [rad s⁻¹]),
+        one state; t [s] unused: the flow is autonomous). Scalar ``math.sin``, which is
+        faster than numpy's on one number and rounds as the C library does."""
+        return [y[1], self._acceleration(math.sin, y[0], y[1])]
+
+    def reversed_rhs(self, _t, y) -> list[float]:
+        """−f(y) for ``solve_ivp`` in reversed time (the stable manifolds are integrated
+        backwards from their saddles): [−θ̇, 2αθ̇ + ω0² sin θ − τ] with ``math.sin``. Summed in
+        this order (not as −θ̈), which the exact tilted boundaries of stored files were
+        computed with; the two differ by rounding only."""
+        return [-y[1], 2.0 * self.alpha * y[1] + self.omega0**2 * math.sin(y[0]) - self.torque]
+
+    def theta_ddot(self, theta: float, theta_dot: float) -> float:
+        """θ̈ [rad s⁻²] at one state with ``math.sin`` (as :meth:`rhs`): for right-hand sides
+        in other coordinates, e.g. dθ̇/dθ = θ̈/θ̇ along a rotating orbit."""
+        return self._acceleration(math.sin, theta, theta_dot)
 
     def field_jet(self, theta, theta_dot):
         """f and its derivative along the flow, df/dt = J·f (J the Jacobian of f):
@@ -165,9 +191,8 @@ class Pendulum:
         base = 0.5 * np.asarray(theta_dot) ** 2 + 2.0 * self.omega0**2 * np.sin(0.5 * phi) ** 2
         if self.torque == 0.0:
             return base
-        s = (self.rest_angle if self.has_rest_states
-             else math.copysign(0.5 * math.pi, self.torque))
-        vers = 2.0 * math.sin(0.5 * s) ** 2
+        s = tilt(self.omega0, self.torque)
+        vers = tilt_versine(s)
         return base - self.omega0**2 * vers - self.torque * (phi - s)
 
     def total_energy(self, theta, theta_dot):

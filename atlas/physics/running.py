@@ -1,54 +1,18 @@
 """The running limit cycle of the pendulum with constant torque, and its certificate.
 
-    θ̈ = τ − ω0² sin θ − 2αθ̇        (α > 0 [s⁻¹], ω0 > 0 [rad s⁻¹], τ [rad s⁻²])
-
-Units throughout: θ [rad], θ̇ [rad s⁻¹], t [s]. Pure numpy/scipy (DOP853).
-
-**Symmetry.** (θ, θ̇, τ) → (−θ, −θ̇, −τ) maps the equation to itself, so everything is
-computed for |τ| (the *canonical frame*, where the cycle runs in +θ) and mirrored; the
-``direction`` of rotation is sign(τ). Below, τ > 0.
-
-**The cycle is a graph and unique.** E = ½θ̇² − ω0² cos θ − τθ obeys dE/dt = −2αθ̇². Over
-a closed orbit of the cylinder that advances θ by Δθ = 2πn, ΔE = 0 gives
-τ·2πn = 2α∮θ̇² dt > 0, so only orbits rotating in +θ are periodic (n = 0 would be a
-contractible cycle, excluded by Bendixson's criterion: div f = −2α < 0). Two rotating cycles
-would bound an annulus on which ∬ div f = −2α·area < 0, while the flux through its invariant
-boundary is zero: at most one exists (Levi, Hoppensteadt & Miranker, Q. Appl. Math. 36,
-167–198 (1978), prove the same and more). Where θ̇ = 0 the cycle would have to stop, so on it
-θ̇ > 0: it is a graph θ̇ = c(θ), 2π-periodic, the fixed point of the Poincaré map
-
-    P: θ̇ at θ = θs  ↦  θ̇ at θ = θs + 2π.
-
-**Finding it** (:func:`limit_cycle`). P is increasing (orbits do not cross). Above the line
-θ̇ = (τ + ω0²)/(2α) the acceleration is negative, so P(v) < v at that speed. The lower end
-of the bracket depends on the regime:
-
-* τ < ω0²: θs is the saddle angle π − arcsin(τ/ω0²). Orbits starting just above the saddle
-  follow its unstable manifold Wᵘ, so P(0⁺) is Wᵘ's speed one turn later, at the next
-  saddle's angle. If Wᵘ passes above the next saddle, P(0⁺) > 0 and the cycle exists
-  (intermediate value theorem). If it falls back (θ̇ reaches 0 first), it lies below the
-  next saddle's stable manifold Wˢ; P is defined only above Wˢ's speed v* at θs, and
-  P(v) → 0 < v as v → v*⁺ (those orbits pass just over the next saddle). A cycle's
-  multiplier is P' = exp(−2αT) < 1, so P(v) − v can cross zero only from + to −, and it
-  is negative at both ends: there is no cycle. Wᵘ lies on Wˢ exactly at the homoclinic
-  torque τ_c (:func:`homoclinic_threshold`).
-* τ > ω0²: there is no rest state; θs = π/2, where the saddle-node was born, and P(0) > 0
-  (θ̈ ≥ τ − ω0² > 0 wherever θ̇ = 0, so no orbit stops): the cycle exists.
-* τ = ω0²: the saddle-node (π/2, 0) is the rest state; θs = π/2 and P(0⁺) is the speed
-  after one turn of its centre manifold, which leaves it in +θ; if that stalls at the next
-  saddle-node, the argument of the first case says there is no cycle.
-
-P(v) − v = 0 is solved by Brent's method; P is scipy's DOP853 (Hairer, Nørsett & Wanner,
-*Solving ODEs I*, §II.5) in time with a terminal event at θ = θs + 2π.
-
-**The certificate** (:func:`running_barrier`): a forward-invariant region that contains the
-cycle and no rest state, so that every orbit entering it converges to the cycle (the
-argument is in :func:`check_barrier`'s docstring, which verifies a region from its stored
-numbers alone). Given the kernels' RK4 step dt it is invariant under that step too, with
-margins from :func:`rk4_allowance`. It comes as a :class:`RunningCertificate`, an
-:class:`atlas.labels.labelling.RunningBarrier` (what :func:`atlas.label` takes as ``running`` and the
-kernels test) that also records ε, the verified margin and dt; :func:`contains` tests
-membership with numpy.
+For θ̈ = τ − ω0² sin θ − 2αθ̇ (α > 0) a rotating limit cycle exists for |τ| above the
+homoclinic torque (:func:`homoclinic_threshold`; ≈ 8αω0/π for small α, Strogatz, *Nonlinear
+Dynamics and Chaos*, §8.5) and is unique (Levi, Hoppensteadt & Miranker, Q. Appl. Math. 36,
+167–198, 1978). :func:`limit_cycle` finds it as the fixed point of the Poincaré map θ̇(θs) ↦
+θ̇(θs + 2π) by Brent's method on scipy's DOP853 (about 1e-11 relative). :func:`running_barrier`
+builds a band around it that is forward-invariant for the exact flow and for the RK4 step
+(margins: :func:`rk4_allowance`, measured), holds the cycle and no rest state, so every orbit
+entering it converges to the cycle; :func:`check_barrier` verifies such a band from its stored
+numbers alone (Poincaré–Bendixson and Bendixson's criterion), and the result, a
+:class:`RunningCertificate`, is the :class:`atlas.physics.barrier.RunningBarrier` that
+:func:`atlas.label` takes as ``running``. Everything is computed for |τ| and mirrored
+((θ, θ̇, τ) → (−θ, −θ̇, −τ)). Units: θ [rad], θ̇ [rad s⁻¹], t [s]. The derivations:
+``docs/design/running.md``.
 """
 
 from __future__ import annotations
@@ -59,8 +23,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from atlas.boundaries.manifold import START_DISTANCE
-from atlas.labels.labelling import RunningBarrier
+from atlas.physics.barrier import RunningBarrier
+from atlas.physics.pendulum import START_DISTANCE, Pendulum, tilt
 
 __all__ = ["LimitCycle", "RunningCertificate", "BarrierCheck", "limit_cycle",
            "homoclinic_threshold", "running_barrier", "check_barrier", "contains",
@@ -97,7 +61,7 @@ def _section(omega0: float, torque: float):
     while τ < ω0², else π/2, where the saddle-node was born) and k = ω0²|cos θs| [s⁻²], the
     linearisation φ̈ = kφ − 2αφ̇ at the saddle (0 from τ = ω0² on)."""
     r = min(torque / omega0**2, 1.0)
-    return math.pi - math.asin(r), omega0**2 * math.sqrt((1.0 - r) * (1.0 + r))
+    return math.pi - tilt(omega0, torque), omega0**2 * math.sqrt((1.0 - r) * (1.0 + r))
 
 
 class _Turn:
@@ -105,11 +69,9 @@ class _Turn:
 
     def __init__(self, alpha: float, omega0: float, torque: float, rtol: float):
         self.alpha, self.w2, self.torque, self.rtol = alpha, omega0**2, torque, rtol
+        self.rhs = Pendulum(alpha, omega0, torque).rhs
         self.scale = _ceiling(alpha, omega0, torque)
         self.t_max = 1e4 * (1.0 / alpha + 1.0 / omega0)
-
-    def rhs(self, _, y):
-        return [y[1], self.torque - self.w2 * math.sin(y[0]) - 2.0 * self.alpha * y[1]]
 
     def run(self, theta, theta_dot, theta_end, dense=False):
         """Integrate from (θ, θ̇) until θ = theta_end (→ reached) or θ̇ falls to 0 (→ turned
@@ -231,10 +193,11 @@ def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-
     (theta_s, v, period), (_, v_check, period_check) = found
     error = float(max(abs(v - v_check) / v, abs(period - period_check) / period))
 
-    w2, a2, tau = omega0**2, 2.0 * alpha, abs(torque)
+    tau = abs(torque)
+    theta_ddot = Pendulum(alpha, omega0, tau).theta_ddot
 
     def along_theta(theta, y):
-        return [(tau - w2 * math.sin(theta) - a2 * y[0]) / y[0], 1.0 / y[0]]
+        return [theta_ddot(theta, y[0]) / y[0], 1.0 / y[0]]
 
     theta = theta_s + np.linspace(0.0, 2.0 * math.pi, samples + 1)
     sol = solve_ivp(along_theta, (theta[0], theta[-1]), [v, 0.0], method="DOP853", rtol=rtol,
@@ -276,7 +239,7 @@ def homoclinic_threshold(alpha: float, omega0: float, *, rtol: float = 1e-12) ->
 
 @dataclass(frozen=True, kw_only=True)
 class RunningCertificate(RunningBarrier):
-    """A :class:`atlas.labels.labelling.RunningBarrier` (what the kernels test, and what
+    """A :class:`atlas.physics.barrier.RunningBarrier` (what the kernels test, and what
     :func:`atlas.label` takes as ``running``) with the record of its verification.
 
     The region, in the canonical frame (τ > 0), is the band {g(θ) ≤ θ̇ ≤ top} of the cylinder,
@@ -323,7 +286,7 @@ def rk4_allowance(alpha: float, omega0: float, torque: float, dt: float, speed, 
     (d/dt sin θ = θ̇ cos θ; ω0 and 2α bound the linear rates), and |θ̈| ≤ 2(ω0² + |τ|) below
     top; so a step moves θ̇ off the exact flow by O((ω0² + |τ|)Λ⁴dt⁵), θ by one factor Λ
     less, and θ̇ − g(θ) by the first plus |s| times the second. Like
-    :func:`atlas.labels.labelling.trap_margin` the constant is measured, not proven:
+    :func:`atlas.labels.trap.trap_margin` the constant is measured, not proven:
     ``tests/physics/test_running.py`` finds RK4's local error per unit time below 1/20 of the
     allowance (in θ̇, and in θ times Λ) throughout the regions of its cases, for dt up to
     0.1 s; a boundary crossed faster than the allowance is crossed inward by the step too.
@@ -415,10 +378,10 @@ def _lower_curve(alpha, omega0, tau, theta_a, v0, epsilon, m, rtol=1e-10):
     None where g falls below v0/1000."""
     from scipy.integrate import solve_ivp
 
-    w2, a2 = omega0**2, 2.0 * alpha
+    theta_ddot = Pendulum(alpha, omega0, tau).theta_ddot
 
     def rhs(theta, y):
-        return [(tau - w2 * math.sin(theta) - a2 * y[0] - epsilon) / y[0]]
+        return [(theta_ddot(theta, y[0]) - epsilon) / y[0]]
 
     def low(_, y):
         return y[0] - 1e-3 * v0

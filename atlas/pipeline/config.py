@@ -30,8 +30,9 @@ from pydantic import (
 )
 
 from atlas import defaults
+from atlas.defaults import METHODS
 from atlas.errors import ConfigError
-from atlas.kernels import METHODS
+from atlas.labels.backends import WORDS
 from atlas.layout import PARAMETERS
 from atlas.limits import MAX_RATE, MIN_RATE
 
@@ -247,7 +248,7 @@ class GridConfig(_Strict):
 
 class IntegratorConfig(_Strict):
     """Fixed-step RK4: step ``dt`` [s]; orbits not trapped by ``t_max`` [s] are unresolved;
-    ``method`` the discretisation (:data:`atlas.kernels.METHODS`: "rk4", classical RK4 on
+    ``method`` the discretisation (:data:`atlas.defaults.METHODS`: "rk4", classical RK4 on
     (θ, θ̇), or "rk4-trigfree", RK4 on (θ, θ̇, cos θ, sin θ), CPU only)."""
 
     dt: Number = Field(default=defaults.DT, gt=0)
@@ -268,7 +269,7 @@ class ExecutionConfig(_Strict):
     """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write; by
     default ``defaults.TILE_ORBITS``, on the GPU ``defaults.TILE_ORBITS_CUDA``)."""
 
-    backend: Literal["cpu", "cuda", "dask"] = "cpu"
+    backend: Literal[tuple(WORDS)] = "cpu"
     tile_orbits: int | None = Field(default=None, ge=1)
     workers: int | None = Field(default=None, ge=1)
     scheduler: str | None = None
@@ -288,20 +289,18 @@ class Config(_Strict):
     @model_validator(mode="after")
     def _runnable(self):
         """Checks across sections, so that a valid config never fails after work began."""
-        from atlas.labels.labelling import (
-            CHECK_EVERY,
-            check_integration,
-            check_method,
-            check_torque_reach,
-        )
+        from atlas.labels.backends import resolve
+        from atlas.labels.labelling import check_integration, check_torque_reach
+        from atlas.labels.methods import lookup as lookup_method
+        from atlas.labels.trap import CHECK_EVERY
         from atlas.limits import check_reach, check_separatrix_settings
 
         dt, t_max = self.integrator.dt, self.integrator.t_max
         try:
-            check_method(self.integrator.method, self.execution.backend)
+            resolve(self.execution.backend)[0].check_method(self.integrator.method)
         except ValueError as exc:
             raise ValueError(f"integrator.{exc}") from None
-        if self.integrator.method != "rk4" and any(self.pendulum.torques):
+        if not lookup_method(self.integrator.method).running and any(self.pendulum.torques):
             raise ValueError(f"integrator.method: {self.integrator.method!r} is for the "
                              "pendulum without torque (the running certificate is established "
                              "for 'rk4' only); use method: rk4 with a torque")

@@ -1,22 +1,14 @@
-"""The Dask backend: tiles as tasks on a dask.distributed cluster, one writer on the client.
+"""The Dask scheduler: tiles as tasks on a dask.distributed cluster, one writer on the client.
 
-Workers compute tiles (:func:`atlas.pipeline.schedule.compute_tile`) and send the label arrays back; the
-client writes each as it arrives, so HDF5 needs no parallel driver and the file's crash and
-resume guarantees are those of the local backend. At most ``2 × workers`` tiles are in
-flight, which bounds the client's memory by a few tiles.
-
-``execution.scheduler`` names an existing scheduler (``tcp://host:8786``, started with
-``dask scheduler`` and ``dask worker`` on other hosts, or by dask-jobqueue on a batch
-system); otherwise a LocalCluster of ``execution.workers`` processes is started.
-
-Threads: a task runs Numba with (the cores of its host) ÷ (the task slots of all workers on
-that host) threads, found on the worker itself (:func:`numba_threads_here`), so the workers
-of one machine do not oversubscribe it whether the cluster is local or external.
-
-Task keys are ``atlas-tile-<run identity>-<random run token>-<tile>``: unique per run, so
-two runs sharing one scheduler never receive each other's tiles (the scheduler merges tasks
-of equal keys). A worker that dies mid-run takes its tasks with it; the scheduler runs them
-again on the others, and since a tile depends only on its inputs the result is unchanged.
+Workers compute tiles (:func:`atlas.pipeline.schedule.compute_tile`) and send the arrays
+back; the client writes each as it arrives, so HDF5 needs no parallel driver and the crash
+and resume guarantees are those of the local scheduler. At most ``2 × workers`` tiles are in
+flight. ``execution.scheduler`` names an existing scheduler (``tcp://host:8786``), otherwise a
+LocalCluster of ``execution.workers`` processes starts. A task runs Numba with (its host's
+cores) ÷ (the task slots on that host) threads (:func:`numba_threads_here`). Task keys
+``atlas-tile-<run identity>-<run token>-<tile>`` are unique per run, so runs sharing a
+scheduler never receive each other's tiles; a tile lost with a dead worker is computed again
+elsewhere with the same result (a tile depends only on its inputs).
 """
 
 from __future__ import annotations

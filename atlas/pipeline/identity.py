@@ -12,9 +12,10 @@ from datetime import datetime, timezone
 import numpy as np
 import xarray as xr
 
-from atlas.labels.labelling import CHECK_EVERY
+from atlas.labels import backends
+from atlas.labels.trap import CHECK_EVERY
 from atlas.pipeline.config import Config, config_hash, integrator_json
-from atlas.store.validate import FORMAT_VERSION
+from atlas.store.schema import FORMAT_VERSION
 
 __all__ = ["run_identity", "identity_hash", "file_attrs", "library_versions"]
 
@@ -34,7 +35,7 @@ def run_identity(cfg: Config, backend: str) -> dict:
             "separatrices": (cfg.separatrices.model_dump(mode="json")
                              if cfg.separatrices.enabled else {"enabled": False}),
             "check_every": int(CHECK_EVERY), "atlas_version": __version__,
-            "kernels": "cuda" if backend == "cuda" else "cpu"}
+            "kernels": backends.resolve(backend)[0].name}
 
 
 def identity_hash(identity: dict) -> str:

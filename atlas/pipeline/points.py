@@ -12,14 +12,16 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from atlas.boundaries import exact
 from atlas.boundaries.certificate import certifier_for
 from atlas.errors import AtlasError
 from atlas.layout import Layout, node_name
 from atlas.physics import running
 from atlas.physics.pendulum import Pendulum, critical_points
 from atlas.pipeline.config import Config
+from atlas.store.schema import with_barrier
 
-__all__ = ["pendulums", "window", "running_certificates", "tilted_boundaries",
+__all__ = ["pendulums", "window", "running_certificates", "exact_boundaries",
            "trace_separatrices", "certifiers", "groups", "per_point",
            "critical_points_dataset", "limit_cycle_dataset"]
 
@@ -61,31 +63,28 @@ def window(cfg: Config) -> tuple[tuple[float, float], tuple[float, float]]:
     return (g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop)
 
 
-def tilted_boundaries(cfg: Config, pendulums: list[Pendulum], cycles: list) -> list:
-    """The exact tilted boundaries of every parameter point with a torque and rest states
-    (None elsewhere), built once for both the separatrices and the certifier."""
-    from atlas.boundaries.tilted import TiltedBoundaries
-
-    return [TiltedBoundaries(p, *window(cfg), cycle=cycle)
-            if p.torque != 0.0 and p.has_rest_states else None
+def exact_boundaries(cfg: Config, pendulums: list[Pendulum], cycles: list) -> list:
+    """The exact basin boundaries of every parameter point over the window
+    (:func:`atlas.boundaries.exact.exact_boundaries`, given its running limit cycle), built
+    once for both the separatrices and the certifier."""
+    return [exact.exact_boundaries(p, window(cfg), cycle=cycle)
             for p, cycle in zip(pendulums, cycles)]
 
 
-def trace_separatrices(cfg: Config, pendulums: list[Pendulum], tilted: list,
+def trace_separatrices(cfg: Config, pendulums: list[Pendulum], boundaries: list,
                         barriers: list) -> list[xr.Dataset | None]:
-    """The traced separatrices of every parameter point (None each when disabled)."""
+    """The traced separatrices of every parameter point (:func:`atlas.boundaries.trace.trace`
+    on its exact boundaries and running barrier; None where it has no boundary, and each
+    when disabled)."""
     if not cfg.separatrices.enabled:
         return [None] * len(pendulums)
-    from atlas.boundaries import separatrices
+    from atlas.boundaries.trace import trace
 
-    box = window(cfg)
     settings = {"tol": cfg.separatrices.tol, "max_spacing": cfg.separatrices.max_spacing,
-                "dt": cfg.integrator.dt, "method": cfg.integrator.method}
-    return [separatrices.trace(p, *box, **settings) if p.torque == 0.0 else
-            separatrices.trace_tilted(p, *box, t_max=cfg.integrator.t_max, exact=exact,
-                                      barrier=barrier, **settings)
-            if exact is not None else None  # |torque| > omega0^2: no saddle, no boundary
-            for p, exact, barrier in zip(pendulums, tilted, barriers)]
+                "dt": cfg.integrator.dt, "t_max": cfg.integrator.t_max,
+                "method": cfg.integrator.method}
+    return [trace(p, *window(cfg), exact=b, barrier=barrier, **settings)
+            for p, b, barrier in zip(pendulums, boundaries, barriers)]
 
 
 def per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
@@ -102,18 +101,17 @@ def per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
     return out
 
 
-def certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, tilted: list,
+def certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, boundaries: list,
                 barriers: list) -> list[tuple]:
     """(certifier, running barrier) of every parameter point: the certifier with the boundary
     shift its separatrices measured (NaN without them: then no label is certified for the
-    exact equation; :func:`atlas.boundaries.certificate.certifier_for`), on the tilted boundaries of
-    :func:`tilted_boundaries` where there is a torque, and the barrier of
-    :func:`running_certificates`."""
+    exact equation; :func:`atlas.boundaries.certificate.certifier_for`), on the exact
+    boundaries of :func:`exact_boundaries`, and the barrier of :func:`running_certificates`."""
     out = []
-    for p, sep, exact, barrier in zip(pendulums, traced, tilted, barriers):
+    for p, sep, b, barrier in zip(pendulums, traced, boundaries, barriers):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
-        out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol, exact),
+        out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol, b),
                     barrier))
     return out
 
@@ -136,10 +134,12 @@ def running_certificates(pendulums: list[Pendulum], dt: float) -> tuple[list, li
     return cycles, barriers
 
 
-def limit_cycle_dataset(cycle) -> xr.Dataset:
+def limit_cycle_dataset(cycle, barrier) -> xr.Dataset:
     """One parameter point's node of ``/limit_cycle``: the running periodic orbit sampled
-    uniformly in θ over one turn, with its period and mean angular velocity."""
-    return xr.Dataset(
+    uniformly in θ over one turn, with its period and mean angular velocity, and (format 4,
+    :func:`atlas.store.schema.with_barrier`) the running barrier its labels were certified
+    with, so that views read that certificate instead of rebuilding it."""
+    return with_barrier(xr.Dataset(
         {"theta_dot": ("sample", cycle.theta_dot, {"units": "rad s-1",
                                                    "long_name": "angular velocity"}),
          "time": ("sample", cycle.time, {"units": "s", "long_name": "time from the first "
@@ -149,11 +149,11 @@ def limit_cycle_dataset(cycle) -> xr.Dataset:
                               "torque: fixed point of the Poincare map over one turn (DOP853)",
                "period": cycle.period, "period_units": "s",
                "mean_theta_dot": cycle.mean_theta_dot, "direction": np.int8(cycle.direction),
-               "relative_error": cycle.error})
+               "relative_error": cycle.error}), barrier)
 
 
-def groups(layout: Layout, pendulums: list[Pendulum], traced: list,
-            cycles: list) -> dict[str, xr.Dataset]:
+def groups(layout: Layout, pendulums: list[Pendulum], traced: list, cycles: list,
+           barriers: list) -> dict[str, xr.Dataset]:
     """The per-point groups (path → dataset): ``/critical_points``, ``/separatrices`` and
     ``/limit_cycle`` (points with a running cycle only)."""
     lo, hi = float(layout.theta0[0]), float(layout.theta0[-1])
@@ -161,4 +161,5 @@ def groups(layout: Layout, pendulums: list[Pendulum], traced: list,
                          [critical_points_dataset(p, lo, hi) for p in pendulums]),
             **per_point(layout, "separatrices", traced),
             **per_point(layout, "limit_cycle",
-                         [None if c is None else limit_cycle_dataset(c) for c in cycles])}
+                         [None if c is None else limit_cycle_dataset(c, b)
+                           for c, b in zip(cycles, barriers)])}

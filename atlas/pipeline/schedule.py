@@ -3,9 +3,10 @@
 A tile (grid rows of one parameter point) is labelled and certified by :func:`compute_tile`,
 a plain function of picklable arguments. The local scheduler computes one tile ahead in a
 background thread while the caller writes the previous one (:func:`local_results`); the Dask
-scheduler (:mod:`atlas.pipeline.distributed`) sends tiles to workers, which for a Zarr output
-write them themselves (:func:`compute_tile_into_zarr`). Which device labels a tile (CPU or
-CUDA kernels) is the ``backend`` argument, independent of the scheduler.
+scheduler (:mod:`atlas.pipeline.distributed`) sends tiles to workers, which for a format that
+takes parallel writes (Zarr) write them themselves (:func:`compute_tile_into_store`). Which
+device labels a tile (CPU or CUDA kernels) is the ``backend`` argument, independent of the
+scheduler.
 """
 
 from __future__ import annotations
@@ -16,12 +17,13 @@ from concurrent.futures import Future
 
 from atlas import defaults
 from atlas.boundaries.certificate import Certifier
-from atlas.labels.labelling import RunningBarrier, label
+from atlas.labels.labelling import label
 from atlas.layout import Layout
+from atlas.physics.barrier import RunningBarrier
 from atlas.pipeline.config import Config
 from atlas.store.partial import TileStore
 
-__all__ = ["compute_tile", "tile_args", "local_results", "compute_tile_into_zarr",
+__all__ = ["compute_tile", "tile_args", "local_results", "compute_tile_into_store",
            "dask_tile_results"]
 
 
@@ -103,29 +105,27 @@ def local_results(cfg, layout, certifiers, todo, backend) -> Iterator[tuple[int,
         yield index, result
 
 
-def compute_tile_into_zarr(path, layout, index, *args, numba_threads=None) -> dict:
-    """Label and certify tile ``index`` and write it by region into the Zarr store at
-    ``path`` (on the Dask worker itself); return its tally for the client's record."""
-    from atlas.store import zarrformat as zarrstore
-
+def compute_tile_into_store(fmt, folder, layout, index, *args, numba_threads=None) -> dict:
+    """Label and certify tile ``index`` and write it with the output's format ``fmt`` into
+    the partial run at ``folder`` (on the Dask worker itself: a format with
+    ``parallel_tile_writes``, Zarr); return its tally for the client's record."""
     values, tally = compute_tile(*args, numba_threads=numba_threads)
-    zarrstore.write_tile(path, layout, index, values)
+    fmt.write_tile(folder, layout, index, values)
     return tally
 
 
 def dask_tile_results(cfg, tiles: TileStore, certifiers, todo) -> Iterator[tuple[int, tuple]]:
-    """(index, (arrays, tally)), or for a Zarr output (index, tally) of a tile the worker
-    has written itself."""
+    """(index, (arrays, tally)), or for a format that takes parallel writes (Zarr)
+    (index, tally) of a tile the worker has written itself."""
     from atlas.pipeline.distributed import dask_results
 
     layout = tiles.layout
-    if tiles.format == "zarr":
-        from atlas.store.zarrformat import DATA
-
+    if tiles.format.parallel_tile_writes:
         def args_of(i):
-            return (tiles.path / DATA, layout, i, *tile_args(cfg, layout, certifiers, i))
+            return (tiles.format, tiles.path, layout, i,
+                    *tile_args(cfg, layout, certifiers, i))
 
-        task = compute_tile_into_zarr
+        task = compute_tile_into_store
     else:
         def args_of(i):
             return tile_args(cfg, layout, certifiers, i)

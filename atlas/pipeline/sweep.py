@@ -5,8 +5,8 @@ whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled ind
 (:func:`compute_tile`, which any backend can run) and each finished tile is written at once
 (:mod:`atlas.store.partial`, one atomically written file per tile in ``<output>.partial/``) while
 the next tile is computed, so memory is bounded by two tiles and a crash loses only tiles in
-flight; when all are done
-:func:`atlas.store.atlasfile.finalize` assembles the HDF5 file. Orbits never interact, so results do not
+flight; when all are done the output's format (:func:`atlas.store.formats.format_for`:
+HDF5, or Zarr for ``NAME.zarr``) assembles the file. Orbits never interact, so results do not
 depend on tile size, backend or thread count.
 
 A run continues the partial run at its output if that has the same identity
@@ -19,7 +19,6 @@ from __future__ import annotations
 import logging
 import os
 import re
-import shutil
 import sys
 import time
 from pathlib import Path
@@ -30,38 +29,38 @@ import xarray as xr
 from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.boundaries.certificate import Certifier, add_tallies
 from atlas.errors import AtlasError, InputFileError, StorageError
-from atlas.labels.labelling import check_method, trap_margin
+from atlas.labels import backends
+from atlas.labels.trap import energy_cap, trap_margin
 from atlas.layout import PARAMETERS, Layout, point_label
 from atlas.pipeline import points
 from atlas.pipeline.config import Config
 from atlas.pipeline.identity import file_attrs, run_identity
 from atlas.pipeline.lock import output_lock
+from atlas.pipeline.output import check_output_path, check_output_target
 from atlas.pipeline.schedule import dask_tile_results, local_results
-from atlas.store import atlasfile as store
-from atlas.store import zarrformat as zarrstore
+from atlas.store.formats import format_for
 from atlas.store.partial import (
+    DamagedTile,
     IdentityMismatch,
     PartialStoreError,
     TileStore,
     discard,
     partial_path,
 )
+from atlas.store.reader import open_atlas
+from atlas.store.schema import summary_dataset, summary_tree
 
 __all__ = ["run", "layout_of"]
 
 log = logging.getLogger(__name__)
 
-#: Upper bound on the bytes one orbit takes on disk (int16 + int8 + float32, uncompressed).
-BYTES_PER_ORBIT = 7
-
-
 def layout_of(cfg: Config, backend: str | None = None) -> Layout:
-    """The grid axes, parameter axes and tiling of a config run on ``backend`` (default
-    ``execution.backend``): ``execution.tile_orbits`` orbits per tile, or by default
-    ``defaults.TILE_ORBITS`` (``TILE_ORBITS_CUDA`` on the GPU, so that a tile fills it)."""
-    backend = backend or cfg.execution.backend
-    tile = cfg.execution.tile_orbits or (defaults.TILE_ORBITS_CUDA if backend == "cuda"
-                                         else defaults.TILE_ORBITS)
+    """The grid axes, parameter axes and tiling of a config run on ``backend`` (a backend
+    word, default ``execution.backend``): ``execution.tile_orbits`` orbits per tile, or by
+    default the device's (:attr:`atlas.labels.backends.Backend.tile_orbits`: a GPU tile
+    fills the GPU)."""
+    device, _ = backends.resolve(backend or cfg.execution.backend)
+    tile = cfg.execution.tile_orbits or device.tile_orbits
     g = cfg.grid
     theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
     theta_dot0 = np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num)
@@ -78,47 +77,21 @@ def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.D
     """The summary variables from the tiles' tallies (O(tiles) numbers, no label re-read)."""
     layout = tiles.layout
     tallies = [[] for _ in certifiers]
-    for index in range(layout.n_tiles):
-        try:
-            tallies[index // layout.bands].append(tiles.read_tally(index))
-        except Exception as exc:  # a damaged record: OSError, ValueError, BadZipFile
-            raise store.DamagedTile(index, exc.__class__.__name__) from None
+    for index in range(layout.n_tiles):  # a damaged record raises DamagedTile
+        tallies[index // layout.bands].append(tiles.read_tally(index))
     points = []
     for p, ((cert, _), point) in enumerate(zip(certifiers, tallies)):
         summary = cert.summary(add_tallies(point))
         pendulum = cert.pendulum
         summary["trap_margin"] = trap_margin(cfg.integrator.dt, pendulum.alpha, pendulum.omega0)
+        summary["trap_energy_cap"] = energy_cap(cfg.integrator.dt, pendulum.alpha,
+                                                pendulum.omega0, pendulum.torque)
         if summary["side_mismatches"]:
             log.warning("%s: %d labels farther than d_cert from every boundary disagree with "
                         "the exact side; they are flagged near_boundary",
                         point_label(layout.point(p)), summary["side_mismatches"])
         points.append(summary)
-    return store.summary_dataset(layout, points)
-
-
-def _check_output_path(cfg: Config, layout: Layout) -> None:
-    """Refuse an output that cannot be written or would not fit, before anything is made."""
-    out = cfg.output
-    if out.is_dir() and not (zarrstore.is_zarr(out) and (out / "zarr.json").exists()):
-        raise AtlasError(f"{out}: the output path is a directory")
-    existing = next(p for p in (out.parent, *out.parent.parents) if p.exists())
-    if not existing.is_dir():
-        raise AtlasError(f"{out}: the output folder {existing} is not a directory")
-    if not os.access(existing, os.W_OK):
-        raise AtlasError(f"{out}: the output folder {existing} is not writable")
-    need = layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
-    free = shutil.disk_usage(existing).free
-    if need > free:
-        raise AtlasError(f"{out}: the output may need up to {_size(need)} but only "
-                         f"{_size(free)} is free on that disk")
-
-
-def _size(n_bytes: int) -> str:
-    for unit in ("B", "KB", "MB", "GB"):
-        if n_bytes < 1000:
-            return f"{n_bytes:.3g} {unit}"
-        n_bytes /= 1000
-    return f"{n_bytes:.3g} TB"
+    return summary_dataset(layout, points)
 
 
 def _make_output_folder(out: Path) -> None:
@@ -166,7 +139,7 @@ def _open_tiles(cfg: Config, layout: Layout, identity: dict, restart: bool) -> T
         discard(partial)
     if not partial.exists():
         return TileStore.create(partial, layout, identity, file_attrs(cfg, identity),
-                                "zarr" if zarrstore.is_zarr(cfg.output) else "hdf5")
+                                format_for(cfg.output))
     tiles = _refuse_another(partial, identity)
     log.warning("resuming %s: %d of %d tiles already done", partial, tiles.done().size,
                 tiles.layout.n_tiles)
@@ -178,21 +151,21 @@ def _orbits(layout: Layout, tiles) -> int:
         * layout.theta0.size
 
 
-def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], backend: str,
-                  quiet: bool) -> None:
+def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], device: str,
+                  scheduler: str, quiet: bool) -> None:
     """Label and certify the tiles still to do and store each as it finishes (the local
     backends compute the next tile meanwhile, :func:`_local_results`)."""
     layout, todo = tiles.layout, tiles.todo()
-    written_by_workers = backend == "dask" and tiles.format == "zarr"
-    results = (dask_tile_results(cfg, tiles, certifiers, todo) if backend == "dask"
-               else local_results(cfg, layout, certifiers, todo, backend))
+    written_by_workers = scheduler == "dask" and tiles.format.parallel_tile_writes
+    results = (dask_tile_results(cfg, tiles, certifiers, todo) if scheduler == "dask"
+               else local_results(cfg, layout, certifiers, todo, device))
     total = _orbits(layout, range(layout.n_tiles))
     with _progress(total, total - _orbits(layout, todo), quiet) as bar:
         for index, result in results:
             if written_by_workers:
                 tiles.record(index, result)
             else:
-                tiles.write(index, *result, store.FILLS)
+                tiles.write(index, *result)
             bar.update(_orbits(layout, [index]))
             log.debug("tile %d of %d written", index + 1, layout.n_tiles)
 
@@ -224,35 +197,34 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
     and certify what is missing, then assemble the file. A tile file found damaged is set
     aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``).
-    Returns what was written beyond the basin map (:func:`atlas.store.atlasfile.summary_tree`)."""
+    Returns what was written beyond the basin map (:func:`atlas.store.schema.summary_tree`)."""
     pendulums = points.pendulums(tiles.layout)
     cycles, barriers = running_certificates
-    tilted = points.tilted_boundaries(cfg, pendulums, cycles)  # timed with the separatrices
-    traced = points.trace_separatrices(cfg, pendulums, tilted, barriers)
+    boundaries = points.exact_boundaries(cfg, pendulums, cycles)  # timed with the separatrices
+    traced = points.trace_separatrices(cfg, pendulums, boundaries, barriers)
     phase.done("separatrices")
-    certifiers = points.certifiers(tiles.layout, pendulums, traced, tilted, barriers)
-    groups = points.groups(tiles.layout, pendulums, traced, cycles)
+    certifiers = points.certifiers(tiles.layout, pendulums, traced, boundaries, barriers)
+    groups = points.groups(tiles.layout, pendulums, traced, cycles, barriers)
     phase.done("exact boundaries and areas")
     for _ in range(3):
-        _compute_into(tiles, cfg, certifiers, backend, quiet)
+        device, scheduler = backends.resolve(backend)
+        _compute_into(tiles, cfg, certifiers, device.name, scheduler, quiet)
         phase.done("map (label and certify tiles)")
-        finalize = zarrstore.finalize if tiles.format == "zarr" else store.finalize
         try:
             summary = _summary(cfg, tiles, certifiers)
             phase.done("summary")
             attrs = {"run_time_s": time.perf_counter() - start, "backend": backend}
             manifest_attrs = tiles.manifest["attrs"]  # read before finalize removes the tiles
-            finalize(tiles, cfg.output, groups, summary, attrs)
+            tiles.finalize(cfg.output, groups, summary, attrs)
             phase.done(f"writing ({tiles.layout.n_tiles} tiles assembled)")
-            return store.summary_tree(tiles.layout, summary, groups,
-                                      {**manifest_attrs, **attrs})
-        except store.DamagedTile as exc:
+            return summary_tree(tiles.layout, summary, groups, {**manifest_attrs, **attrs})
+        except DamagedTile as exc:
             log.warning("%s: %s is damaged; computing it again", tiles.path, exc)
             tiles.set_aside(exc.index)
     raise StorageError(f"{tiles.path}: tile files keep coming back damaged; check the disk")
 
 
-def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool = False,
+def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
         backend: str | None = None, force: bool = False,
         config_path: str | Path | None = None, open_result: bool = True) -> xr.DataTree:
     """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
@@ -260,30 +232,26 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
     An interrupted run of the same identity at the output (``<output>.partial/``) is
     continued: only its missing tiles are computed, with its own tiling. A partial run of
     another identity raises :class:`InputFileError`, unless ``restart=True`` discards it
-    first. ``resume`` is accepted for compatibility (continuing is always on). ``backend``
+    first. ``backend``
     overrides ``execution.backend`` ('cpu', 'cuda' or 'dask'). A write error (disk full, I/O
     error) raises :class:`StorageError`; the tiles finished before it are kept. An output
     that atlas did not write is refused (:class:`~atlas.errors.OutputInTheWay`) unless
     ``force``, and one that is the config file ``config_path`` itself always.
     ``open_result=False`` returns, instead of the file opened (and checked) again, what was
-    written beyond the basin map, from memory (:func:`atlas.store.atlasfile.summary_tree`: what
+    written beyond the basin map, from memory (:func:`atlas.store.schema.summary_tree`: what
     ``atlas run`` prints).
     """
-    from atlas.store.validate import check_output_target
-
     check_output_target(cfg.output, config_path, force=force)
     backend = backend or cfg.execution.backend
+    device, _ = backends.resolve(backend)
     try:
-        check_method(cfg.integrator.method, backend)
+        device.check_method(cfg.integrator.method)
     except ValueError as exc:  # a --backend override of a valid config: name the config
         where = f"{config_path}: " if config_path is not None else ""
         raise AtlasError(f"{where}integrator.{exc}") from None
     layout = layout_of(cfg, backend)
-    if backend == "cuda":
-        from atlas.kernels.cuda import require_cuda
-
-        require_cuda()
-    _check_output_path(cfg, layout)
+    device.require()
+    check_output_path(cfg.output, layout)
     partial = partial_path(cfg.output)
     identity = run_identity(cfg, backend)
     if not restart:
@@ -307,7 +275,7 @@ def run(cfg: Config, *, resume: bool = True, restart: bool = False, quiet: bool 
                                "tiles finished before it are kept: free space or fix the "
                                "disk, then run the same command again") from None
     if open_result:
-        written = store.open_atlas(cfg.output)
+        written = open_atlas(cfg.output)
         phase.done("opening the result")
     log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
     return written

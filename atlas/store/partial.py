@@ -1,26 +1,17 @@
 """The store of an unfinished run: ``<output>.partial/``, one file per finished tile.
 
-A kill at any instant loses at most the tile in flight, because nothing is ever modified in
-place:
+A kill at any instant loses at most the tile in flight: nothing is modified in place
+(:mod:`atlas.store.durable`). ``manifest.json`` (identity, layout, output format, provenance)
+is written once, with the folder built under a temporary name and renamed into place; each
+finished tile is written under a temporary name and renamed to ``tiles/<index>.npz``, so the
+file's existence is the record that the tile is done and its contents are whole (the zip's
+CRC is checked on reading); leftovers of cut-short writes (``*.tmp``) are cleared on reopening.
 
-* ``manifest.json`` (the run's identity, its layout and provenance) is written once, when the
-  run starts: the folder is built under a temporary name, fsynced and renamed into place, so
-  a partial folder always has its manifest;
-* each finished tile is written to a temporary name, fsynced, then renamed to
-  ``tiles/<index>.npz`` (and the folder fsynced): the file's existence is the record that the
-  tile is done, and its contents are whole (the zip's CRC is checked when it is read back);
-* leftovers of a write that was cut short (``*.tmp``) are not tiles and are cleared when the
-  run is reopened.
-
-For an HDF5 output a tile file holds the tile's three label arrays as the final file stores
-them (a chunk of ``rows_per_tile`` rows, byte-shuffled then deflated, the edge chunk padded;
-see :func:`encode_chunk`), so :func:`atlas.store.atlasfile.finalize` assembles the output by copying
-compressed chunks without re-encoding. For a Zarr output (``NAME.zarr``) the arrays go by
-region into the Zarr store ``atlas.zarr`` inside the partial folder (:mod:`atlas.store.zarrformat`),
-before the tile file is written, and the tile file holds only the record. Either way the tile
-file holds the tile's basin counts (trapped orbits per well k, and the orbits not trapped), so
-basin fractions are summed from O(tiles) numbers. This module never touches HDF5;
-:mod:`atlas.store.atlasfile` does.
+The store is handed the output's :class:`~atlas.store.format.Format` and never asks which
+one it is: the format writes each tile's label arrays (``write_tile``: HDF5 returns encoded
+chunks, kept in the tile file; Zarr writes into its store in the folder) and assembles the
+output (:meth:`TileStore.finalize`). Each tile file holds the tile's tally (basin counts,
+certificate figures), so the summary is summed from O(tiles) numbers.
 """
 
 from __future__ import annotations
@@ -28,24 +19,24 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import zlib
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from atlas.layout import Layout
+from atlas.store.durable import discard, fsync, write_durably
+from atlas.store.format import Format
+from atlas.store.formats import DEFAULT, format_named
 
-__all__ = ["TileStore", "Tile", "partial_path", "encode_chunk", "decode_chunk", "discard",
-           "DEFLATE_LEVEL", "MANIFEST", "PartialStoreError", "IdentityMismatch", "VARIABLES",
-           "fsync"]
+__all__ = ["TileStore", "Tile", "partial_path", "discard", "MANIFEST", "PartialStoreError",
+           "IdentityMismatch", "DamagedTile"]
 
 MANIFEST = "manifest.json"
 SCHEMA = "atlas-partial/3"
-#: zlib level of the chunks (the HDF5 variables' gzip level, :mod:`atlas.store.atlasfile`).
-DEFLATE_LEVEL = 4
-#: The per-orbit variables of a tile, in file order.
-VARIABLES = ("attractor", "status", "t_trap", "boundary_distance")
+#: What reading a damaged tile file raises (a zip cut short, a CRC that fails, …).
+_DAMAGE = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile)
 
 
 class PartialStoreError(Exception):
@@ -60,109 +51,65 @@ class IdentityMismatch(PartialStoreError):
         self.differs = differs
 
 
+class DamagedTile(Exception):
+    """A tile file that cannot be read back (its index in ``index``): set it aside
+    (:meth:`TileStore.set_aside`) and compute the tile again."""
+
+    def __init__(self, index: int, reason: str):
+        super().__init__(f"tile {index}: {reason}")
+        self.index = index
+
+
 def partial_path(output: Path) -> Path:
     """Where an unfinished run keeps its tiles: next to the output, never at it."""
     return output.with_name(output.name + ".partial")
 
 
-def encode_chunk(values: np.ndarray, chunk_rows: int, fill) -> bytes:
-    """One HDF5 chunk of ``values`` (rows × columns) exactly as HDF5's shuffle + deflate filter
-    pipeline stores it: padded with ``fill`` to ``chunk_rows`` rows (an edge chunk is stored
-    whole), bytes shuffled (byte j of every element together; a no-op for 1-byte types), then
-    zlib-compressed (HDF5's deflate filter writes zlib streams)."""
-    values = np.ascontiguousarray(values)
-    if values.shape[0] < chunk_rows:
-        pad = np.full((chunk_rows - values.shape[0], values.shape[1]), fill, values.dtype)
-        values = np.concatenate([values, pad])
-    raw = values.view(np.uint8).reshape(-1, values.dtype.itemsize).T
-    return zlib.compress(np.ascontiguousarray(raw).tobytes(), DEFLATE_LEVEL)
-
-
-def decode_chunk(raw: bytes, chunk_rows: int, cols: int, dtype, shuffle: bool = True
-                 ) -> np.ndarray:
-    """The inverse of :func:`encode_chunk`: a stored chunk (deflated, after HDF5's byte
-    shuffle when ``shuffle``) as its ``chunk_rows`` × ``cols`` array of ``dtype``; ValueError
-    if it does not inflate to that size (zlib.error if it does not inflate at all)."""
-    dtype = np.dtype(dtype)
-    data = np.frombuffer(zlib.decompress(raw), np.uint8)
-    if data.size != chunk_rows * cols * dtype.itemsize:
-        raise ValueError("a chunk of the wrong size")
-    if shuffle:  # byte j of every element was stored together
-        data = np.ascontiguousarray(data.reshape(dtype.itemsize, -1).T)
-    return data.view(dtype).reshape(chunk_rows, cols)
-
-
 @dataclass(frozen=True)
 class Tile:
-    """A finished tile as stored: its encoded chunks and its tally (basin counts and the
+    """A finished tile as stored: the bytes its format keeps with the record (HDF5: the
+    encoded chunks of each map variable; none for Zarr) and its tally (basin counts and the
     certificate's figures, :meth:`atlas.boundaries.certificate.Certifier.tile`)."""
 
     chunks: dict[str, bytes]
     tally: dict[str, np.ndarray]
 
 
-def fsync(path: Path) -> None:
-    """Push a file's or a folder's contents (a folder: its entries) to disk."""
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _write_durably(path: Path, write) -> None:
-    """``write(file)`` into a private temporary name, fsync, rename onto ``path``, fsync the
-    folder: ``path`` then either does not exist or holds the whole content, whatever happens."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    fsync(path.parent)
-
-
 class TileStore:
-    """An open partial run: its manifest and its finished tiles.
+    """An open partial run: its manifest, its output format and its finished tiles.
 
     Make one with :meth:`create` or :meth:`open`; the caller holds the output's lock.
     """
 
-    def __init__(self, path: Path, manifest: dict):
+    def __init__(self, path: Path, manifest: dict, fmt: Format):
         self.path = path
         self.manifest = manifest
         self.layout = Layout.from_json(manifest["layout"])
+        self.format = fmt
 
     # ---------------------------------------------------------------- creating, opening
 
     @classmethod
     def create(cls, path: Path, layout: Layout, identity: dict, attrs: dict,
-               output_format: str = "hdf5") -> TileStore:
+               fmt: Format = DEFAULT) -> TileStore:
         """A new, empty partial run at ``path`` (which must not exist), for an output of
-        ``output_format`` 'hdf5' or 'zarr'."""
+        format ``fmt`` (:func:`atlas.store.formats.format_for` of the output)."""
         manifest = {"schema": SCHEMA, "identity": identity, "layout": layout.to_json(),
-                    "format": output_format, "attrs": _jsonable(attrs)}
+                    "format": fmt.name, "attrs": _jsonable(attrs)}
         new = path.with_name(f"{path.name}.{os.getpid()}.new")
         shutil.rmtree(new, ignore_errors=True)
         try:
             (new / "tiles").mkdir(parents=True)
-            if output_format == "zarr":
-                from atlas.store import zarrformat as zarrstore
-
-                zarrstore.create(new / zarrstore.DATA, layout)
-            _write_durably(new / MANIFEST,
-                           lambda fh: fh.write(json.dumps(manifest, indent=1).encode()))
+            fmt.create(new, layout)
+            write_durably(new / MANIFEST,
+                          lambda fh: fh.write(json.dumps(manifest, indent=1).encode()))
             fsync(new / "tiles")
             os.rename(new, path)  # fails if path exists: never over someone's tiles
         except BaseException:
             shutil.rmtree(new, ignore_errors=True)
             raise
         fsync(path.parent)
-        return cls(path, manifest)
+        return cls(path, manifest, fmt)
 
     @classmethod
     def read(cls, path: Path) -> TileStore:
@@ -175,7 +122,7 @@ class TileStore:
             manifest = json.loads((path / MANIFEST).read_text())
             if manifest.get("schema") != SCHEMA:
                 raise ValueError(f"schema {manifest.get('schema')!r}")
-            store = cls(path, manifest)
+            store = cls(path, manifest, format_named(manifest["format"]))
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise PartialStoreError(f"unreadable manifest ({exc.__class__.__name__})") from None
         return store
@@ -219,65 +166,54 @@ class TileStore:
     def todo(self) -> np.ndarray:
         return np.setdiff1d(np.arange(self.layout.n_tiles), self.done())
 
-    @property
-    def format(self) -> str:
-        return self.manifest["format"]
-
-    def write(self, index: int, values: dict, tally: dict, fills: dict) -> None:
-        """Store tile ``index`` durably and atomically: ``values`` maps each of
-        :data:`VARIABLES` to its array (shaped (rows, n_theta0)), ``tally`` holds the tile's
-        named count arrays."""
-        if self.format == "zarr":
-            from atlas.store import zarrformat as zarrstore
-
-            zarrstore.write_tile(self.path / zarrstore.DATA, self.layout, index, values)
-            chunks = {}
-        else:
-            rows = self.layout.chunk_rows
-            chunks = {name: encode_chunk(values[name], rows, fills[name]) for name in VARIABLES}
-        self.record(index, tally, chunks)
+    def write(self, index: int, values: dict, tally: dict) -> None:
+        """Store tile ``index`` durably and atomically: ``values`` maps each map variable
+        (:data:`atlas.store.schema.MAP_VARIABLES`) to its array (shaped (rows, n_theta0)),
+        written by the format; ``tally`` holds the tile's named count arrays."""
+        self.record(index, tally, self.format.write_tile(self.path, self.layout, index, values))
 
     def record(self, index: int, tally: dict, chunks: dict | None = None) -> None:
-        """Record tile ``index`` done, with its ``tally`` and, for an HDF5 output, its encoded
-        chunks: the tile file appears whole, or not at all."""
+        """Record tile ``index`` done, with its ``tally`` and the bytes its format keeps
+        (:meth:`~atlas.store.format.Format.write_tile`'s result; none where the tile was
+        written by a worker into the format's own store): the tile file appears whole, or
+        not at all."""
         arrays = {name: np.frombuffer(data, np.uint8) for name, data in (chunks or {}).items()}
         arrays.update({f"tally_{name}": np.asarray(value) for name, value in tally.items()})
-        _write_durably(self._tile_path(index), lambda fh: np.savez(fh, **arrays))
+        write_durably(self._tile_path(index), lambda fh: np.savez(fh, **arrays))
 
     def read_tile(self, index: int) -> Tile:
-        """A finished tile; OSError/ValueError/BadZipFile if its file is damaged."""
-        with np.load(self._tile_path(index)) as z:
-            return Tile(chunks={name: z[name].tobytes() for name in VARIABLES if name in z},
-                        tally={name[6:]: z[name] for name in z.files
-                               if name.startswith("tally_")})
+        """A finished tile; :class:`DamagedTile` if its file cannot be read back."""
+        try:
+            with np.load(self._tile_path(index)) as z:
+                return Tile(chunks={name: z[name].tobytes() for name in z.files
+                                    if not name.startswith("tally_")},
+                            tally={name[6:]: z[name] for name in z.files
+                                   if name.startswith("tally_")})
+        except _DAMAGE as exc:
+            raise DamagedTile(index, exc.__class__.__name__) from None
 
     def read_tally(self, index: int) -> dict[str, np.ndarray]:
         """Only the tally of a finished tile (a few numbers: the label chunks are not read);
-        OSError/ValueError/BadZipFile if its file is damaged."""
-        with np.load(self._tile_path(index)) as z:
-            return {name[6:]: z[name] for name in z.files if name.startswith("tally_")}
+        :class:`DamagedTile` if its file cannot be read back."""
+        try:
+            with np.load(self._tile_path(index)) as z:
+                return {name[6:]: z[name] for name in z.files if name.startswith("tally_")}
+        except _DAMAGE as exc:
+            raise DamagedTile(index, exc.__class__.__name__) from None
 
     def set_aside(self, index: int) -> None:
         """Move a damaged tile file to ``damaged/`` (kept for inspection, no longer done)."""
         (self.path / "damaged").mkdir(exist_ok=True)
         os.replace(self._tile_path(index), self.path / "damaged" / self._tile_path(index).name)
 
+    def finalize(self, output: Path, groups: dict, root_vars, attrs: dict) -> None:
+        """Assemble the finished tiles into the atlas at ``output`` in this run's format,
+        then remove the partial run (:meth:`atlas.store.format.Format.finalize`)."""
+        self.format.finalize(self, output, groups, root_vars, attrs)
+
     def remove(self) -> None:
         """Delete the partial run, once its output is in place."""
         discard(self.path)
-
-
-def discard(path: Path) -> None:
-    """Delete a partial run (file or folder) so that an interruption never leaves half of
-    it at ``path``: it is renamed away first (atomic), then deleted; what an interruption
-    leaves under the new name is cleared by :meth:`TileStore.clear_leftovers`."""
-    away = path.with_name(f".{path.name}.{os.getpid()}.discarded")
-    os.rename(path, away)
-    fsync(path.parent)
-    if away.is_dir():
-        shutil.rmtree(away)
-    else:
-        away.unlink()
 
 
 def _jsonable(attrs: dict) -> dict:

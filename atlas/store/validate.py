@@ -1,30 +1,17 @@
 """Files are checked before they are believed: the schema check every reader shares.
 
-:func:`atlas.open` (and with it ``atlas info``, ``plot``, ``view`` and ``orbit``) opens an atlas
-file and runs :func:`check_tree` before any view uses it. A file that fails is refused with one
-:class:`~atlas.errors.InputFileError` line naming the file and what is wrong (exit status 2 in
-the CLI). What is checked, from the metadata only (the arrays are not read):
-
-* ``format_version`` (root attribute): the integer :data:`FORMAT_VERSION`. Older files (a
-  file without the attribute is format 1) kept α and ω0 as attributes of a single atlas and
-  merged a parameter atlas's separatrices into one table; they are refused with one line
-  naming their version (run the config again to rewrite them);
-* the basin map: ``attractor`` int16, ``status`` int8, ``t_trap`` float32 and
-  ``boundary_distance`` float32, each on the map's dims (``theta_dot0``, ``theta0``, with
-  the swept parameters leading, :mod:`atlas.layout`);
-* the coordinates ``theta0`` and ``theta_dot0``: float64, 1-D, finite, strictly increasing;
-  every parameter (``alpha`` > 0, ``omega0`` > 0, ``torque``): a float64 coordinate, scalar
-  or 1-D (swept), finite;
-* ``status``'s CF flags: ``flag_values`` and ``flag_meanings`` pair up and each value means
-  what atlas means by it (0 trapped, 1 unresolved, 2 nonfinite, 3 near_boundary, 4 running,
-  5 running_near_boundary);
-* the summary ``atlas info`` prints: the per-basin variables over ``k`` and the per-point
-  figures, floating point, on the parameter dims;
-* the attributes the readers use: ``dt`` and ``t_max`` (finite, > 0), ``check_every`` (a
-  positive integer), and ``config``, which must be a JSON object (:func:`parse_config`);
-* the per-point groups (``/critical_points``, ``/separatrices``, ``/limit_cycle``): each node
-  names its parameter point in its attributes, and holds the vectors and attributes the
-  readers draw from.
+:func:`atlas.open` (and with it ``atlas info``, ``plot``, ``view`` and ``orbit``) opens an
+atlas file and runs :func:`check_tree` before any view uses it; a file that fails is refused
+with one :class:`~atlas.errors.InputFileError` line naming it and what is wrong (exit status
+2). Checked against :mod:`atlas.store.schema`, from the metadata and the small groups (the
+maps are not read): ``format_version`` (3 or 4; older layouts are refused naming their
+version); the basin map's variables, dtypes and dims; the coordinates (``theta0``,
+``theta_dot0`` finite and increasing; every parameter a finite float64, scalar or swept);
+``status``'s CF flags against :data:`atlas.status.STATUS_MEANINGS`; the summary; the
+attributes the readers use (``dt``, ``t_max``, ``check_every``, ``method``, ``config`` a
+JSON object); the per-point groups' vectors and attributes. In format 4 also the stored
+certificate: ``trap_energy_cap`` per point, and in each ``/limit_cycle`` node the running
+barrier (finite ``barrier_g``, g[-1] ≥ g[0], ``barrier_top`` above every g, direction ±1).
 """
 
 from __future__ import annotations
@@ -37,27 +24,21 @@ import numpy as np
 
 from atlas import defaults
 from atlas.errors import InputFileError
-from atlas.kernels import METHODS
 from atlas.layout import PARAMETERS, point_nodes
+from atlas.status import STATUS_MEANINGS
+from atlas.store.schema import (
+    BARRIER_ATTRS,
+    BARRIER_DIM,
+    BASIN_VARIABLES,
+    CERTIFICATE_FORMAT,
+    CERTIFICATE_POINT_VARIABLES,
+    FORMAT_VERSION,
+    MAP_VARIABLES,
+    OLDEST_FORMAT,
+    POINT_VARIABLES,
+)
 
-__all__ = ["FORMAT_VERSION", "check_tree", "check_dataset", "parse_config", "MAP_VARIABLES"]
-
-#: Version of the atlas file layout written by this atlas (root attribute ``format_version``).
-#: 1: files without the attribute; 2: the attribute is written; 3: every parameter (α, ω0,
-#: τ) is a coordinate, and the per-point groups hold one node per parameter point.
-FORMAT_VERSION = 3
-#: The basin map's variables and their stored dtypes.
-MAP_VARIABLES = {"attractor": np.int16, "status": np.int8, "t_trap": np.float32,
-                 "boundary_distance": np.float32}
-#: What atlas means by each status flag value.
-STATUS_MEANINGS = {0: "trapped", 1: "unresolved", 2: "nonfinite", 3: "near_boundary",
-                   4: "running", 5: "running_near_boundary"}
-_BASIN = ("basin_fraction_exact", "basin_fraction_exact_error", "basin_fraction",
-          "basin_fraction_grid_error_bound", "basin_fraction_grid_error")
-_POINT = ("unresolved_fraction", "running_fraction", "running_fraction_exact",
-          "running_fraction_exact_error", "running_fraction_grid_error_bound",
-          "certified_fraction", "d_cert",
-          "boundary_shift", "boundary_reference_error", "trap_margin", "side_mismatches")
+__all__ = ["check_tree", "check_dataset", "parse_config", "format_version", "file_method"]
 
 
 def _refuse(path, what: str):
@@ -65,8 +46,9 @@ def _refuse(path, what: str):
 
 
 def format_version(attrs: dict, path) -> int:
-    """The file's layout version (1 when absent); a newer one than this atlas reads, or a
-    value that is not an integer, is refused."""
+    """The file's layout version (1 when absent): :data:`~atlas.store.schema.OLDEST_FORMAT`
+    to :data:`~atlas.store.schema.FORMAT_VERSION`; an older or newer one, or a value that is
+    not an integer, is refused."""
     value = attrs.get("format_version", 1)
     if isinstance(value, np.ndarray) and value.size == 1:
         value = value.reshape(()).item()
@@ -79,22 +61,22 @@ def format_version(attrs: dict, path) -> int:
                 f"{FORMAT_VERSION}); upgrade atlas to read it")
     if value < 1:
         _refuse(path, f"format_version {value} is not a version atlas ever wrote")
-    if value < FORMAT_VERSION:
+    if value < OLDEST_FORMAT:
         _refuse(path, f"format_version {value}, an older layout than this atlas reads "
-                f"({FORMAT_VERSION}); run its config again to rewrite it")
+                f"({OLDEST_FORMAT} to {FORMAT_VERSION}); run its config again to rewrite it")
     return value
 
 
 def file_method(attrs: dict, path) -> str:
     """The discretisation the file's labels come from: its ``method`` attribute (bytes
     decoded; "rk4" where absent), or one InputFileError line if it is not one of
-    :data:`atlas.kernels.METHODS` as text."""
+    :data:`atlas.defaults.METHODS` as text."""
     method = attrs.get("method", defaults.METHOD)
     if isinstance(method, bytes):
         method = method.decode("utf-8", "replace")
-    if not isinstance(method, str) or method not in METHODS:
+    if not isinstance(method, str) or method not in defaults.METHODS:
         _refuse(path, f"attribute method = {str(method)[:40]!r} is not one of "
-                f"{', '.join(METHODS)}")
+                f"{', '.join(defaults.METHODS)}")
     return method
 
 
@@ -178,29 +160,32 @@ def _flags(attrs: dict, path) -> None:
                     f"{STATUS_MEANINGS.get(value, 'anything atlas writes')!r}")
 
 
-def check_dataset(ds, path) -> None:
+def check_dataset(ds, path) -> int:
     """Check the root group ``ds`` (an :class:`xarray.Dataset` opened with
-    ``mask_and_scale=False``) of the atlas file at ``path``; InputFileError if it fails."""
+    ``mask_and_scale=False``) of the atlas file at ``path``; InputFileError if it fails.
+    Returns the file's format version."""
     attrs = ds.attrs
-    format_version(attrs, path)
+    version = format_version(attrs, path)
     lead = tuple(name for name in PARAMETERS if name in ds.dims)
     dims = (*lead, "theta_dot0", "theta0")
     for name in ("theta0", "theta_dot0"):
         _axis(ds, name, path, increasing=True)
     for name in PARAMETERS:
         _parameter(ds, name, path)
-    for name, dtype in MAP_VARIABLES.items():
+    for name, spec in MAP_VARIABLES.items():
         if name not in ds.data_vars:
             _refuse(path, f"no {name} variable")
         var = ds[name]
-        if var.dtype != dtype:
-            _refuse(path, f"variable {name} is {var.dtype}, not {np.dtype(dtype)}")
+        if var.dtype != spec.dtype:
+            _refuse(path, f"variable {name} is {var.dtype}, not {np.dtype(spec.dtype)}")
         if var.dims != dims:
             _refuse(path, f"variable {name} has dims {var.dims}, not {dims}")
     _flags(ds["status"].attrs, path)
     if "k" not in ds.coords or ds["k"].dims != ("k",) or ds["k"].dtype.kind not in "iu":
         _refuse(path, "no integer k coordinate (the basins' summary)")
-    for names, want in ((_BASIN, (*lead, "k")), (_POINT, lead)):
+    point_names = [name for name in POINT_VARIABLES if version >= CERTIFICATE_FORMAT
+                   or name not in CERTIFICATE_POINT_VARIABLES]
+    for names, want in ((BASIN_VARIABLES, (*lead, "k")), (point_names, lead)):
         for name in names:
             if name not in ds.data_vars:
                 _refuse(path, f"no {name} variable (the summary)")
@@ -213,15 +198,21 @@ def check_dataset(ds, path) -> None:
         every = _number(attrs, "check_every", path, positive=True)
         if every != int(every):
             _refuse(path, f"attribute check_every = {every!r} is not an integer")
+    if version >= CERTIFICATE_FORMAT:
+        cap = np.asarray(ds["trap_energy_cap"].values)
+        if np.isnan(cap).any() or (cap == np.inf).any():
+            _refuse(path, "variable trap_energy_cap holds NaN or +inf (a cap is finite, or "
+                    "-inf where no well can trap)")
     file_method(attrs, path)
     parse_config(attrs, path)
+    return version
 
 
 def check_tree(tree, path) -> None:
     """Check an opened atlas (:class:`xarray.DataTree`): the root group
     (:func:`check_dataset`), then the groups the readers draw from (their small arrays are
     read: the separatrices' branch codes index a table)."""
-    check_dataset(tree.to_dataset(inherit=False), path)
+    version = check_dataset(tree.to_dataset(inherit=False), path)
     for node in point_nodes(tree, "critical_points"):
         cp = node.to_dataset(inherit=False)
         _point_attrs(node, path)
@@ -240,6 +231,31 @@ def check_tree(tree, path) -> None:
         direction = _number(node.attrs, "direction", path, where=f"{node.path} ")
         if direction not in (1.0, -1.0):
             _refuse(path, f"{node.path} attribute direction = {direction:g} is not +1 or -1")
+        if version >= CERTIFICATE_FORMAT:
+            _check_barrier(cycle, node.path, path, direction)
+
+
+def _check_barrier(cycle, group: str, path, direction: float) -> None:
+    """Format 4's running barrier in a ``/limit_cycle`` node: the contract the kernels tested
+    (:class:`atlas.physics.barrier.RunningBarrier`), so that a view may draw it as stored."""
+    g = _vector(cycle, group, "barrier_g", "f", path, dim=BARRIER_DIM)
+    if g.size < 2 or not np.all(np.isfinite(g)):
+        _refuse(path, f"{group}/barrier_g is not finite or has fewer than 2 samples")
+    if not g[-1] >= g[0]:
+        _refuse(path, f"{group}/barrier_g ends below its start ({g[-1]:g} < {g[0]:g})")
+    where = f"{group} "
+    for name in BARRIER_ATTRS:
+        _number(cycle.attrs, name, path, where=where)
+    top = _number(cycle.attrs, "barrier_top", path, where=where)
+    if not top > g.max():
+        _refuse(path, f"{group} attribute barrier_top = {top:g} is not above every barrier_g "
+                f"(max {g.max():g})")
+    sign = _number(cycle.attrs, "barrier_direction", path, where=where)
+    if sign not in (1.0, -1.0):
+        _refuse(path, f"{group} attribute barrier_direction = {sign:g} is not +1 or -1")
+    if sign != direction:
+        _refuse(path, f"{group} attribute barrier_direction = {sign:g} is not the cycle's "
+                f"direction {direction:g}")
 
 
 def _point_attrs(node, path) -> None:
@@ -270,38 +286,3 @@ def _check_separatrices(sep, group: str, path) -> None:
     if "discrepancy" not in sep.attrs:
         _refuse(path, f"no {group} attribute discrepancy")
     _number(sep.attrs, "discrepancy", path, finite=False, where=f"{group} ")
-
-
-def check_output_target(output, config=None, *, force: bool = False) -> None:
-    """Refuse an output path that holds something a run must not write over:
-
-    * the config file being run (``atlas run c.yaml -o c.yaml``), whatever ``force`` says;
-    * an existing file (or Zarr store) that atlas did not write, unless ``force``.
-
-    An atlas file at the output (a finished run of this or another config) may be written
-    over: that is how a changed config is run again. Raises
-    :class:`~atlas.errors.OutputInTheWay` (exit status 2)."""
-    import os
-    from pathlib import Path
-
-    from atlas.errors import OutputInTheWay
-    from atlas.store.atlasfile import is_atlas_file
-
-    output = Path(output)
-    if config is not None and output.exists():
-        try:
-            same = os.path.samefile(output, config)
-        except OSError:
-            same = False
-        if same:
-            raise OutputInTheWay(f"{output}: the output path is the config file being run; "
-                                 "name another output with -o")
-    if force or not output.exists():
-        return
-    if output.is_dir() and not (output / "zarr.json").exists():
-        return  # not a store: the run refuses a directory with its own line
-    if not is_atlas_file(output):
-        what = "Zarr store" if output.is_dir() else "file"
-        raise OutputInTheWay(f"{output}: an existing {what} that atlas did not write is in "
-                             "the way; run with --force to write over it, or name another "
-                             "output with -o")

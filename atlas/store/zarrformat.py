@@ -1,17 +1,18 @@
-"""The atlas as a Zarr v3 store: the final format of an output named ``NAME.zarr``.
+"""The Zarr format: the atlas as a Zarr v3 store, for an output named ``NAME.zarr``.
 
-The same schema as the HDF5 file (:mod:`atlas.store.atlasfile`: root variables, coordinates,
-attributes, groups ``/critical_points`` and ``/separatrices``), read with
+The only code that touches Zarr, as :mod:`atlas.store.hdf5` is for HDF5. The same schema as the HDF5
+file (:mod:`atlas.store.schema`: root variables, coordinates, attributes, groups
+``/critical_points``, ``/separatrices``, ``/limit_cycle``), read with
 ``xr.open_datatree(path, engine="zarr")`` or :func:`atlas.open`.
 
 During a run the store is built inside the partial folder (``<output>.partial/atlas.zarr``):
-:func:`create` writes the metadata (one chunk per tile), :func:`write_tile` writes a tile by
-region, whole chunks only, so tiles never share a chunk and any number of writers (Dask
-workers with the partial folder on a shared file system) can write their own tiles at once.
-Zarr writes each chunk to a temporary name and renames it, so a kill leaves a chunk whole or
-absent; the tile counts as done only once its record is written after it
-(:meth:`atlas.store.partial.TileStore.record`). :func:`finalize` adds the summary, marks the store
-complete, and renames it onto the output.
+:meth:`Zarr.create` writes the metadata (one chunk per tile), :meth:`Zarr.write_tile` writes
+a tile by region, whole chunks only, so tiles never share a chunk and any number of writers
+(Dask workers with the partial folder on a shared file system) can write their own tiles at
+once. Zarr writes each chunk to a temporary name and renames it, so a kill leaves a chunk
+whole or absent; the tile counts as done only once its record is written after it
+(:meth:`atlas.store.partial.TileStore.record`). :meth:`Zarr.finalize` adds the summary, marks
+the store complete, and renames it onto the output.
 """
 
 from __future__ import annotations
@@ -26,16 +27,14 @@ import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import BackendUnavailable, InputFileError
+from atlas.layout import Layout
+from atlas.store.format import Format
+from atlas.store.schema import MAP_VARIABLES, SCHEMA, chunks_of
 
-__all__ = ["DATA", "is_zarr", "create", "write_tile", "finalize", "attrs_of", "open_tree"]
+__all__ = ["Zarr", "DATA"]
 
 #: The Zarr store's folder name inside the partial folder.
 DATA = "atlas.zarr"
-
-
-def is_zarr(path: Path) -> bool:
-    """True for an output path that names a Zarr store (``*.zarr``)."""
-    return Path(path).suffix == ".zarr"
 
 
 def _zarr():
@@ -47,81 +46,91 @@ def _zarr():
     return zarr
 
 
-def create(path: Path, layout) -> None:
-    """The store's metadata: coordinates, empty label variables chunked one chunk per tile
-    (no chunk is written)."""
-    _zarr()
-    import dask.array as da
+class Zarr(Format):
+    name = "zarr"
+    description = "a Zarr v3 store (a folder; tiles written in parallel, e.g. by Dask workers)"
+    suffixes = (".zarr",)
+    folder = True
+    parallel_tile_writes = True
 
-    from atlas.store.atlasfile import _SPECS, chunks_of
+    def recognises(self, path: Path) -> bool:
+        return (path / "zarr.json").is_file()
 
-    chunks = chunks_of(layout)
-    shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
-    data, encoding = {}, {}
-    for name, (dtype, fill, attrs) in _SPECS.items():
-        empty = da.zeros(shape, dtype=dtype, chunks=chunks)
-        data[name] = (layout.dims, empty, attrs)
-        encoding[name] = {"chunks": chunks, "_FillValue": fill}
-    coords = layout.coords()
-    xr.Dataset(data, coords=coords).to_zarr(path, mode="w", compute=False, encoding=encoding,
-                                            zarr_format=3, consolidated=False)
+    def require(self) -> None:
+        _zarr()
 
+    def create(self, folder: Path, layout: Layout) -> None:
+        """The store's metadata: coordinates, empty label variables chunked one chunk per
+        tile (no chunk is written)."""
+        _zarr()
+        import dask.array as da
 
-def write_tile(path: Path, layout, index: int, values: dict) -> None:
-    """Write tile ``index`` (``values``: name → array shaped (rows, n_theta0)) into its own
-    chunks."""
-    zarr = _zarr()
-    params, rows = layout.tile(index)
-    group = zarr.open_group(path, mode="r+")
-    for name, array in values.items():
-        group[name][(*params, rows, slice(None))] = array
+        chunks = chunks_of(layout)
+        shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
+        data, encoding = {}, {}
+        for name, spec in MAP_VARIABLES.items():
+            empty = da.zeros(shape, dtype=spec.dtype, chunks=chunks)
+            data[name] = (layout.dims, empty, spec.attrs)
+            encoding[name] = {"chunks": chunks, "_FillValue": spec.fill}
+        xr.Dataset(data, coords=layout.coords()).to_zarr(
+            folder / DATA, mode="w", compute=False, encoding=encoding, zarr_format=3,
+            consolidated=False)
 
+    def write_tile(self, folder: Path, layout: Layout, index: int,
+                   values: dict) -> dict[str, bytes]:
+        """Write tile ``index`` into its own chunks of the store; nothing to keep with the
+        record."""
+        zarr = _zarr()
+        params, rows = layout.tile(index)
+        group = zarr.open_group(folder / DATA, mode="r+")
+        for name, array in values.items():
+            group[name][(*params, rows, slice(None))] = array
+        return {}
 
-def attrs_of(path: Path) -> dict:
-    """The root attributes of a Zarr atlas (InputFileError if it is not one)."""
-    zarr = _zarr()
-    try:
-        return dict(zarr.open_group(path, mode="r").attrs)
-    except Exception as exc:  # zarr raises several kinds for a folder that is not a store
-        raise InputFileError(f"{path}: not a readable Zarr store "
-                             f"({exc.__class__.__name__})") from None
+    def finalize(self, tiles, output: Path, groups: dict[str, xr.Dataset],
+                 root_vars: xr.Dataset, attrs: dict) -> None:
+        """Complete the partial run's store and rename it onto ``output`` (an older store
+        there is moved aside first and removed last); then remove the partial folder."""
+        zarr = _zarr()
+        layout = tiles.layout
+        path = tiles.path / DATA
+        for leftover in path.rglob("*.partial"):  # a chunk write cut short (zarr's temp name)
+            leftover.unlink()
+        root_vars.drop_vars([n for n in root_vars.coords if n in layout.coords()]).to_zarr(
+            path, mode="a", consolidated=False)
+        for name, ds in groups.items():
+            _vlen_strings(ds).to_zarr(path, group=name, mode="w", consolidated=False)
+        root = zarr.open_group(path, mode="r+")
+        root.attrs.update({**tiles.manifest["attrs"], "atlas_schema": SCHEMA,
+                           **{k: _plain(v) for k, v in attrs.items() if v is not None},
+                           "complete": 1})
+        with warnings.catch_warnings():  # "not part of the v3 spec yet": xarray reads it
+            warnings.simplefilter("ignore")
+            zarr.consolidate_metadata(path)  # one read opens the whole tree
+        for stale in output.parent.glob(f".{output.name}.*.old"):  # a rename cut short
+            shutil.rmtree(stale, ignore_errors=True)
+        aside = output.with_name(f".{output.name}.{os.getpid()}.old")
+        if output.exists():
+            os.rename(output, aside)
+        os.rename(path, output)
+        shutil.rmtree(aside, ignore_errors=True)
+        tiles.remove()
 
+    def attrs(self, path: Path) -> dict:
+        if path.is_dir() and not (path / "zarr.json").exists():
+            raise InputFileError(f"{path}: is a directory, not an atlas file")
+        zarr = _zarr()
+        try:
+            attrs = dict(zarr.open_group(path, mode="r").attrs)
+        except Exception as exc:  # zarr raises several kinds for what is not a store
+            raise InputFileError(f"{path}: not a readable Zarr store "
+                                 f"({exc.__class__.__name__})") from None
+        if attrs.get("atlas_schema") != SCHEMA:
+            raise InputFileError(f"{path}: a Zarr store, but not an atlas")
+        return attrs
 
-def open_tree(path: Path, chunks=None) -> xr.DataTree:
-    return xr.open_datatree(path, engine="zarr", mask_and_scale=False, chunks=chunks)
-
-
-def finalize(tiles, output: Path, groups: dict[str, xr.Dataset],
-             root_vars: xr.Dataset, attrs: dict) -> None:
-    """Complete the partial run's Zarr store and rename it onto ``output`` (an older store
-    there is moved aside first and removed last); then remove the partial folder. Same
-    arguments as :func:`atlas.store.atlasfile.finalize`."""
-    zarr = _zarr()
-    from atlas.store.atlasfile import SCHEMA
-
-    layout = tiles.layout
-    path = tiles.path / DATA
-    for leftover in path.rglob("*.partial"):  # a chunk write cut short (zarr's temp name)
-        leftover.unlink()
-    root_vars.drop_vars([n for n in root_vars.coords if n in layout.coords()]).to_zarr(
-        path, mode="a", consolidated=False)
-    for name, ds in groups.items():
-        _vlen_strings(ds).to_zarr(path, group=name, mode="w", consolidated=False)
-    root = zarr.open_group(path, mode="r+")
-    root.attrs.update({**tiles.manifest["attrs"], "atlas_schema": SCHEMA,
-                       **{k: _plain(v) for k, v in attrs.items() if v is not None},
-                       "complete": 1})
-    with warnings.catch_warnings():  # "not part of the v3 spec yet": xarray reads it
-        warnings.simplefilter("ignore")
-        zarr.consolidate_metadata(path)  # one read opens the whole tree
-    for stale in output.parent.glob(f".{output.name}.*.old"):  # a rename cut short
-        shutil.rmtree(stale, ignore_errors=True)
-    aside = output.with_name(f".{output.name}.{os.getpid()}.old")
-    if output.exists():
-        os.rename(output, aside)
-    os.rename(path, output)
-    shutil.rmtree(aside, ignore_errors=True)
-    tiles.remove()
+    def open(self, path: Path, chunks=None) -> xr.DataTree:
+        return xr.open_datatree(path, engine="zarr", mask_and_scale=False, chunks=chunks)
 
 
 def _vlen_strings(ds: xr.Dataset) -> xr.Dataset:

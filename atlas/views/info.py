@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.layout import at_point, point_group, point_label, points
-from atlas.store import atlasfile as store
+from atlas.store import reader as store
 
 
 def summary_lines(tree: xr.DataTree) -> list[str]:
@@ -28,7 +29,7 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
         lines += ["  " + line for line in _torque_lines(tree, point)]
         sep = point_group(tree, "separatrices", point)
         if sep is not None:
-            lines += ["  " + line for line in _separatrix_lines(sep)]
+            lines += ["  " + line for line in separatrix_lines(sep)]
     unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
     lines.append(f"unresolved {unresolved} orbits")
     if "run_time_s" in ds.attrs:
@@ -104,15 +105,62 @@ def _torque_lines(tree: xr.DataTree, point: dict) -> list[str]:
     return lines
 
 
-def _separatrix_lines(sep: xr.Dataset) -> list[str]:
-    from atlas.boundaries.separatrices import summary
+def separatrix_lines(ds: xr.Dataset) -> list[str]:
+    """One parameter point's ``/separatrices`` node (:mod:`atlas.store.separatrices`) in a
+    few lines: its boundaries and branches, its symmetry check (the point reflection without
+    torque, the 2π shift with), its check against the exact boundaries, its orbits, its
+    crossings of the axis θ0 = 0, its warnings."""
+    from atlas.store.separatrices import branches, max_discrepancy, warnings
 
-    return summary(sep)
+    found = {(n, b) for n, b, *_ in branches(ds)}
+    saddles = sorted({n for n, _ in found})
+    bound = float(ds.attrs["discrepancy_bound"])
+    disc = max_discrepancy(ds)
+    symmetry = float(ds.attrs.get("symmetry_error", math.nan))
+    symmetry_bound = float(ds.attrs.get("symmetry_bound", math.nan))
+    lines = [
+        f"separatrices: {len(saddles)} basin boundaries (saddles n = "
+        f"{', '.join(map(str, saddles)) or '-'}), {len(found)} branches, "
+        f"{ds.sizes.get('point', 0)} points; bisection tol {float(ds.attrs['tol']):.0e}, "
+        f"max spacing {float(ds.attrs['max_spacing']):g}",
+        (f"symmetry: torque breaks the point reflection; the 2 pi shift between copies, "
+         f"located independently: max distance {float(ds.attrs['shift_error']):.1e} over "
+         f"{int(ds.attrs.get('shift_pairs', 0))} pairs"
+         if "shift_error" in ds.attrs else
+         "symmetry: right branch of -pi vs reflected left branch of pi: "
+         + (f"max distance {symmetry:.1e} "
+            f"({'within' if symmetry <= symmetry_bound else 'EXCEEDS'} bound "
+            f"{symmetry_bound:.0e})" if symmetry == symmetry else
+            "not checked (the window needs one of them only)")),
+        f"check vs DOP853 stable manifold: max distance {disc:.1e} "
+        f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e}); "
+        f"polyline error {float(ds.attrs['polyline_error']):.1e}; "
+        f"{int(ds.attrs['n_orbits'])} orbits labelled, {int(ds.attrs['n_unresolved'])} "
+        "uncertified (left out, never counted as either side)",
+    ]
+    inside = ds["crossing_in_window"].values if "crossing_in_window" in ds else None
+    cross = [f"{v:+.10f} ({_basin_name(lo)}|{_basin_name(hi)})"
+             f"{'' if inside is None or inside[i] else '*'}"
+             for i, (v, lo, hi) in enumerate(zip(ds["crossing_theta_dot"].values,
+                                                 ds["k_below"].values, ds["k_above"].values,
+                                                 strict=True))]
+    lines.append("basin boundaries on theta0 = 0: theta_dot0 = "
+                 + (", ".join(cross) if cross else "none") + " rad/s (k below|above; "
+                 "* outside the window)")
+    lines += [f"warning: {w}" for w in warnings(ds)]
+    return lines
+
+
+def _basin_name(k) -> str:
+    """A crossing's basin: its well k, or "run" for the running basin (the fill value)."""
+    from atlas.status import ATTRACTOR_FILL
+
+    return "run" if int(k) == ATTRACTOR_FILL else str(int(k))
 
 
 def info_lines(path: str | Path) -> list[str]:
     """Completeness, then :func:`summary_lines` for a complete file (opened and checked by
-    :func:`atlas.store.atlasfile.open_atlas`), then provenance. A file that fails the check raises
+    :func:`atlas.store.reader.open_atlas`), then provenance. A file that fails the check raises
     :class:`~atlas.errors.InputFileError`."""
     path = Path(path)
     d = store.describe(path)

@@ -2,29 +2,16 @@
 
 The page (no server, no network: every script, style and image is inline) shows the basin map
 of each parameter point as a PNG at the grid's native resolution with its separatrices and
-critical points (and, with a torque τ, the running basin and the running limit cycle). Clicking
-a point integrates that orbit in the browser — the same RK4 step of θ̈ = −ω0² sin θ − 2αθ̇ + τ
-(of the file's method: :mod:`atlas.kernels.rk4` or :mod:`atlas.kernels.trigfree`), the same
-(tilted) energy trap and the same running certificate as atlas's kernels
-(:mod:`atlas.kernels.rk4`, :func:`atlas.labels.labelling.energy_cap`, the barrier of
-:func:`atlas.physics.running.running_barrier` that the sweep built for the file), tested every
-``check_every`` steps — draws its phase curve, animates the pendulum along it, and shows the
-stored label, status, t_trap and boundary distance of the nearest grid point next to the
-orbit's own end state. A parameter atlas gets a slider over its parameter points.
-
-Size: the per-point arrays the readout needs are packed as little-endian typed arrays,
-zlib-compressed and base64-encoded (the browser inflates them with ``DecompressionStream``):
-``attractor`` int16, ``status`` int8, ``t_trap`` as uint32 counts of trap tests (exact; NaN as
-0xFFFFFFFF), ``boundary_distance`` as uint16 log2-quantised at 256 steps per octave (relative
-error ≤ 0.14 %; 0 for 0, 0xFFFF for NaN). A 512 × 512 atlas gives a page of about 1 MB. With a
-torque, each point with a running limit cycle adds its running barrier (rebuilt here from the
-file's ``/limit_cycle``, exactly as the sweep built it: :func:`atlas.commands.orbit.running_barrier_for`)
-with the lower curve g as float64, zlib-compressed (never rounded: the certificate is verified
-for these numbers only; about 40 kB), and the cycle itself, rounded to 1e-4, for the picture.
-
-Safety: every string taken from the file (config name, attributes, file name) travels inside
-one JSON ``<script type="application/json">`` block with ``<``, ``>``, ``&`` and the JavaScript
-line separators escaped as ``\\uXXXX``, and the page writes it with ``textContent`` only.
+critical points (and, with a torque τ, the running basin and the running limit cycle). A click
+integrates that orbit in the browser (``view_assets/view.js``): the RK4 step of θ̈ = −ω0² sin θ
+− 2αθ̇ + τ of the file's method, with the certificate the file's run used, read from the file
+(format 4: the trap's ``trap_energy_cap`` and ``trap_margin``, the running barrier of each
+``/limit_cycle`` node; nothing is rebuilt here), tested every ``check_every`` steps in the
+kernels' order; it draws the phase curve, animates the pendulum, and shows the stored label
+of the nearest grid point next to the orbit's own. A parameter atlas gets a slider. A file of
+format 3 stores no certificate and is refused with one line. How the arrays are packed (about
+1 MB for 512²; the barrier never rounded) and why file strings cannot run as markup:
+``docs/design/views.md``.
 """
 
 from __future__ import annotations
@@ -43,11 +30,20 @@ import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import AtlasError, InputFileError
-from atlas.kernels import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
-from atlas.labels.labelling import CHECK_EVERY, energy_cap, trap_margin
 from atlas.layout import at_point, point_group
 from atlas.layout import points as parameter_points
-from atlas.store.validate import STATUS_MEANINGS, file_method
+from atlas.physics.pendulum import Pendulum, tilt, tilt_versine
+from atlas.status import (
+    NEAR_BOUNDARY,
+    RUNNING,
+    RUNNING_NEAR_BOUNDARY,
+    STATUS_MEANINGS,
+    TRAPPED,
+)
+from atlas.store.reader import open_atlas, require_certificate, stored_certificate
+from atlas.store.separatrices import branches
+from atlas.store.validate import file_method
+from atlas.views.style import RUNNING_COLOR, WELL_COLORS
 
 __all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json",
            "DIST_STEPS"]
@@ -58,11 +54,8 @@ _DIST_OFFSET = 128  # log2 d from -128 to +128 fits uint16 at 256 steps per octa
 _T_NAN = np.iinfo(np.uint32).max
 #: The name of each status code (as the file's CF flag_meanings say).
 STATUS_NAMES = STATUS_MEANINGS
-#: matplotlib's tab10, the colour of well k being TAB10[k mod 10] as in atlas.views.plotting.
-TAB10 = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
-         "#7f7f7f", "#bcbd22", "#17becf"]
-#: The running basin's colour (atlas.views.plotting's RUNNING_COLOR, grey 0.82).
-RUNNING_RGB = (209, 209, 209)
+#: The running basin's colour as RGB (:data:`atlas.views.style.RUNNING_COLOR`, a grey).
+RUNNING_RGB = (round(255 * float(RUNNING_COLOR)),) * 3
 
 
 def pack_distance(d: np.ndarray) -> np.ndarray:
@@ -97,14 +90,14 @@ def _uniform(values: np.ndarray, name: str, path) -> list[float]:
 
 def _map_png(attractor: np.ndarray, status: np.ndarray) -> str:
     """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward: well k
-    in TAB10[k mod 10], running in grey, no certified label white."""
+    in WELL_COLORS[k mod 10], running in grey, no certified label white."""
     from PIL import Image
 
     labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
     index = np.where(labelled, np.mod(attractor.astype(np.int64), 10), 10).astype(np.uint8)
     index[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = 11
     image = Image.fromarray(index[::-1], mode="P")
-    palette = ([int(c[i:i + 2], 16) for c in TAB10 for i in (1, 3, 5)] + [255, 255, 255]
+    palette = ([int(c[i:i + 2], 16) for c in WELL_COLORS for i in (1, 3, 5)] + [255, 255, 255]
                + list(RUNNING_RGB))
     image.putpalette(palette)
     buffer = io.BytesIO()
@@ -114,8 +107,6 @@ def _map_png(attractor: np.ndarray, status: np.ndarray) -> str:
 
 def _curves(tree: xr.DataTree, point: dict[str, float]) -> list[list[list[float]]]:
     """Separatrix polylines of one parameter point as [[θ…], [θ̇…]], rounded to 1e-4."""
-    from atlas.boundaries.separatrices import branches
-
     sep = point_group(tree, "separatrices", point)
     if sep is None or sep.sizes.get("point", 0) == 0:
         return []
@@ -135,44 +126,38 @@ def _critical(tree: xr.DataTree, point: dict[str, float]) -> dict[str, list[floa
 CYCLE_DRAWN = 256
 
 
-def _running(tree: xr.DataTree, point: dict[str, float], dt: float) -> dict:
+def _running(tree: xr.DataTree, point: dict[str, float], barrier) -> dict:
     """The running barrier and the limit cycle of one parameter point for the page (None
-    each where the point has no running cycle): the barrier the sweep gave its kernels,
-    rebuilt from the stored cycle, g as a float64 blob; the cycle (about ``CYCLE_DRAWN``
-    segments, rounded to 1e-4) to draw."""
-    from atlas.commands.orbit import running_barrier_for
-
-    torque = point.get("torque", 0.0)
-    stored = point_group(tree, "limit_cycle", point) if torque else None
-    if stored is None:
+    each where the point has no running cycle): the barrier its labels were certified with,
+    as stored (``barrier``, :class:`atlas.store.reader.StoredBarrier`), g as a float64 blob;
+    the stored cycle (about ``CYCLE_DRAWN`` segments, rounded to 1e-4) to draw."""
+    cycle = point_group(tree, "limit_cycle", point) if point.get("torque", 0.0) else None
+    if cycle is None or barrier is None:
         return {"barrier": None, "cycle": None}
-    barrier, cycle = running_barrier_for(point["alpha"], point["omega0"], torque, dt, stored)
-    n = cycle.theta.size
+    theta, theta_dot = cycle["theta"].values, cycle["theta_dot"].values
+    n = theta.size
     drawn = np.unique(np.r_[0:n:max(1, (n - 1) // CYCLE_DRAWN), n - 1])  # both ends: one turn
     return {
         "barrier": {"theta0": barrier.theta0, "top": barrier.top,
                     "direction": barrier.direction, "n": int(barrier.g.size),
-                    "g": _blob(barrier.g.astype("<f8"))},
-        "cycle": {"theta": np.round(cycle.theta[drawn], 4).tolist(),
-                  "theta_dot": np.round(cycle.theta_dot[drawn], 4).tolist(),
-                  "period": float(cycle.period)},
+                    "g": _blob(np.asarray(barrier.g).astype("<f8"))},
+        "cycle": {"theta": np.round(theta[drawn], 4).tolist(),
+                  "theta_dot": np.round(theta_dot[drawn], 4).tolist(),
+                  "period": float(cycle.attrs["period"])},
     }
 
 
-def _tilt(point: dict[str, float], dt: float) -> dict:
-    """What the page's trap needs for the point's torque: the kernels' cap
-    (:func:`atlas.labels.labelling.energy_cap`; None when no well can trap, |τ| ≥ ω0²), θ* and
-    1 − cos θ* as :func:`atlas.kernels.rk4.torque_model` computes them, and the lower
-    saddle's energy above the rest state (the pictures follow a trapped orbit until it has
-    nearly settled, E_k below 1e-3 of it)."""
-    from atlas.physics.pendulum import Pendulum
-
+def _tilt(point: dict[str, float], cap: float) -> dict:
+    """What the page's trap needs for the point's torque: the stored cap (None where no well
+    can trap, |τ| ≥ ω0²), θ* (:func:`atlas.physics.pendulum.tilt`, as the kernels' torque
+    model) and 1 − cos θ* as the kernels compute it, and the lower saddle's energy above the
+    rest state (the pictures follow a trapped orbit until it has nearly settled, E_k below
+    1e-3 of it)."""
     alpha, omega0, torque = point["alpha"], point["omega0"], point.get("torque", 0.0)
-    cap = energy_cap(dt, alpha, omega0, torque)
-    shift = math.asin(min(1.0, max(-1.0, torque / (omega0 * omega0)))) if torque else 0.0
+    shift = tilt(omega0, torque)
     pendulum = Pendulum(alpha, omega0, torque)
     return {"torque": torque, "cap": cap if math.isfinite(cap) else None, "shift": shift,
-            "vers": 2.0 * math.sin(0.5 * shift) ** 2,
+            "vers": tilt_versine(shift),
             "saddle_energy": pendulum.saddle_energy if pendulum.has_rest_states else None}
 
 
@@ -191,7 +176,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
     """Everything the page shows, as JSON-ready data."""
     ds = tree.to_dataset(inherit=False)
     dt, t_max = float(ds.attrs["dt"]), float(ds.attrs["t_max"])
-    check_every = int(ds.attrs.get("check_every", CHECK_EVERY))
+    check_every = int(ds.attrs["check_every"])
     points = []
     for params in parameter_points(ds):
         point = at_point(ds, params)
@@ -202,16 +187,18 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         n_check = np.round(t_trap / (dt * check_every))
         n_check = np.where(np.isfinite(n_check), n_check, _T_NAN).astype("<u4")
         d_cert = float(point["d_cert"]) if "d_cert" in point else math.nan
+        certificate = stored_certificate(tree, params)
         distance = (point["boundary_distance"].values if "boundary_distance" in point
                     else np.full(attractor.shape, np.nan))
         points.append({
-            "alpha": alpha, "omega0": omega0, "margin": trap_margin(dt, alpha, omega0),
+            "alpha": alpha, "omega0": omega0, "margin": float(point["trap_margin"]),
             "d_cert": d_cert if math.isfinite(d_cert) else None,
             "png": _map_png(attractor, status),
             "attractor": _blob(attractor), "status": _blob(status),
             "t_trap": _blob(n_check), "distance": _blob(pack_distance(distance)),
             "curves": _curves(tree, params), **_critical(tree, params),
-            **_tilt(params, dt), **_running(tree, params, dt),
+            **_tilt(params, certificate.trap_energy_cap),
+            **_running(tree, params, certificate.barrier),
         })
     return {
         "name": _name(ds), "file": Path(path).name, "title": _text(ds.attrs.get("title", "")),
@@ -223,7 +210,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
         "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
         "status_names": {str(k): v for k, v in STATUS_NAMES.items()},
-        "colors": TAB10, "points": points,
+        "colors": list(WELL_COLORS), "points": points,
     }
 
 
@@ -250,9 +237,8 @@ def build_page(tree: xr.DataTree, path: Path) -> str:
 
 def write_view(path: str | Path, output: str | Path | None = None) -> Path:
     """Write the page of the atlas file ``path`` to ``output`` (default: next to it, .html);
-    returns the page's path. Bad files raise :class:`InputFileError`."""
-    from atlas.store.atlasfile import open_atlas
-
+    returns the page's path. Bad files, and files of format 3 (which do not store the
+    certificate the page integrates with), raise :class:`InputFileError`."""
     path = Path(path)
     output = Path(output) if output is not None else path.with_suffix(".html")
     if output.is_dir():
@@ -261,6 +247,7 @@ def write_view(path: str | Path, output: str | Path | None = None) -> Path:
         raise AtlasError(f"{output}: the output folder {output.parent} is not a directory")
     tree = open_atlas(path)
     try:
+        require_certificate(tree, path)
         for name in ("attractor", "status", "t_trap"):
             if name not in tree.to_dataset(inherit=False):
                 raise InputFileError(f"{path}: no {name} variable in this atlas")

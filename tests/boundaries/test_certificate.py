@@ -1,7 +1,9 @@
-"""Labels certified for the exact equation, and the grid fractions' error (atlas.boundaries.certificate).
+"""Labels certified for the exact equation, and the grid fractions' error
+(atlas.boundaries.certificate).
 
 References: scipy's DOP853 at rtol 1e-12 labelling orbits of the exact equation; the exact
-areas of atlas.boundaries.manifold (themselves checked in tests/boundaries/test_manifold.py); the cell geometry.
+areas of atlas.boundaries.manifold (themselves checked in tests/boundaries/test_manifold.py);
+the cell geometry.
 """
 
 from __future__ import annotations
@@ -13,8 +15,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import atlas
-from atlas.boundaries import separatrices
 from atlas.boundaries.certificate import SAFETY, Certifier, add_tallies, cert_distance, labelled
+from atlas.boundaries.trace import trace
 from atlas.kernels import NEAR_BOUNDARY, TRAPPED
 from atlas.physics.pendulum import Pendulum
 
@@ -44,7 +46,7 @@ def exact_label(p: Pendulum, theta0: float, theta_dot0: float) -> int | None:
 def traced(request):
     """(pendulum, its separatrices over the default window, a Certifier with their shift)."""
     p = Pendulum(*request.param)
-    sep = separatrices.trace(p, *WINDOW)
+    sep = trace(p, *WINDOW)
     theta0, theta_dot0 = np.linspace(*WINDOW[0], 64), np.linspace(*WINDOW[1], 48)
     cert = Certifier(p, theta0, theta_dot0, float(sep.attrs["discrepancy"]),
                      float(sep.attrs["tol"]))
@@ -95,7 +97,7 @@ def test_certified_labels_are_the_exact_equations(traced):
 @pytest.mark.slow
 def test_grid_error_bound_holds_and_shrinks_at_first_order():
     p = Pendulum(0.1, 1.0)
-    sep = separatrices.trace(p, *WINDOW)
+    sep = trace(p, *WINDOW)
     errors, bounds = [], []
     for num in (64, 128, 256):
         theta0, theta_dot0 = np.linspace(*WINDOW[0], num), np.linspace(*WINDOW[1], num)
@@ -158,7 +160,7 @@ def test_distances_are_those_of_one_index_over_everything(window):
     same distances and saddles as one index whose box holds every point's nearest boundary.
     Inside a basin every boundary lies beyond the first margin, so the second search must
     find them."""
-    from atlas.boundaries.certificate import _FIRST_MARGIN
+    from atlas.boundaries.exact import _FIRST_MARGIN
     from atlas.boundaries.manifold import BoundaryIndex, StableManifold
 
     p = Pendulum(0.1, 1.0)

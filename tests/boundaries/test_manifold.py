@@ -33,7 +33,8 @@ CASES = {
 def branch_by_dop853(p: Pendulum, n: int, side: str, speed: float):
     """One branch of the stable manifold of the saddle (nπ, 0), integrated on its own in
     reversed time from 1e-9 along the eigenvector until |θ̇| > speed + 1: (samples (2, M),
-    their times, scipy's own dense output) — independent of atlas.boundaries.manifold: no symmetry."""
+    their times, scipy's own dense output) — independent of atlas.boundaries.manifold: no
+    symmetry."""
     u2 = p.alpha + math.hypot(p.alpha, p.omega0)
     e = np.array([1.0, -u2]) / math.hypot(1.0, u2)
     sign = -1.0 if side == "left" else 1.0

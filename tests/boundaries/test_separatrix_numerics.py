@@ -9,7 +9,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
 from atlas.boundaries.manifold import StableManifold
-from atlas.boundaries.separatrices import _not_a_knot_spline
+from atlas.boundaries.predictor import not_a_knot_spline
 from atlas.physics.pendulum import Pendulum
 
 
@@ -19,7 +19,7 @@ def test_not_a_knot_spline_is_scipys_cubic_spline(n):
     x = np.sort(rng.uniform(0.0, 10.0, n)) + np.arange(n) * 0.05  # distinct knots
     y = np.sin(x) + 0.1 * rng.normal(size=n)
     at = np.linspace(x[0], x[-1], 777)
-    np.testing.assert_allclose(_not_a_knot_spline(x, y, at), CubicSpline(x, y)(at),
+    np.testing.assert_allclose(not_a_knot_spline(x, y, at), CubicSpline(x, y)(at),
                                rtol=0, atol=1e-12)
 
 
@@ -28,7 +28,7 @@ def test_not_a_knot_spline_reproduces_cubics():
     x = np.array([0.0, 0.3, 1.1, 1.5, 2.6, 3.0])
     cubic = np.poly1d([0.7, -1.2, 0.4, 2.0])
     at = np.linspace(0.0, 3.0, 101)
-    np.testing.assert_allclose(_not_a_knot_spline(x, cubic(x), at), cubic(at), atol=1e-13)
+    np.testing.assert_allclose(not_a_knot_spline(x, cubic(x), at), cubic(at), atol=1e-13)
 
 
 def test_speed_crossing_matches_brent():
@@ -45,7 +45,7 @@ def test_boundary_index_saddles_within_is_a_ball_query():
     """The bucket search for the saddles near points equals a k-d tree's ball query."""
     from scipy.spatial import cKDTree
 
-    from atlas.boundaries.certificate import exact_boundaries
+    from atlas.boundaries.exact import exact_boundaries
     from atlas.boundaries.manifold import SAMPLE_SPACING
 
     ex = exact_boundaries(Pendulum(alpha=0.1, omega0=1.0), ((-3 * math.pi, 3 * math.pi),
@@ -86,12 +86,12 @@ def test_tilted_saddles_within_is_a_ball_query():
     it) give what a k-d tree's ball query over every vertex gives."""
     from scipy.spatial import cKDTree
 
-    from atlas.boundaries.certificate import exact_boundaries
+    from atlas.boundaries.exact import exact_boundaries
     from atlas.boundaries.tilted import MAX_SEGMENT
 
     window = ((-5 * math.pi / 6, 7 * math.pi / 6), (-10.0, 10.0))
     ex = exact_boundaries(Pendulum(alpha=0.05, omega0=1.0, torque=0.5), window)
-    curves = ex.exact.curves(clip=False)
+    curves = ex.tilted.curves(clip=False)
     xy = np.concatenate([np.column_stack([t, v]) for _, _, t, v in curves])
     n = np.concatenate([np.full(t.size, 2 * j + 1) for j, _, t, _ in curves])
     tree = cKDTree(xy)

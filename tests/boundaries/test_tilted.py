@@ -1,5 +1,5 @@
-"""The exact basin boundaries of the pendulum with torque (atlas.boundaries.tilted) against independent
-references.
+"""The exact basin boundaries of the pendulum with torque (atlas.boundaries.tilted) against
+independent references.
 
 References: scipy's DOP853 on θ̈ = τ − ω0² sin θ − 2αθ̇ in the actual coordinates (forward
 time; orbits classified by the energy trap of a well or by running); the running limit cycle
@@ -19,7 +19,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import atlas
-from atlas.boundaries.tilted import RUNNING_SIDE, TiltedBoundaries
+from atlas.boundaries.exact import RUNNING_SIDE
+from atlas.boundaries.tilted import TiltedBoundaries
 from atlas.physics.pendulum import Pendulum
 from atlas.physics.running import homoclinic_threshold, limit_cycle, running_barrier
 

@@ -156,7 +156,7 @@ def test_plot_and_open_refuse_a_partial_file(small_config, tmp_path):
     import atlas
     from atlas.pipeline.identity import run_identity
     from atlas.pipeline.sweep import layout_of
-    from atlas.store import atlasfile as store
+    from atlas.store import partial as store
     from atlas.store.partial import TileStore
 
     cfg = atlas.load_config(small_config())

@@ -1,4 +1,5 @@
-"""The essay's Figures 1–12 (atlas.commands.figures): each draws the right curves from the right maths."""
+"""The essay's Figures 1–12 (atlas.commands.figures): each draws the right curves from the
+right maths."""
 
 from __future__ import annotations
 

@@ -19,7 +19,7 @@ import xarray as xr
 import atlas
 from atlas import errors
 from atlas.cli import main
-from atlas.store.validate import FORMAT_VERSION
+from atlas.store.schema import FORMAT_VERSION
 
 REPO = Path(__file__).resolve().parents[2]
 XSS = "</script><script>alert(1)</script>"

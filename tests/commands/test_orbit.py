@@ -8,8 +8,8 @@ import pytest
 
 import atlas
 from atlas.cli import main
-from atlas.commands.orbit import integrate
-from atlas.labels.labelling import energy_cap
+from atlas.commands.orbit_integrate import integrate
+from atlas.labels.trap import energy_cap
 from tests.helpers import SWING
 
 
@@ -122,6 +122,7 @@ def test_orbit_picks_a_parameter_point(atlas_file, tmp_path, capsys):
     (["orbit", "{sweep}", "1", "2"], "a parameter atlas of 2 points"),
     (["orbit", "{sweep}", "1", "2", "--alpha", "0.3"], "no single parameter point"),
     (["orbit", "{file}", "1", "2", "--dt", "0.02"], "was computed with dt = 0.01"),
+    (["orbit", "--alpha", "0.05", "--omega0", "1", "--torque", "1", "0", "1"], "saddle-node"),
 ])
 def test_bad_input_is_one_line_and_exit_2(atlas_file, capsys, tmp_path, args, fragment):
     path, sweep = atlas_file
@@ -210,6 +211,43 @@ def test_orbit_on_a_torque_file(swing_file, tmp_path, capsys):
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_orbit_reads_the_certificate_its_file_stores(swing_file, tmp_path):
+    """atlas orbit takes the running barrier, the trap's cap and margin from the file, as the
+    run stored them (format 4), and rebuilds nothing: with them changed in a copy, the orbit
+    is certified with the changed numbers, and the text says whose barrier it is."""
+    from atlas.commands.orbit import report
+    from tests.views.test_view import rewritten, tamper
+
+    path = rewritten(swing_file, tmp_path / "tampered.h5", tamper)
+    tree = atlas.open(path)
+    node, root = tree["limit_cycle"].to_dataset(), tree.to_dataset(inherit=False)
+    status = root["status"].values
+    j, i = np.argwhere(status == 4)[np.sum(status == 4) // 2]
+    orbit, lines, context = report(float(root["theta0"][i]), float(root["theta_dot0"][j]),
+                                   file=path)
+    context["tree"].close()
+    np.testing.assert_array_equal(orbit.barrier.g, node["barrier_g"].values)
+    assert orbit.barrier.top == node.attrs["barrier_top"]
+    assert orbit.cap == float(root["trap_energy_cap"])
+    assert orbit.margin == float(root["trap_margin"])
+    assert orbit.status == 4 and any("the run's, as its file stores it" in line for line in lines)
+    tree.close()
+
+
+def test_orbit_refuses_a_format_3_file_with_one_line(swing_file, tmp_path, capsys):
+    """A file of format 3 stores no certificate: atlas orbit FILE refuses it with one line
+    saying how to upgrade it (exit 2, no figure); without a file the barrier is built."""
+    from tests.views.test_view import as_format_3, rewritten
+
+    path = rewritten(swing_file, tmp_path / "old.h5", as_format_3)
+    out = tmp_path / "o.png"
+    assert main(["orbit", str(path), "0", "1", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("atlas: error: ") and "\n" not in err
+    assert "written in format 3, which does not store the certificate" in err
+    assert "atlas run CONFIG --restart" in err and not out.exists()
+
+
 @pytest.mark.slow
 def test_orbit_with_torque_without_a_file(tmp_path, capsys):
     out = tmp_path / "free.png"
@@ -219,6 +257,8 @@ def test_orbit_with_torque_without_a_file(tmp_path, capsys):
     assert "label        running" in text and "(direction -1)" in text and out.exists()
     assert main(["orbit", "--alpha", "0.05", "--omega0", "1", "--torque", "1.5", "-o",
                  str(out), "--", "0", "0"]) == 0  # |τ| > ω0²: no well, every orbit runs
-    assert "label        running" in capsys.readouterr().out
+    text = capsys.readouterr().out
+    assert "label        running" in text
+    assert "boundary distance inf" in text and "no basin boundary" in text
     assert main(["orbit", "--alpha", "0.05", "--omega0", "1", "--torque", "abc", "0", "1"]) == 2
     assert "--torque: cannot read 'abc'" in capsys.readouterr().err

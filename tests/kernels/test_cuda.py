@@ -37,7 +37,7 @@ from atlas.kernels import NONFINITE, TRAPPED, UNRESOLVED
 from atlas.kernels.cuda import VARIANTS
 from atlas.kernels.cuda_host import label_cuda, propagate_cuda
 from atlas.kernels.rk4 import label_straightforward, propagate_straightforward
-from atlas.labels.labelling import CHECK_EVERY, energy_cap, n_checks_for
+from atlas.labels.trap import CHECK_EVERY, energy_cap, n_checks_for
 
 alpha, omega0, dt, t_max = 0.1, 1.0, 0.01, 20.0
 th, v = np.meshgrid(np.linspace(-3 * np.pi, 3 * np.pi, 12), np.linspace(-4.0, 4.0, 12))

@@ -9,9 +9,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from atlas.boundaries import manifold
-from atlas.boundaries.manifold import START_DISTANCE, StableManifold
-from atlas.kernels.dop853 import EVENT, FULL, stable_manifold
-from atlas.physics.pendulum import Pendulum
+from atlas.boundaries.manifold import StableManifold
+from atlas.kernels import dop853
+from atlas.kernels.dop853 import EVENT, FULL, TABLEAU, Tableau, stable_manifold
+from atlas.physics.pendulum import START_DISTANCE, Pendulum
 
 RTOL = 1e-13
 
@@ -126,3 +127,40 @@ def test_compiled_dense_output_is_scipys_polynomial():
                                rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(beyond[:, 1], sol.sol.interpolants[-1](ts[-1] + 1e-3),
                                rtol=1e-12, atol=1e-14)
+
+
+def test_the_tableau_is_consistent_to_rounding():
+    """The DOP853 tableau checks itself as diffrax's ButcherTableau does: every row sum of A
+    is its node c (stage s is evaluated at t + c_s·h, the dense output's extra stages at
+    0.1, 0.2, 7/9 included), the weights B sum to 1 and the error weights E3, E5 to 0 —
+    to rounding; and the compiled step uses those very arrays."""
+    t = TABLEAU
+    eps = np.finfo(float).eps
+    assert t.a.shape == (16, 16) and t.c.shape == (16,) and np.all(np.triu(t.a) == 0.0)
+    for s in range(16):
+        assert abs(t.a[s].sum() - t.c[s]) <= 2 * eps * max(np.abs(t.a[s]).sum(), 1.0), s
+    np.testing.assert_array_equal(t.c[13:], [0.1, 0.2, 7 / 9])
+    assert abs(t.b.sum() - 1.0) <= 4 * eps * np.abs(t.b).sum()
+    for e in (t.e3, t.e5):
+        assert abs(e.sum()) <= 4 * eps * np.abs(e).sum()
+    assert max(t.defects().values()) < 1.0
+    assert (dop853._A is t.a and dop853._B is t.b and dop853._E3 is t.e3
+            and dop853._E5 is t.e5 and dop853._D is t.d)
+
+
+@pytest.mark.parametrize("field", ["a", "c", "b", "e3", "e5"])
+def test_a_mistyped_coefficient_is_refused(field):
+    """One coefficient off by 1e-10 of itself (a wrong 11th significant digit) is refused
+    when the tableau is built, for every nonzero coefficient of A, C, B, E3 and E5: even the
+    smallest against its row (A[15, 12] ≈ −0.0014 among terms up to 9) moves the row sum by
+    21 ulps of the row's magnitude, five times the tolerance."""
+    import dataclasses
+
+    values = getattr(TABLEAU, field)
+    for index in zip(*np.nonzero(values)):
+        typo = values.copy()
+        typo[index] *= 1.0 + 1e-10
+        with pytest.raises(ValueError, match="inconsistent Runge-Kutta tableau"):
+            dataclasses.replace(TABLEAU, **{field: typo})
+    assert isinstance(dataclasses.replace(TABLEAU), Tableau)  # the true one is accepted
+

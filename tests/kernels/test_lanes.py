@@ -22,7 +22,7 @@ from atlas.kernels.lanes import (
     propagate_trigfree,
 )
 from atlas.kernels.rk4 import label_straightforward, propagate_straightforward
-from atlas.labels.labelling import energy_cap, n_checks_for
+from atlas.labels.trap import energy_cap, n_checks_for
 from tests.helpers import boundary_adjacent
 
 ALPHA, OMEGA0, DT, T_MAX = 0.1, 1.0, 0.01, 200.0

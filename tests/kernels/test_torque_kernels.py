@@ -18,14 +18,10 @@ from atlas.kernels import NONFINITE, RUNNING, TRAPPED, UNRESOLVED
 from atlas.kernels.lanes import FULL, SCALAR, label_lanes, label_trigfree
 from atlas.kernels.rk4 import label_straightforward, record_torque
 from atlas.kernels.trigfree import label_trigfree_straightforward, record_trigfree_torque
-from atlas.labels.labelling import (
-    ATTRACTOR_FILL,
-    RunningBarrier,
-    energy_cap,
-    n_checks_for,
-    trap_margin,
-)
+from atlas.labels.trap import energy_cap, n_checks_for, trap_margin
+from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import Pendulum
+from atlas.status import ATTRACTOR_FILL
 from tests.helpers import boundary_adjacent
 
 TWO_PI = 2 * math.pi
@@ -424,7 +420,7 @@ if not ok:
     print(json.dumps({"skip": why})); sys.exit()
 from atlas.kernels.cuda_host import label_cuda
 from atlas.kernels.rk4 import label_straightforward
-from atlas.labels.labelling import energy_cap, n_checks_for
+from atlas.labels.trap import energy_cap, n_checks_for
 from tests.kernels.test_torque_kernels import CASES, make_barrier
 
 alpha, omega0, tau, start, eps = CASES["bstab"]

@@ -3,7 +3,8 @@ certified labels are the exact equation's, its kernels against its plain form, h
 selects it, and a whole atlas run, orbit and separatrices with it.
 
 Order 4 is fitted in tests/kernels/test_rk4.py, the energy trap's margin measured for it in
-tests/labels/test_labels.py, the lane machinery's thread independence in tests/kernels/test_lanes.py.
+tests/labels/test_labels.py, the lane machinery's thread independence in
+tests/kernels/test_lanes.py.
 """
 
 from __future__ import annotations
@@ -14,12 +15,14 @@ import numpy as np
 import pytest
 
 import atlas
-from atlas.boundaries import separatrices
 from atlas.boundaries.certificate import Certifier, labelled
+from atlas.boundaries.trace import trace
+from atlas.defaults import METHOD as DEFAULT_METHOD
 from atlas.kernels import TRAPPED
 from atlas.kernels.lanes import label_trigfree
 from atlas.kernels.trigfree import label_trigfree_straightforward
-from atlas.labels.labelling import DEFAULT_METHOD, energy_cap, n_checks_for, resolve_method
+from atlas.labels.backends import resolve_method
+from atlas.labels.trap import energy_cap, n_checks_for
 from atlas.physics.pendulum import Pendulum
 from tests.boundaries.test_certificate import exact_label as _exact_after
 from tests.helpers import boundary_adjacent
@@ -29,8 +32,8 @@ WINDOW = ((-3 * PI, 3 * PI), (-4.0, 4.0))
 
 
 def exact_label(p: Pendulum, theta0: float, theta_dot0: float) -> int | None:
-    """DOP853's well (tests/boundaries/test_certificate.py), and the nearest well for a start already
-    deep in one (E_k < ω0², where that reference's stopping event cannot fire)."""
+    """DOP853's well (tests/boundaries/test_certificate.py), and the nearest well for a start
+    already deep in one (E_k < ω0², where that reference's stopping event cannot fire)."""
     k = round(theta0 / (2 * PI))
     if p.energy(theta0, theta_dot0, k) < p.omega0**2:
         return k
@@ -59,7 +62,7 @@ def test_certified_trigfree_labels_are_the_exact_equations(alpha):
     the same method. Every label certified (boundary distance > d_cert, on the exact side)
     must be DOP853's."""
     p = Pendulum(alpha, 1.0)
-    sep = separatrices.trace(p, *WINDOW, method="rk4-trigfree")
+    sep = trace(p, *WINDOW, method="rk4-trigfree")
     cert = Certifier(p, np.linspace(*WINDOW[0], 64), np.linspace(*WINDOW[1], 48),
                      float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
     rng = np.random.default_rng(5)
@@ -170,8 +173,8 @@ def test_an_atlas_run_with_the_trigfree_method(tmp_path):
     sep = tree["separatrices"].to_dataset(inherit=False)
     p = Pendulum(0.1, 1.0)
     window = ((-3 * PI, 3 * PI), (-4.0, 4.0))
-    mine = separatrices.trace(p, *window, method="rk4-trigfree")
-    classical = separatrices.trace(p, *window)
+    mine = trace(p, *window, method="rk4-trigfree")
+    classical = trace(p, *window)
     assert float(sep.attrs["discrepancy"]) == float(mine.attrs["discrepancy"])
     assert float(mine.attrs["discrepancy"]) > 2 * float(classical.attrs["discrepancy"])
     assert "method rk4-trigfree" in sep.attrs["method"]
@@ -179,9 +182,10 @@ def test_an_atlas_run_with_the_trigfree_method(tmp_path):
 
 
 def test_orbit_integrates_with_the_trigfree_method():
-    """atlas.commands.orbit.integrate(method="rk4-trigfree") steps as the method's straightforward
-    kernel: the same status and well at random points, t_trap too but at rounding ties."""
-    from atlas.commands.orbit import integrate
+    """atlas.commands.orbit_integrate.integrate(method="rk4-trigfree") steps as the method's
+    straightforward kernel: the same status and well at random points, t_trap too but at
+    rounding ties."""
+    from atlas.commands.orbit_integrate import integrate
 
     rng = np.random.default_rng(8)
     th, v = rng.uniform(-9, 9, 80), rng.uniform(-4, 4, 80)

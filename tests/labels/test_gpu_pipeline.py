@@ -18,8 +18,8 @@ import atlas
 from atlas.errors import StorageError
 from atlas.kernels.cuda_host import CHUNK_CAP, MEMORY_FRACTION, WAVES, chunk_orbits
 from atlas.pipeline import schedule, sweep
-from atlas.store.atlasfile import describe
 from atlas.store.partial import TileStore
+from atlas.store.reader import describe
 from tests.helpers import write_config
 from tests.kernels.test_cuda import _child
 
@@ -60,7 +60,7 @@ assert cuda_status() == (True, "CUDA simulator"), cuda_status()
 from numba import cuda
 from atlas.kernels.cuda_host import label_cuda, propagate_cuda
 from atlas.kernels.rk4 import label_straightforward, propagate_straightforward
-from atlas.labels.labelling import CHECK_EVERY, energy_cap, n_checks_for
+from atlas.labels.trap import CHECK_EVERY, energy_cap, n_checks_for
 
 made = {"pinned_array": 0, "device_array": 0, "stream": 0}
 for name in made:

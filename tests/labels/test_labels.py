@@ -8,8 +8,9 @@ import pytest
 import atlas
 from atlas.kernels.rk4 import propagate_straightforward
 from atlas.kernels.trigfree import record_trigfree
-from atlas.labels.labelling import ATTRACTOR_FILL, trap_margin
+from atlas.labels.trap import trap_margin
 from atlas.physics.pendulum import Pendulum
+from atlas.status import ATTRACTOR_FILL
 from tests.helpers import boundary_adjacent, dop853_attractor
 
 ALPHA, OMEGA0 = 0.1, 1.0

@@ -1,4 +1,5 @@
-"""The running limit cycle and its certificate (atlas.physics.running) against independent references.
+"""The running limit cycle and its certificate (atlas.physics.running) against independent
+references.
 
 References: scipy's ``solve_ivp`` DOP853 on θ̈ = τ − ω0² sin θ − 2αθ̇ in the actual
 coordinates (no mirroring, no Poincaré section); quadrature of dθ/θ̇ along the returned curve;
@@ -17,7 +18,7 @@ import pytest
 from scipy.integrate import simpson, solve_ivp
 
 from atlas.defaults import DT
-from atlas.labels.labelling import RunningBarrier
+from atlas.physics.barrier import RunningBarrier
 from atlas.physics.running import (
     RunningCertificate,
     check_barrier,

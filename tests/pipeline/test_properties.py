@@ -11,8 +11,9 @@ from hypothesis import strategies as st
 
 import atlas
 from atlas.kernels.rk4 import propagate_straightforward
-from atlas.labels.labelling import ATTRACTOR_FILL, trap_margin
+from atlas.labels.trap import trap_margin
 from atlas.physics.pendulum import Pendulum
+from atlas.status import ATTRACTOR_FILL
 
 SETTINGS = settings(max_examples=25, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow])

@@ -57,7 +57,7 @@ def test_kill_9_then_resume_gives_identical_arrays(tmp_path):
     proc.wait()
     assert proc.returncode == -signal.SIGKILL
     assert not out.exists() and partial.exists()
-    from atlas.store.atlasfile import describe
+    from atlas.store.reader import describe
 
     done_at_kill = describe(partial)["tiles_done"]
     assert 5 <= done_at_kill < 48
@@ -65,6 +65,7 @@ def test_kill_9_then_resume_gives_identical_arrays(tmp_path):
     resumed = run_cli("run", cfg, "--resume", "--quiet", "-v")
     assert resumed.returncode == 0, resumed.stderr
     assert "resuming" in resumed.stderr and "tiles already done" in resumed.stderr
+    assert "--resume is deprecated and does nothing" in resumed.stderr
     assert out.exists() and not partial.exists()
     # the clean result, computed here
     atlas.run(atlas.load_config(cfg, output=tmp_path / "fresh.h5"), quiet=True)
@@ -229,7 +230,7 @@ def test_large_outputs_open_lazily(small_atlas_file):
 
 
 def test_parameter_sweep_stores_each_points_separatrices(tmp_path):
-    from atlas.boundaries.separatrices import trace
+    from atlas.boundaries.trace import trace
     from atlas.layout import point_group
 
     cfg = write_config(tmp_path / "s.yaml", f"""\

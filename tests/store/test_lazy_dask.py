@@ -19,7 +19,7 @@ def test_xarray_work_without_dask_arrays_does_not_import_dask_array(tmp_path):
     out = _run(f"""
         import sys
         import numpy as np
-        import atlas.store.atlasfile  # installs the deferral
+        import atlas.store.reader  # installs the deferral
         import xarray as xr
         ds = xr.Dataset({{"a": (("y", "x"), np.arange(6.0).reshape(2, 3))}})
         ds.to_netcdf("{tmp_path / 'a.h5'}", engine="h5netcdf")
@@ -40,7 +40,7 @@ def test_datasets_with_index_coordinates_do_not_import_dask(tmp_path):
     out = _run(f"""
         import sys
         import numpy as np
-        import atlas.store.atlasfile  # installs the deferral
+        import atlas.store.reader  # installs the deferral
         import xarray as xr
         ds = xr.Dataset({{"a": ("k", np.arange(3.0))}}, coords={{"k": np.arange(3)}})
         back = xr.open_dataset("{path}", engine="h5netcdf").load()
@@ -64,7 +64,7 @@ def test_without_the_deferral_xarray_imports_dask_array():
 def test_dask_arrays_are_recognised_once_dask_is_imported(tmp_path):
     out = _run(f"""
         import numpy as np
-        import atlas.store.atlasfile
+        import atlas.store.reader
         from atlas import lazy_dask
         import xarray as xr
         assert lazy_dask.install()  # idempotent: still deferred

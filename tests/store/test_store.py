@@ -9,7 +9,7 @@ import xarray as xr
 
 import atlas
 from atlas.kernels import NEAR_BOUNDARY
-from atlas.labels.labelling import ATTRACTOR_FILL
+from atlas.status import ATTRACTOR_FILL
 from tests.helpers import crash_on_tile, lock_is_free, write_config
 
 
@@ -49,7 +49,7 @@ def test_root_schema_with_plain_xarray(written):
     assert all(ds[n].dims == () for n in ("alpha", "omega0", "torque"))
     assert float(ds["d_cert"]["alpha"]) == 0.1 and float(ds["attractor"]["torque"]) == 0.0
     attrs = ds.attrs
-    assert "alpha" not in attrs and attrs["format_version"] == 3
+    assert "alpha" not in attrs and attrs["format_version"] == 4
     assert (attrs["dt"], attrs["t_max"]) == (0.01, 200.0)
     assert attrs["method"] == "rk4" and attrs["atlas_version"] == atlas.__version__
     datetime.fromisoformat(attrs["created"])
@@ -127,7 +127,7 @@ def test_failed_run_leaves_no_file_at_the_output(written, tmp_path, monkeypatch)
     partial = out.with_name(out.name + ".partial")
     assert partial.exists() and lock_is_free(out)
     assert not out.with_name(out.name + ".lock.owner").exists()
-    from atlas.store.atlasfile import describe
+    from atlas.store.reader import describe
 
     info = describe(partial)
     assert not info["complete"] and info["tiles_done"] == 2

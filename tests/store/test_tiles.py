@@ -9,8 +9,8 @@ import atlas
 from atlas.pipeline.config import config_hash
 from atlas.pipeline.identity import run_identity
 from atlas.pipeline.sweep import layout_of
-from atlas.store.atlasfile import FILLS
-from atlas.store.partial import IdentityMismatch, TileStore, encode_chunk, partial_path
+from atlas.store.hdf5 import encode_chunk
+from atlas.store.partial import IdentityMismatch, TileStore, partial_path
 from tests.helpers import REPO
 
 
@@ -121,10 +121,10 @@ def test_tile_write_is_atomic(cfg, monkeypatch):
 
     monkeypatch.setattr(np, "savez", dies)
     with pytest.raises(KeyboardInterrupt):
-        store.write(2, values, tally, FILLS)
+        store.write(2, values, tally)
     assert store.done().size == 0
     monkeypatch.undo()
-    store.write(2, values, tally, FILLS)
+    store.write(2, values, tally)
     assert list(store.done()) == [2] and store.read_tile(2).tally["count"].tolist() == [96]
 
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import atlas
-from atlas.store.atlasfile import describe
+from atlas.store.reader import describe
 from tests.helpers import REPO, lock_is_free, run_cli, write_config
 
 pytestmark = pytest.mark.slow  # every test runs atlas in subprocesses and waits
@@ -226,7 +226,7 @@ def test_a_failure_while_finishing_the_file_is_resumable(tmp_path, monkeypatch):
     import errno
 
     from atlas.errors import StorageError
-    from atlas.store import atlasfile as store
+    from atlas.store import hdf5 as store
 
     out = tmp_path / "fin.h5"
     cfg = atlas.load_config(write_config(tmp_path / "c.yaml",

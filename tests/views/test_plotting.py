@@ -59,7 +59,7 @@ def test_big_maps_are_coarsened_by_the_mode_of_their_labels():
     """A map wider than the figure's pixels is drawn from blocks; a block of labels takes its
     most frequent label (never an average, which could name a well no orbit reached), and
     the continuous maps keep their extremes."""
-    from atlas.views.plotting import MAX_PIXELS, _coarsen
+    from atlas.views.coarsen import MAX_PIXELS, _coarsen
 
     rows, cols = 3 * MAX_PIXELS, 2 * MAX_PIXELS + 1
     labels = np.full((rows, cols), 2.0)
@@ -93,11 +93,11 @@ def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
     and ties (the smallest k wins; the running basin, the largest label, loses) included;
     chunks known from the file's encoding or from dask, and labels decoded to float (NaN
     where the file has its fill value) as plain xarray would read them."""
-    from atlas.views import plotting
-    from atlas.views.plotting import _coarsen, _read_extreme, _read_labels
+    from atlas.views import coarsen
+    from atlas.views.coarsen import _coarsen, _read_extreme, _read_labels
 
-    monkeypatch.setattr(plotting, "MAX_PIXELS", 7)
-    monkeypatch.setattr(plotting, "BAND_CELLS", 500)
+    monkeypatch.setattr(coarsen, "MAX_PIXELS", 7)
+    monkeypatch.setattr(coarsen, "BAND_CELLS", 500)
     rng = np.random.default_rng(14)
     shape = (53, 40)
     attractor = rng.integers(-2, 3, shape).astype(np.int16)
@@ -121,8 +121,8 @@ def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
         for name in ds.data_vars:
             ds[name].encoding["preferred_chunks"] = {"theta_dot0": 5, "theta0": 40}
     reads = []
-    read = plotting._read_rows
-    monkeypatch.setattr(plotting, "_read_rows",
+    read = coarsen._read_rows
+    monkeypatch.setattr(coarsen, "_read_rows",
                         lambda da, r0, r1: reads.append((r0, r1)) or read(da, r0, r1))
 
     image, kmin, kmax, running = _read_labels(ds)
@@ -142,7 +142,7 @@ def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
 def _whole_maps(point):
     """The images of the maps of one parameter point (a Dataset loaded whole) coarsened in
     memory, as the figures drew them before streaming."""
-    from atlas.views.plotting import _coarsen
+    from atlas.views.coarsen import _coarsen
 
     k = _coarsen(_old_basin_labels(point["attractor"].values, point["status"].values), "mode")
     t = point["t_trap"].values.astype(float)
@@ -160,15 +160,15 @@ def test_a_big_map_is_drawn_from_bands_never_read_whole(sweep_tree, monkeypatch,
     row, or the file's whole 20-row chunk), their stored chunks inflated here, and the images
     are those of the whole arrays coarsened in memory; the maps are never loaded. Another
     parameter point reads its own chunks."""
-    from atlas.store import atlasfile as store
-    from atlas.views import plotting
+    from atlas.store import hdf5 as store
+    from atlas.views import coarsen, plotting
 
     _, path = sweep_tree
-    monkeypatch.setattr(plotting, "MAX_PIXELS", 8)
-    monkeypatch.setattr(plotting, "BAND_CELLS", band_cells)
+    monkeypatch.setattr(coarsen, "MAX_PIXELS", 8)
+    monkeypatch.setattr(coarsen, "BAND_CELLS", band_cells)
     sizes, inflated = [], []
-    read, inflate = plotting._read_rows, store.StoredRows._inflate
-    monkeypatch.setattr(plotting, "_read_rows",
+    read, inflate = coarsen._read_rows, store.StoredRows._inflate
+    monkeypatch.setattr(coarsen, "_read_rows",
                         lambda source, r0, r1: sizes.append((r1 - r0) * source.shape[1]) or
                         read(source, r0, r1))
     monkeypatch.setattr(store.StoredRows, "_inflate",
@@ -196,7 +196,7 @@ def test_a_big_map_is_drawn_from_bands_never_read_whole(sweep_tree, monkeypatch,
     np.testing.assert_array_equal(np.ma.masked_invalid(maps["basin"][0]), k)
     np.testing.assert_array_equal(np.ma.masked_invalid(maps["boundary_distance"][0]), d)
     np.testing.assert_array_equal(maps["t_trap"][0],  # t_trap before the figure's log scale
-                                  plotting._coarsen(other["t_trap"].values.astype(float), "max"))
+                                  coarsen._coarsen(other["t_trap"].values.astype(float), "max"))
 
 
 def test_a_damaged_chunk_of_a_coarsened_map_is_one_line(sweep_tree, monkeypatch, tmp_path):
@@ -209,7 +209,7 @@ def test_a_damaged_chunk_of_a_coarsened_map_is_one_line(sweep_tree, monkeypatch,
     import h5py
 
     from atlas.cli import main
-    from atlas.views import plotting
+    from atlas.views import coarsen
 
     _, path = sweep_tree
     bad = shutil.copyfile(path, tmp_path / "bad.h5")
@@ -218,7 +218,7 @@ def test_a_damaged_chunk_of_a_coarsened_map_is_one_line(sweep_tree, monkeypatch,
     with open(bad, "r+b") as f:
         f.seek(chunk.byte_offset + chunk.size // 2)
         f.write(b"\xff" * 16)
-    monkeypatch.setattr(plotting, "MAX_PIXELS", 8)
+    monkeypatch.setattr(coarsen, "MAX_PIXELS", 8)
     err = io.StringIO()
     with redirect_stderr(err):
         assert main(["plot", str(bad)]) == 2
@@ -357,11 +357,13 @@ def test_nothing_is_cut_off_at_a_maps_edge(sweep_tree, swing_atlas, which, figur
     import io
 
     from atlas.views import plotting
+    from atlas.views.maps import MAP_FIGURES
+    from atlas.views.style import MAP_SIZE
 
     tree = sweep_tree[0] if which == "untilted" else atlas.open(swing_atlas)
-    scene = getattr(plotting, f"_{figure}_scene")(tree)
+    read, draw = MAP_FIGURES[figure]
     png = io.BytesIO()
-    plotting._draw_figure(png, plotting.MAP_SIZE, getattr(plotting, f"_draw_{figure}"), scene)
+    plotting._draw_figure(png, MAP_SIZE, draw, read(tree))
     png.seek(0)
     image = plt.imread(png)[..., :3]
     white = np.all(image > 0.99, axis=-1)

@@ -186,8 +186,9 @@ def test_page_orbits_match_atlas_labels_at_grid_points(files, browser):
     np.testing.assert_allclose([g["t_trap"] for g in got], t, atol=16 * 0.01 + 1e-9)
     assert np.mean(np.isclose([g["t_trap"] for g in got], t)) > 0.95
     # and the very same RK4 map: the state at the trap equals atlas's integrator's to rounding
-    # (atlas.commands.orbit.integrate repeats the kernel's step; tests/commands/test_orbit.py ties it to the kernel)
-    from atlas.commands.orbit import integrate
+    # (atlas.commands.orbit_integrate.integrate steps with the kernel's step;
+    # tests/commands/test_orbit.py ties it to the kernel)
+    from atlas.commands.orbit_integrate import integrate
 
     for g in got[:40]:
         ref = integrate(g["theta0"], g["theta_dot0"], alpha=0.1, omega0=1.0)
@@ -201,9 +202,9 @@ def test_page_orbits_match_atlas_labels_at_grid_points(files, browser):
 def test_a_trigfree_page_integrates_with_the_files_method(tmp_path, browser):
     """An atlas computed with method "rk4-trigfree": the page steps (θ, θ̇, cos θ, sin θ) as
     the file's kernels did, so its orbits end in the stored wells with the stored t_trap, and
-    the state at the trap is atlas.commands.orbit.integrate's with that method (not classical RK4's,
-    which differs by the methods' O(dt⁴) gap, far above rounding)."""
-    from atlas.commands.orbit import integrate
+    the state at the trap is atlas.commands.orbit_integrate.integrate's with that method (not
+    classical RK4's, which differs by the methods' O(dt⁴) gap, far above rounding)."""
+    from atlas.commands.orbit_integrate import integrate
 
     path = _run(tmp_path, "trig-free", num=(48, 32), method="rk4-trigfree")
     page = write_view(path)
@@ -308,7 +309,7 @@ def test_torque_page_carries_the_sweeps_certificates(swing):
     import base64
     import zlib
 
-    from atlas.labels.labelling import energy_cap
+    from atlas.labels.trap import energy_cap
     from atlas.physics.running import limit_cycle, running_barrier
 
     path, page = swing
@@ -325,6 +326,74 @@ def test_torque_page_carries_the_sweeps_certificates(swing):
     assert p["cycle"]["theta"][-1] == round(float(cycle["theta"][-1]), 4)
     assert len(p["cycle"]["theta"]) < 300 and page.stat().st_size < 100_000
     assert "running" in _data(page)["status_names"].values()
+
+
+def rewritten(source: Path, output: Path, change) -> Path:
+    """A copy of the atlas file ``source`` at ``output`` with ``change(h5py.File)`` applied."""
+    import shutil
+
+    import h5py
+
+    shutil.copyfile(source, output)
+    with h5py.File(output, "a") as f:
+        change(f)
+    return output
+
+
+def tamper(f) -> None:
+    """Change the stored certificate of a one-point torque atlas (the shape of a valid one
+    kept: g scaled, still below the top, which is raised; cap and margin changed): numbers
+    no run would build."""
+    node = f["limit_cycle"]
+    node["barrier_g"][...] = 0.75 * node["barrier_g"][...]
+    node.attrs["barrier_top"] = 1.25 * node.attrs["barrier_top"]
+    f["trap_energy_cap"][()] = 0.5 * f["trap_energy_cap"][()]
+    f["trap_margin"][()] = 3.0 * f["trap_margin"][()]
+
+
+def as_format_3(f) -> None:
+    """What a format-3 writer left of a one-point torque atlas: no cap, no barrier."""
+    f.attrs["format_version"] = np.int64(3)
+    del f["trap_energy_cap"]
+    node = f["limit_cycle"]
+    del node["barrier_g"], node["barrier_sample"]
+    for name in [name for name in node.attrs if name.startswith("barrier_")]:
+        del node.attrs[name]
+
+
+def test_the_page_carries_the_stored_certificate_nothing_rebuilt(swing_atlas, tmp_path):
+    """The page takes the certificate from the file, as the run stored it: with the barrier,
+    the cap and the margin changed in a copy, the page carries the changed numbers bit for
+    bit (a page that rebuilt or recomputed them would carry the run's)."""
+    import base64
+    import zlib
+
+    path = rewritten(swing_atlas, tmp_path / "tampered.h5", tamper)
+    stored = atlas.open(path)
+    node = stored["limit_cycle"].to_dataset()
+    root = stored.to_dataset(inherit=False)
+    p = _data(write_view(path))["points"][0]
+    g = np.frombuffer(zlib.decompress(base64.b64decode(p["barrier"]["g"])), "<f8")
+    np.testing.assert_array_equal(g, node["barrier_g"].values)
+    assert p["barrier"]["top"] == node.attrs["barrier_top"]
+    assert p["cap"] == float(root["trap_energy_cap"])
+    assert p["margin"] == float(root["trap_margin"])
+    original = _data(write_view(swing_atlas, tmp_path / "original.html"))["points"][0]
+    assert p["cap"] == 0.5 * original["cap"] and p["barrier"]["g"] != original["barrier"]["g"]
+    stored.close()
+
+
+def test_a_format_3_file_is_refused_with_one_line(swing_atlas, tmp_path, capsys):
+    """atlas view refuses a file of format 3 (no stored certificate) with one line saying how
+    to upgrade it, and writes no page; atlas info and atlas plot still read it."""
+    path = rewritten(swing_atlas, tmp_path / "old.h5", as_format_3)
+    assert main(["view", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "written in format 3" in err
+    assert "does not store the certificate" in err and "atlas run CONFIG --restart" in err
+    assert not path.with_suffix(".html").exists()
+    assert main(["info", str(path)]) == 0 and "alpha" in capsys.readouterr().out
+    assert main(["plot", str(path)]) == 0 and path.with_suffix(".png").exists()
 
 
 def _uniform_cells(ds, code, k=None):
@@ -345,8 +414,10 @@ def test_torque_page_clicks_agree_with_the_file(swing, browser):
     """Clicks on a torque page: a point the file labels running is certified running in the
     browser (and shown as the file's), a point in a well's basin ends in the file's well; the
     page's orbits from grid points inside uniform patches get the file's labels, and the
-    state at the certificate equals atlas.commands.orbit.integrate's (the same RK4 map and tests)."""
-    from atlas.commands.orbit import integrate, running_barrier_for
+    state at the certificate equals atlas.commands.orbit_integrate.integrate's (the same RK4
+    map and tests)."""
+    from atlas.commands.orbit import running_barrier_for
+    from atlas.commands.orbit_integrate import integrate
 
     path, page = swing
     ds = atlas.open(path).to_dataset(inherit=False)

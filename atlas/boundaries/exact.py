@@ -1,0 +1,307 @@
+"""The exact basin boundaries, one small interface (ExactBoundaries) and one factory.
+
+What the certificate (:mod:`atlas.boundaries.certificate`) and the traces ask of the exact
+equation's basin boundaries over a window: the side of a point (well k or the running
+basin), its distance to the nearest boundary, the saddles of the boundaries near it, the exact
+area of each basin in the window, and the boundaries' own error. :func:`exact_boundaries`
+picks the implementation: :class:`UntiltedExact` (τ = 0: the stable manifolds of
+:mod:`atlas.boundaries.manifold`, one DOP853 curve and its copies, areas by quadrature),
+:class:`TiltedExact` (0 < |τ| < ω0²: :mod:`atlas.boundaries.tilted`, polylines, areas by
+polygon clipping) and :class:`UnboundedExact` (|τ| > ω0²: no rest state, no boundary, the
+running basin is the whole plane). Accuracy: distances and sides are exact for the
+reference curves, whose error is ``reference_error`` (the change from DOP853 rtol 1e-12 to
+1e-13, plus the polylines' chord error with torque). After Attractors.jl's small mapper
+interface. Derivations: docs/design/separatrices.md, docs/design/tilted-boundaries.md.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+from typing import NamedTuple, Protocol, runtime_checkable
+
+import numpy as np
+
+from atlas.boundaries.manifold import RTOL_CHECK, StableManifold, basin_areas, bins
+from atlas.physics.pendulum import Pendulum
+from atlas.status import ATTRACTOR_FILL
+
+__all__ = ["ExactBoundaries", "ExactAreas", "exact_boundaries", "UntiltedExact",
+           "TiltedExact", "UnboundedExact", "RUNNING_SIDE", "FIND_CYCLE"]
+
+#: The exact side of a point in the running basin (the basin of the running limit cycle): the
+#: kernels' ATTRACTOR_FILL, −32768, the attractor index of an orbit that settles in no well.
+#: Wells k are |k| ≤ atlas.limits.MAX_WELL = 32767, so it names no well, and it survives int16.
+RUNNING_SIDE = ATTRACTOR_FILL
+#: Default of ``cycle``: find the running limit cycle (:func:`atlas.physics.running.limit_cycle`).
+FIND_CYCLE = object()
+#: First search radius around the window for boundaries [rad-ish]; grown while needed.
+_FIRST_MARGIN = 1.0
+#: Cell side [rad-ish] of the bins over the tilted boundaries' vertices (the radii asked
+#: for are about half a grid cell's diagonal).
+_VERTEX_CELL = 0.05
+#: Vertices farther than this [rad-ish] outside the window are not binned for points in it.
+_VERTEX_MARGIN = 0.5
+
+Box = tuple[tuple[float, float], tuple[float, float]]
+
+
+class ExactAreas(NamedTuple):
+    """Exact area fractions of a window.
+
+    k:             the wells whose basins meet the window (int64).
+    fraction:      each well's basin area ∩ window / window area.
+    error:         estimated error of each ``fraction`` (the reference's change from rtol
+                   1e-12 to 1e-13, with torque plus chord_error × that basin's boundary
+                   length in the window, over the window area), at least 4 ulp.
+    running:       the running basin's fraction (0 when there is no running limit cycle).
+    running_error: the same for ``running`` (0 without a cycle).
+
+    The fractions and ``running`` sum to 1, to their errors."""
+
+    k: np.ndarray
+    fraction: np.ndarray
+    error: np.ndarray
+    running: float
+    running_error: float
+
+
+@runtime_checkable
+class ExactBoundaries(Protocol):
+    """The exact basin boundaries of ``pendulum`` over ``window`` = ((θmin, θmax) [rad],
+    (θ̇min, θ̇max) [rad s⁻¹]). Points are arrays (θ [rad], θ̇ [rad s⁻¹]) that broadcast;
+    distances are Euclidean in the (θ, θ̇) plane, both as one unit ("rad-ish"). A boundary is
+    named by its saddle n (odd: the saddle near nπ; with torque n = 2j + 1 for the saddle
+    π − θ* + 2πj) and separates the wells (n − 1)/2 + ``lower_well`` … (n − 1)/2 +
+    ``upper_well`` (and the running basin where ``running_possible``)."""
+
+    pendulum: Pendulum
+    window: Box
+    running_possible: bool
+    lower_well: int
+    upper_well: int
+
+    @property
+    def reference_error(self) -> float:
+        """The reference curves' own error [rad-ish]: every side and distance holds to it."""
+
+    @property
+    def areas(self) -> ExactAreas:
+        """The exact area fraction of the window in each basin, the running one included."""
+
+    def side(self, theta, theta_dot) -> np.ndarray:
+        """The basin each point of the window lies in: well k (int64), or
+        :data:`RUNNING_SIDE`."""
+
+    def distance(self, theta, theta_dot) -> tuple[np.ndarray, np.ndarray]:
+        """(distance [rad-ish] to the nearest boundary, its saddle n); (inf, 0) if none."""
+
+    def saddles_within(self, theta, theta_dot, radius: float) -> tuple[np.ndarray, np.ndarray]:
+        """(lowest, highest) saddle n of the boundaries within ``radius`` [rad-ish] of each
+        point, a superset (flattened; (0, 0) where none)."""
+
+
+def exact_boundaries(pendulum: Pendulum, window: Box, *, cycle=FIND_CYCLE) -> ExactBoundaries:
+    """The exact basin boundaries of ``pendulum`` (α > 0) over ``window``: the one place
+    where the torque picks an implementation (module docstring). ``cycle``: the running
+    limit cycle if the caller has it (None: there is none), found here by default; used with
+    torque only. The saddle-node |τ| = ω0², a degenerate point, has no certified boundaries:
+    ValueError (configs refuse it)."""
+    if pendulum.torque == 0.0:
+        return UntiltedExact(pendulum, window)
+    if pendulum.has_rest_states:
+        return TiltedExact(pendulum, window, cycle=cycle)
+    if abs(pendulum.torque) > pendulum.omega0**2:
+        return UnboundedExact(pendulum, window)
+    raise ValueError("|torque| = omega0^2: the saddle-node, whose basin atlas does not certify")
+
+
+class UntiltedExact:
+    """:class:`ExactBoundaries` without torque: the strips between the stable manifolds of
+    the saddles ((2j + 1)π, 0) (:class:`atlas.boundaries.manifold.StableManifold`, indexed by
+    :class:`atlas.boundaries.manifold.BoundaryIndex`). The areas and the reference error are
+    computed on first use; it pickles without its search indices, rebuilt on first use."""
+
+    running_possible = False
+    #: A boundary of saddle n (odd) separates the wells on either side of nπ.
+    lower_well, upper_well = 0, 1
+
+    def __init__(self, pendulum: Pendulum, window: Box):
+        self.pendulum, self.window = pendulum, window
+        self._indices: dict[float, object] = {}
+
+    def __getstate__(self):
+        return {**self.__dict__, "_indices": {}}
+
+    @cached_property
+    def _areas(self):
+        """(ExactAreas, the saddles (n_below, n_above) bounding the window, reference
+        error): the left branch at rtol 1e-13 (the search index's) and at 1e-12, each
+        integrated once."""
+        fine = self._index(_FIRST_MARGIN).manifold
+        coarse = StableManifold(self.pendulum, max(abs(v) for v in self.window[1]), RTOL_CHECK)
+        areas = basin_areas(self.pendulum, *self.window, manifolds=(fine, coarse))
+        return (ExactAreas(areas.k, areas.fraction, areas.error, 0.0, 0.0), areas.saddles,
+                _reference_error(fine, coarse))
+
+    @property
+    def areas(self) -> ExactAreas:
+        return self._areas[0]
+
+    @property
+    def reference_error(self) -> float:
+        """Largest distance between the reference manifolds at rtol 1e-12 and 1e-13 over the
+        window's θ̇ band: the DOP853 reference's own error, overestimated about tenfold."""
+        return self._areas[2]
+
+    def _index(self, margin: float):
+        """The boundary index of the window grown by ``margin`` (cached)."""
+        if margin not in self._indices:
+            (t0, t1), (v0, v1) = self.window
+            speed = max(abs(v0), abs(v1)) + margin
+            manifold = StableManifold(self.pendulum, speed)
+            self._indices[margin] = manifold.index(((t0 - margin, t1 + margin),
+                                                    (v0 - margin, v1 + margin)))
+        return self._indices[margin]
+
+    def side(self, theta, theta_dot):
+        return self._index(_FIRST_MARGIN).manifold.side(theta, theta_dot, self._areas[1])
+
+    def distance(self, theta, theta_dot):
+        """Distance [rad-ish] of each point to the nearest exact basin boundary, and that
+        boundary's saddle n. Boundaries are searched within a margin around the window; a
+        distance found is exact where it does not exceed the point's distance to the edge of
+        the searched box (a boundary outside it is farther). The others are searched again
+        with the margin grown past every distance found."""
+        theta, theta_dot = np.broadcast_arrays(np.asarray(theta, float),
+                                               np.asarray(theta_dot, float))
+        if not (np.isfinite(theta).all() and np.isfinite(theta_dot).all()):
+            raise ValueError("distance to the basin boundaries of a non-finite point")
+        margin = _FIRST_MARGIN
+        index = self._index(margin)
+        dist, n = index.nearest(theta, theta_dot)
+        todo = np.ones(theta.shape, bool)
+        while True:
+            (t0, t1), (v0, v1) = index.box
+            edge = np.minimum(np.minimum(theta - t0, t1 - theta),
+                              np.minimum(theta_dot - v0, v1 - theta_dot))
+            todo &= ~(dist <= edge)
+            if not todo.any():
+                return dist, n
+            finite = dist[todo][np.isfinite(dist[todo])]
+            margin = 2.0 * max(margin, finite.max(initial=0.0))
+            index = self._index(margin)
+            dist[todo], n[todo] = index.nearest(theta[todo], theta_dot[todo])
+
+    def saddles_within(self, theta, theta_dot, radius: float):
+        return self._index(_FIRST_MARGIN).saddles_within(theta, theta_dot, radius)
+
+
+def _reference_error(fine: StableManifold, coarse: StableManifold) -> float:
+    """Largest distance of the reference manifold at rtol 1e-12 (``coarse``) from the one at
+    1e-13 (``fine``) over the window's θ̇ band."""
+    speed = coarse.speed
+    box = ((coarse.theta.min() - 1.0, math.pi + 1.0), (-speed, speed))
+    inside = coarse.theta_dot <= speed  # both integrations end just beyond it
+    dist, _ = fine.index(box).nearest(coarse.theta[inside], coarse.theta_dot[inside])
+    return float(dist.max(initial=0.0))
+
+
+class TiltedExact:
+    """:class:`ExactBoundaries` with torque 0 < |τ| < ω0²: the stable branches of the tilted
+    saddles (:class:`atlas.boundaries.tilted.TiltedBoundaries`, kept as ``tilted``; ``cycle``
+    as there, or ``tilted`` itself if the caller built it). A boundary's saddle s_j is named
+    n = 2j + 1 (the saddle near (2j + 1)π). The reference error includes the polylines' chord
+    error (the distances are measured to polylines)."""
+
+    def __init__(self, pendulum: Pendulum, window: Box, *, cycle=FIND_CYCLE, tilted=None):
+        from atlas.boundaries.tilted import TiltedBoundaries
+
+        self.pendulum, self.window = pendulum, window
+        self.tilted = (TiltedBoundaries(pendulum, *window, cycle=cycle) if tilted is None
+                       else tilted)
+        self.running_possible = self.tilted.bistable
+        # the wells a boundary of saddle n = 2j + 1 separates: bistable, one well from the
+        # running basin — well j for τ > 0, and for τ < 0 (the mirror of canonical saddle
+        # −j − 1, whose tongue holds canonical well −j − 1, i.e. actual well j + 1) well j + 1;
+        # monostable, wells j and j + 1
+        if not self.tilted.bistable:
+            self.lower_well, self.upper_well = 0, 1
+        else:
+            self.lower_well = self.upper_well = 0 if pendulum.torque > 0 else 1
+        self.areas = self.tilted.areas()
+        self.reference_error = self.tilted.reference_error + self.tilted.chord_error
+        self._vertices = {}  # the polylines' vertices binned, built on first use
+
+    def __getstate__(self):
+        return {**self.__dict__, "_vertices": {}}
+
+    def side(self, theta, theta_dot):
+        return self.tilted.side(theta, theta_dot)
+
+    def distance(self, theta, theta_dot):
+        dist, j = self.tilted.distance(theta, theta_dot)
+        return dist, 2 * np.asarray(j, np.int64) + 1
+
+    def saddles_within(self, theta, theta_dot, radius: float):
+        """(lowest, highest) saddle n = 2j + 1 of the boundaries with a vertex within
+        ``radius`` + the longest segment of each point (a superset of the boundaries within
+        ``radius``); (0, 0) where none."""
+        from atlas.boundaries.tilted import MAX_SEGMENT
+        from atlas.kernels.foot import saddles_near
+
+        theta = np.ascontiguousarray(np.ravel(theta), dtype=float)
+        theta_dot = np.ascontiguousarray(np.ravel(theta_dot), dtype=float)
+        lo, hi = np.zeros(theta.size, np.int64), np.zeros(theta.size, np.int64)
+        if not theta.size:
+            return lo, hi
+        (w0, w1), (u0, u1) = self.window
+        reach = radius + MAX_SEGMENT
+        # the vertices near the window suffice for points in it (the usual case)
+        near = (reach <= _VERTEX_MARGIN and theta.min() >= w0 and theta.max() <= w1
+                and theta_dot.min() >= u0 and theta_dot.max() <= u1)
+        key = "window" if near else "all"
+        if key not in self._vertices:
+            curves = self.tilted.curves(clip=False)
+            t = np.concatenate([t for _, _, t, _ in curves])
+            v = np.concatenate([v for _, _, _, v in curves])
+            n = np.concatenate([np.full(t.size, 2 * j + 1) for j, _, t, _ in curves])
+            if near:
+                m = _VERTEX_MARGIN
+                keep = (t >= w0 - m) & (t <= w1 + m) & (v >= u0 - m) & (v <= u1 + m)
+                t, v, n = t[keep], v[keep], n[keep]
+            box = ((t.min(), t.max()), (v.min(), v.max())) if t.size else ((0, 1), (0, 1))
+            self._vertices[key] = (t, v, n, box, bins(t, v, box, _VERTEX_CELL))
+        t, v, n, ((t0, _), (v0, _)), (cell, shape, start, items) = self._vertices[key]
+        saddles_near(theta, theta_dot, float(radius + MAX_SEGMENT), t, v, n.astype(np.int64),
+                     start, items, float(t0), float(v0), float(cell), shape[0], shape[1],
+                     lo, hi)
+        return lo, hi
+
+
+class UnboundedExact:
+    """:class:`ExactBoundaries` of a pendulum without rest states (|τ| > ω0²): the running
+    limit cycle is its only attractor, so its basin is the whole plane and there is no
+    boundary: every side is :data:`RUNNING_SIDE`, every distance +inf, the running fraction
+    1, exactly."""
+
+    running_possible = True
+    lower_well = upper_well = 0
+    reference_error = 0.0
+
+    def __init__(self, pendulum: Pendulum, window: Box):
+        self.pendulum, self.window = pendulum, window
+        self.areas = ExactAreas(np.zeros(0, np.int64), np.zeros(0), np.zeros(0), 1.0, 0.0)
+
+    def side(self, theta, theta_dot):
+        shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
+        return np.full(shape, RUNNING_SIDE, np.int64)
+
+    def distance(self, theta, theta_dot):
+        shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
+        return np.full(shape, np.inf), np.zeros(shape, np.int64)
+
+    def saddles_within(self, theta, theta_dot, radius: float):
+        size = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
+        zeros = np.zeros(int(np.prod(size)), np.int64)
+        return zeros, zeros.copy()

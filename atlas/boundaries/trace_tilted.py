@@ -1,0 +1,179 @@
+"""The traced separatrices with torque 0 < |τ| < ω0²: every branch located on its own labels.
+
+With a torque the point reflection is gone and the branches fold, so every boundary in the
+window is located, not copied: vertices about ``max_spacing`` apart on the exact tilted
+boundaries (:class:`atlas.boundaries.tilted.TiltedBoundaries`, DOP853), each bisected across
+the curve, along the normal of the vector field, on certified RK4 labels (the tilted trap
+and the running barrier) between the exact sides read at ±1e-3 (well k or the running
+basin) until narrower than ``tol`` [rad-ish]. The 2π shift is checked on relocated copies
+(``shift_error``); ``discrepancy``, the located points' largest distance from the exact
+boundaries, is the RK4 map's boundary shift (≈ 1e-9 at dt = 0.01 s) that sets d_cert.
+Same ``/separatrices`` schema as without torque (:mod:`atlas.store.separatrices`).
+Derivation: docs/design/separatrices.md.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+from atlas import lazy_dask  # noqa: F401 (installs itself)
+from atlas.boundaries.bisection import (
+    MAX_BRACKET,
+    Labeller,
+    bisect_between,
+    field_normal,
+    linger,
+)
+from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
+from atlas.boundaries.crossings import PROBE, tilted_crossings
+from atlas.boundaries.exact import RUNNING_SIDE
+from atlas.boundaries.window import Window
+from atlas.physics.pendulum import Pendulum
+from atlas.store import separatrices as schema
+
+__all__ = ["trace_tilted"]
+
+_SHIFT_STRIDE = 8  # every 8th located vertex is located again on its 2π-shifted copy
+_FIRST_VERTEX = 1e-3  # no vertex closer [rad-ish] to its saddle: the field vanishes there
+
+
+def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
+                 max_spacing: float, dt: float, t_max: float, backend: str,
+                 method: str) -> xr.Dataset:
+    """The basin boundaries of the RK4 map for a pendulum with torque 0 < |τ| < ω0²
+    (:func:`atlas.boundaries.trace.trace`'s settings; ``t_max`` [s] the atlas's, to which the
+    lingering time at a saddle is added) over ``window``, predicted by ``exact``, the
+    window's :class:`atlas.boundaries.tilted.TiltedBoundaries`; ``barrier``: the running
+    barrier to label with (None: none).
+
+    Vertices are taken along each branch in the window about ``max_spacing`` apart (the first
+    polyline vertex at or beyond each multiple of it along the branch, so at most max_spacing
+    + :data:`atlas.boundaries.tilted.MAX_SEGMENT`; none closer than 1e-3 to its saddle, where
+    the vector field that gives the normal vanishes); vertices whose exact sides agree at
+    ±1e-3 (a tongue thinner than that) are skipped and counted (``n_skipped``). Nothing is
+    copied: every branch in the window is located on its own labels, so the 2π shift, the
+    symmetry that holds with torque, is checked, not assumed: ``shift_error`` is the largest
+    distance between a located point and the located point of the same source vertex on the
+    neighbouring copy, shifted by 2π (the point reflection of the untilted pendulum does not
+    hold: ``symmetry_error`` is NaN). Crossings of the axis θ0 = 0 are located the same way
+    along θ̇ (:func:`atlas.boundaries.crossings.tilted_crossings`); a running side is stored
+    as :data:`atlas.boundaries.exact.RUNNING_SIDE` in ``k_below``/``k_above``.
+
+    ``saddle_n`` = 2j + 1 for the saddle π − θ* + 2πj, the one near (2j + 1)π; attributes as
+    without torque, plus ``torque``, ``shift_error``, ``shift_pairs``, ``n_skipped`` and
+    ``reference_error`` (the exact boundaries' own error: chord + DOP853).
+    """
+    labels = Labeller(p, dt, t_max + linger(p, tol), backend, method, barrier)
+    saddle_j, branch, vertex, base = _vertices(exact, window, max_spacing)
+    normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1])) if base.size \
+        else base.copy()
+    below = exact.side(base[:, 0] - PROBE * normal[:, 0], base[:, 1] - PROBE * normal[:, 1])
+    above = exact.side(base[:, 0] + PROBE * normal[:, 0], base[:, 1] + PROBE * normal[:, 1])
+    # a vertex whose exact sides agree at ±PROBE (a tongue thinner than that, or a fold)
+    # has no boundary to bisect across there: it is left out, and counted
+    keep = below != above
+    skipped = int((~keep).sum())
+    saddle_j, branch, vertex = saddle_j[keep], branch[keep], vertex[keep]
+    base, normal, below, above = base[keep], normal[keep], below[keep], above[keep]
+    lo, hi, ok = bisect_between(labels, base, normal, below, above, tol=tol,
+                                half_width=PROBE)
+    point = base + 0.5 * (lo + hi)[:, None] * normal
+    dist, _ = exact.distance(point[:, 0], point[:, 1]) if point.size else (np.zeros(0), None)
+    # a vertex that could not be located leaves the shift unmeasured there: NaN, so that d_cert
+    # is NaN and no label is certified for the exact equation on a partial measurement
+    discrepancy = float(dist.max(initial=0.0)) if ok.all() else math.nan
+    shift_error, shift_pairs = _shift_error(labels, base, normal, below, above, point, ok,
+                                            tol)
+
+    crossing, crossing_width, k_below, k_above = tilted_crossings(exact, labels, window, tol)
+    problems = []
+    if not ok.all():
+        problems.append(f"{int((~ok).sum())} of {ok.size} vertices could not be bisected to "
+                        f"tol = {tol:g} on certified labels (unresolved orbits, a third "
+                        f"basin in the bracket, or a boundary shift beyond {MAX_BRACKET:g}: "
+                        "lower dt); the RK4 map's boundary shift is not measured (NaN), so no "
+                        "label is certified for the exact equation")
+    if discrepancy > DISCREPANCY_BOUND:
+        problems.append(f"separatrix points are up to {discrepancy:.2e} from the DOP853 "
+                        f"stable manifolds (bound {DISCREPANCY_BOUND:.0e}): lower dt")
+    stored_n = (2 * saddle_j + 1).astype(np.int32)
+    order = np.lexsort((vertex, branch, stored_n))
+    saddle_theta = np.array([exact.saddle_theta(int(j)) for j in saddle_j])
+    return schema.node(
+        theta=point[order, 0], theta_dot=point[order, 1], width=(hi - lo)[order],
+        crossing=crossing, crossing_width=crossing_width, k_below=k_below, k_above=k_above,
+        in_window=np.ones(crossing.size, np.int8), saddle_theta=saddle_theta[order],
+        saddle_n=stored_n[order], branch=branch[order], vertex=vertex[order],
+        saddle_name="theta of the saddle (pi - asin(torque/omega0^2) + 2 pi j, 0), n = 2j + 1",
+        branch_comment="left: arrives with theta_dot > 0 from the left; right: arrives with "
+                       "theta_dot < 0 from the right",
+        k_comment=f"{RUNNING_SIDE}: the running basin",
+        attrs={
+            "alpha": p.alpha, "omega0": p.omega0, "torque": p.torque,
+            "theta_window": np.array(window.theta),
+            "theta_dot_window": np.array(window.theta_dot),
+            "tol": float(tol), "max_spacing": float(max_spacing), "dt": float(dt),
+            "t_max": labels.t_max,
+            "n_boundaries": int(np.unique(stored_n).size),
+            "symmetry_error": math.nan, "symmetry_bound": SYMMETRY_BOUND * tol,
+            "shift_error": shift_error, "shift_pairs": np.int64(shift_pairs),
+            "n_skipped": np.int64(skipped),
+            "discrepancy": discrepancy, "discrepancy_bound": DISCREPANCY_BOUND,
+            "polyline_error": exact.chord_error,
+            "reference_error": exact.reference_error + exact.chord_error,
+            "n_orbits": labels.orbits, "n_unresolved": labels.unresolved,
+            "warnings": "\n".join(problems),
+            "method": (
+                f"basin boundaries of the RK4 map (step dt, method {method}) with torque: "
+                "vertices on the exact stable branches of the tilted saddles "
+                "(atlas.boundaries.tilted: "
+                "DOP853 in reversed time, rtol = atol = 1e-13), at most max_spacing apart; "
+                "each located by bisection across the curve on certified RK4 labels (tilted "
+                "trap, running barrier) "
+                "until the bracket is narrower than tol; every copy located on its own "
+                "labels (shift_error: the 2 pi shift between copies); discrepancy = max "
+                "distance of the points to the exact boundaries"),
+        },
+    )
+
+
+def _vertices(exact, window: Window, max_spacing: float):
+    """The vertices to locate: (saddle j, branch flag, vertex number along the branch — gaps
+    outside the window —, (θ, θ̇) (N, 2)) of every branch in the window, about
+    ``max_spacing`` apart along it."""
+    rows = []  # (saddle j, branch, vertex index, θ, θ̇)
+    for j, name, theta, theta_dot in exact.curves(clip=False):
+        step = np.hypot(np.diff(theta), np.diff(theta_dot))
+        along = np.concatenate([[0.0], np.cumsum(step)])
+        picks = np.unique(np.searchsorted(along, np.arange(_FIRST_VERTEX, along[-1],
+                                                           max_spacing)))
+        picks = picks[picks < theta.size]
+        inside = window.margin(theta[picks], theta_dot[picks]) >= 0
+        for number in np.flatnonzero(inside):  # numbered along the branch: gaps outside
+            i = picks[number]
+            rows.append((j, schema.BRANCHES.index(name), int(number), theta[i], theta_dot[i]))
+    saddle_j = np.array([r[0] for r in rows], np.int64)
+    branch = np.array([r[1] for r in rows], np.int8)
+    vertex = np.array([r[2] for r in rows], np.int32)
+    base = np.array([(r[3], r[4]) for r in rows], float).reshape(-1, 2)
+    return saddle_j, branch, vertex, base
+
+
+def _shift_error(labels, base, normal, below, above, point, ok, tol: float):
+    """The 2π shift: every ``_SHIFT_STRIDE``-th located vertex, shifted by 2π and located
+    again on its own labels (the next well's side), must land on the shifted point. Returns
+    (largest distance [rad-ish], number of pairs compared)."""
+    pick = np.flatnonzero(ok)[::_SHIFT_STRIDE]
+    shifted = base[pick] + np.array([2.0 * math.pi, 0.0])
+
+    def next_well(side):
+        return np.where(side == RUNNING_SIDE, side, side + 1)
+
+    s_lo, s_hi, s_ok = bisect_between(labels, shifted, normal[pick], next_well(below[pick]),
+                                      next_well(above[pick]), tol=tol, half_width=PROBE)
+    moved = shifted + 0.5 * (s_lo + s_hi)[:, None] * normal[pick]
+    gap = np.hypot(*(moved - point[pick] - np.array([2.0 * math.pi, 0.0])).T)
+    return float(gap[s_ok].max(initial=0.0)), int(s_ok.sum())

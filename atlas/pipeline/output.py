@@ -1,0 +1,86 @@
+"""What an output path may be: the policy a run checks before it creates anything.
+
+A run writes its atlas at ``cfg.output`` in the format the path asks for
+(:func:`atlas.store.formats.format_for`). Before anything is made (the lock, the partial
+folder) it refuses, with one line each: the config file being run as the output, whatever
+``--force`` says; an existing file or store that atlas did not write, unless ``--force``
+(:func:`check_output_target`; an atlas file may be written over: that is how a changed config
+is run again); a directory where the format writes a file; a folder that is not a directory
+or not writable; a disk without room for the labels (:func:`check_output_path`, an estimate
+from the grid's size, :data:`BYTES_PER_ORBIT`).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+from atlas.errors import AtlasError, OutputInTheWay
+from atlas.layout import Layout
+from atlas.store.formats import format_for
+from atlas.store.reader import is_atlas_file
+
+__all__ = ["check_output_target", "check_output_path", "BYTES_PER_ORBIT"]
+
+#: Bytes one orbit is expected to take on disk: an estimate from the labels uncompressed
+#: (int16 + int8 + float32), not a bound (boundary_distance is not counted).
+BYTES_PER_ORBIT = 7
+
+
+def check_output_target(output, config=None, *, force: bool = False) -> None:
+    """Refuse an output path that holds something a run must not write over:
+
+    * the config file being run (``atlas run c.yaml -o c.yaml``), whatever ``force`` says;
+    * an existing file (or Zarr store) that atlas did not write, unless ``force``.
+
+    An atlas file at the output (a finished run of this or another config) may be written
+    over: that is how a changed config is run again. Raises
+    :class:`~atlas.errors.OutputInTheWay` (exit status 2)."""
+    output = Path(output)
+    if config is not None and output.exists():
+        try:
+            same = os.path.samefile(output, config)
+        except OSError:
+            same = False
+        if same:
+            raise OutputInTheWay(f"{output}: the output path is the config file being run; "
+                                 "name another output with -o")
+    if force or not output.exists():
+        return
+    fmt = format_for(output)
+    if output.is_dir() and not fmt.recognises(output):
+        return  # not a store: check_output_path refuses a directory with its own line
+    if not is_atlas_file(output):
+        what = "Zarr store" if output.is_dir() else "file"
+        raise OutputInTheWay(f"{output}: an existing {what} that atlas did not write is in "
+                             "the way; run with --force to write over it, or name another "
+                             "output with -o")
+
+
+def check_output_path(output: Path, layout: Layout) -> None:
+    """Refuse an output that cannot be written or would not fit, before anything is made:
+    a directory (unless a store of the folder format the path asks for), an output folder
+    that is not a directory or not writable, a disk with less room than the labels of
+    ``layout`` may take."""
+    fmt = format_for(output)
+    if output.is_dir() and not (fmt.folder and fmt.recognises(output)):
+        raise AtlasError(f"{output}: the output path is a directory")
+    existing = next(p for p in (output.parent, *output.parent.parents) if p.exists())
+    if not existing.is_dir():
+        raise AtlasError(f"{output}: the output folder {existing} is not a directory")
+    if not os.access(existing, os.W_OK):
+        raise AtlasError(f"{output}: the output folder {existing} is not writable")
+    need = layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
+    free = shutil.disk_usage(existing).free
+    if need > free:
+        raise AtlasError(f"{output}: the output may need up to {_size(need)} but only "
+                         f"{_size(free)} is free on that disk")
+
+
+def _size(n_bytes: int) -> str:
+    for unit in ("B", "KB", "MB", "GB"):
+        if n_bytes < 1000:
+            return f"{n_bytes:.3g} {unit}"
+        n_bytes /= 1000
+    return f"{n_bytes:.3g} TB"
