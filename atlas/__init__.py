@@ -1,4 +1,4 @@
-"""atlas: a Numba-accelerated phase-space atlas of the damped pendulum θ̈ = −ω0² sin θ − 2αθ̇.
+"""atlas: a Numba-accelerated phase-space atlas of the damped pendulum θ̈ = −ω0² sin θ − 2αθ̇ + τ.
 
     import atlas
     res = atlas.label(theta0, theta_dot0, alpha=0.1, omega0=1.0)   # certified labels
@@ -10,10 +10,16 @@ The file-level API (config, run, open) loads xarray/pydantic on first use, so th
 ``import atlas`` for labelling alone starts fast.
 """
 
+import sys as _sys
+
 from atlas.errors import AtlasError, BackendUnavailable, ConfigError, InputFileError
 from atlas.labels.labelling import LabelResult, label
 from atlas.physics import linear
 from atlas.physics.pendulum import Pendulum, critical_points
+
+# The closed forms live in atlas.physics.linear; ``atlas.linear`` is their public name, also
+# for ``import atlas.linear`` and ``from atlas.linear import solve``.
+_sys.modules.setdefault(__name__ + ".linear", linear)
 
 __version__ = "0.1.0"
 __all__ = ["label", "linear", "LabelResult", "load_config", "Config", "run", "open",

@@ -18,7 +18,8 @@ import sys
 from pathlib import Path
 
 from atlas.errors import EXIT_BAD_INPUT, AtlasError, Terminated
-from atlas.labels.backends import BACKENDS, WORDS
+from atlas.labels.backends import BACKENDS
+from atlas.pipeline.config import BACKEND_WORDS
 
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
@@ -149,7 +150,27 @@ def _cmd_orbit(args) -> int:
     return 0
 
 
-def _add_view_and_orbit(sub, common) -> None:
+def _cmd_zoom(args) -> int:
+    from atlas.commands.orbit import parse_number
+    from atlas.commands.zoom import write_zoom, zoom_config
+
+    theta0, theta_dot0, width = (parse_number(text, name) for text, name in (
+        (args.theta0, "theta0"), (args.theta_dot0, "theta_dot0"), (args.width, "--width")))
+    opts = {name: None if getattr(args, name) is None else parse_number(getattr(args, name),
+                                                                         f"--{name}")
+            for name in ("alpha", "omega0", "torque")}
+    if args.num is not None:
+        opts["num"] = args.num
+    zoom = zoom_config(args.file, theta0, theta_dot0, width, **opts)
+    if args.output is None:
+        sys.stdout.write(zoom.text)
+    else:
+        print(f"wrote {write_zoom(zoom, args.output, args.file)}; run it with "
+              f"atlas run {args.output}")
+    return 0
+
+
+def _add_view_orbit_zoom(sub, common) -> None:
     p = sub.add_parser("view", parents=[common],
                        help="OUT.html: a self-contained interactive page of an atlas file")
     p.add_argument("file")
@@ -170,17 +191,37 @@ def _add_view_and_orbit(sub, common) -> None:
                    "file, else outputs/orbit.png)")
     p.set_defaults(func=_cmd_orbit)
 
+    p = sub.add_parser("zoom", parents=[common],
+                       help="the YAML config of a square window centred on a point, at an "
+                       "atlas file's parameters",
+                       description="atlas zoom FILE THETA0 THETA_DOT0 --width W: the config "
+                       "of a window W wide in theta0 [rad] and theta_dot0 [rad/s] centred on "
+                       "(THETA0, THETA_DOT0), at FILE's parameters and integrator; numbers or "
+                       "pi expressions; put the options first and -- before a negative pi "
+                       "expression (atlas zoom --width 1 FILE -- -pi/2 1)")
+    p.add_argument("file", help="an atlas file (atlas run's output)")
+    p.add_argument("theta0", help="the window's centre theta0 [rad]")
+    p.add_argument("theta_dot0", help="the window's centre theta_dot0 [rad/s]")
+    p.add_argument("--width", required=True, help="the window's width W [rad and rad/s], > 0")
+    p.add_argument("--num", type=int,
+                   help="orbits per axis (default 101: the centre is a grid point)")
+    p.add_argument("--alpha", help="a parameter atlas: selects the point's damping [1/s]")
+    p.add_argument("--omega0", help="a parameter atlas: selects the point's omega0 [rad/s]")
+    p.add_argument("--torque", help="a parameter atlas: selects the point's torque [rad/s^2]")
+    p.add_argument("-o", "--output", help="write the config here (default: print it)")
+    p.set_defaults(func=_cmd_zoom)
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="atlas", description="Phase-space atlas of the damped pendulum "
-                     "θ̈ = −ω0² sin θ − 2αθ̇: basins of attraction, separatrices, figures.")
+                     "θ̈ = −ω0² sin θ − 2αθ̇ + τ: basins of attraction, separatrices, figures.")
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("-v", "--verbose", action="count", default=0,
                         help="log progress (-v) and every tile written (-vv)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("run", parents=[common],
-                       help="compute the atlas of a YAML config into HDF5")
+                       help="compute the atlas of a YAML config into HDF5 (or Zarr: NAME.zarr)")
     p.add_argument("config", help="YAML config, e.g. configs/default.yaml")
     p.add_argument("-o", "--output", help="output file (overrides the config's output key)")
     p.add_argument("--resume", action="store_true",
@@ -192,7 +233,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true",
                    help="write over an existing file at the output that atlas did not write "
                    "(never over the config itself)")
-    p.add_argument("--backend", choices=tuple(WORDS),
+    p.add_argument("--backend", choices=tuple(BACKEND_WORDS),
                    help="override execution.backend: the device (cpu, cuda) or the CPU on a "
                    "Dask cluster (dask)")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
@@ -220,7 +261,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with a GPU: also time atlas run --backend cuda of the N x N default "
                         "atlas, end to end (repeatable; 16384 is the target's size)")
     p.set_defaults(func=_cmd_bench)
-    _add_view_and_orbit(sub, common)
+    _add_view_orbit_zoom(sub, common)
     return parser
 
 
@@ -236,7 +277,7 @@ def _configure_logging(verbose: int) -> None:
 
 def _input_file(args) -> str | None:
     """The atlas file a reading command was given (None for ``run`` and the others)."""
-    if getattr(args, "command", None) in ("info", "plot", "view"):
+    if getattr(args, "command", None) in ("info", "plot", "view", "zoom"):
         return args.file
     if getattr(args, "command", None) == "orbit" and len(args.values) == 3:
         return args.values[0]

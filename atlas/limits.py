@@ -52,6 +52,13 @@ MIN_TOL_ULPS = 64
 MIN_MAX_SPACING = 1e-4
 
 
+#: Narrowest window side, in units of ``tol``: a boundary located to tol (every traced
+#: point) is then resolved to 1/1000 of the window, and the points a zoom places
+#: side/16 apart (:func:`atlas.boundaries.predictor.fine_spacing`) stay 60 tol apart, their
+#: brackets disjoint. With the default tol 1e-12: windows down to 1e-9 wide.
+MIN_WINDOW_TOLS = 1000
+
+
 def _round_up(x: float) -> float:
     """``x`` rounded up to two significant digits (a bound that still holds when printed)."""
     unit = 10.0 ** (math.floor(math.log10(x)) - 1)
@@ -67,7 +74,9 @@ def check_separatrix_settings(theta_window, theta_dot_window, tol: float,
     Pure and cheap: run it before any work. Bounds: 0 < ``tol``, and tol ≥ ``MIN_TOL_ULPS``
     (64) spacings of doubles at the window's largest coordinate (1.1e-13 for |θ| ≤ 3π), below
     which a bracket cannot be resolved; ``max_spacing`` ≥ ``MIN_MAX_SPACING`` (1e-4), below
-    which the polyline outgrows the accuracy of the curve it joins (see the constant).
+    which the polyline outgrows the accuracy of the curve it joins (see the constant); and
+    each side of the window ≥ ``MIN_WINDOW_TOLS`` (1000) tol, below which the located
+    boundary is not resolved in it (a zoom narrower than 1e-9 at the default tol).
     """
     for name, value in (("tol", tol), ("max_spacing", max_spacing)):
         if not (math.isfinite(value) and value > 0):
@@ -79,6 +88,14 @@ def check_separatrix_settings(theta_window, theta_dot_window, tol: float,
         where = "|θ|" if scale == theta_max else "|θ̇|"
         raise ValueError(f"tol = {tol:g} is below what double precision can resolve at "
                          f"{where} ≤ {scale:.3g} (needs ≥ {_round_up(need):.2g})")
+    for axis, (lo, hi) in (("θ0", theta_window), ("θ̇0", theta_dot_window)):
+        side = float(hi) - float(lo)
+        if side < MIN_WINDOW_TOLS * tol:
+            raise ValueError(
+                f"tol = {tol:g} is too coarse for a window {side:.3g} wide in {axis}: a "
+                f"boundary located to tol is resolved only in windows at least "
+                f"{MIN_WINDOW_TOLS} tol = {MIN_WINDOW_TOLS * tol:.2g} wide (lower tol, down "
+                f"to {_round_up(need):.2g} here, or widen the window)")
     if max_spacing < MIN_MAX_SPACING:
         raise ValueError(f"max_spacing = {max_spacing:g} is below {MIN_MAX_SPACING:g}: its "
                          "chord error max_spacing²/8 would fall below the curve's own accuracy "

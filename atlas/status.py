@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TRAPPED", "UNRESOLVED", "NONFINITE", "NEAR_BOUNDARY", "RUNNING",
+__all__ = ["IN_FILE", "TRAPPED", "UNRESOLVED", "NONFINITE", "NEAR_BOUNDARY", "RUNNING",
            "RUNNING_NEAR_BOUNDARY", "ATTRACTOR_FILL", "STATUS_MEANINGS"]
 
 #: Trapped in the energy trap of well k; in a file, also farther than d_cert from every
@@ -40,3 +40,19 @@ ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
 STATUS_MEANINGS = {TRAPPED: "trapped", UNRESOLVED: "unresolved", NONFINITE: "nonfinite",
                    NEAR_BOUNDARY: "near_boundary", RUNNING: "running",
                    RUNNING_NEAR_BOUNDARY: "running_near_boundary"}
+
+#: What each status value means in an atlas file, where labels have been certified against the
+#: exact basin boundaries (from :func:`atlas.label`, ``trapped`` means trapped for the RK4 map
+#: only): the file's ``status`` comment is built from these.
+IN_FILE = {
+    TRAPPED: "certified for the exact equation (energy trap of the RK4 map, and farther than "
+             "d_cert from every basin boundary)",
+    UNRESOLVED: "no certificate held before t_max",
+    NONFINITE: "a NaN or inf state was met",
+    NEAR_BOUNDARY: "trapped, certified for the RK4 map only (closer than d_cert to a basin "
+                   "boundary)",
+    RUNNING: "with torque: in the running barrier of the RK4 map and farther than d_cert from "
+             "every basin boundary, certified for the exact equation to converge to the "
+             "running limit cycle",
+    RUNNING_NEAR_BOUNDARY: "running, certified for the RK4 map only",
+}

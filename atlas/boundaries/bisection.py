@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from atlas import defaults
-from atlas.boundaries.exact import RUNNING_SIDE
+from atlas.boundaries.basins import RUNNING_SIDE
 from atlas.boundaries.predictor import not_a_knot_spline
 from atlas.errors import SeparatrixError
 from atlas.labels.labelling import label

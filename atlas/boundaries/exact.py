@@ -18,23 +18,17 @@ from __future__ import annotations
 
 import math
 from functools import cached_property
-from typing import NamedTuple, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from atlas.boundaries.basins import FIND_CYCLE, RUNNING_SIDE, ExactAreas
 from atlas.boundaries.manifold import RTOL_CHECK, StableManifold, basin_areas, bins
 from atlas.physics.pendulum import Pendulum
-from atlas.status import ATTRACTOR_FILL
 
 __all__ = ["ExactBoundaries", "ExactAreas", "exact_boundaries", "UntiltedExact",
            "TiltedExact", "UnboundedExact", "RUNNING_SIDE", "FIND_CYCLE"]
 
-#: The exact side of a point in the running basin (the basin of the running limit cycle): the
-#: kernels' ATTRACTOR_FILL, −32768, the attractor index of an orbit that settles in no well.
-#: Wells k are |k| ≤ atlas.limits.MAX_WELL = 32767, so it names no well, and it survives int16.
-RUNNING_SIDE = ATTRACTOR_FILL
-#: Default of ``cycle``: find the running limit cycle (:func:`atlas.physics.running.limit_cycle`).
-FIND_CYCLE = object()
 #: First search radius around the window for boundaries [rad-ish]; grown while needed.
 _FIRST_MARGIN = 1.0
 #: Cell side [rad-ish] of the bins over the tilted boundaries' vertices (the radii asked
@@ -44,26 +38,6 @@ _VERTEX_CELL = 0.05
 _VERTEX_MARGIN = 0.5
 
 Box = tuple[tuple[float, float], tuple[float, float]]
-
-
-class ExactAreas(NamedTuple):
-    """Exact area fractions of a window.
-
-    k:             the wells whose basins meet the window (int64).
-    fraction:      each well's basin area ∩ window / window area.
-    error:         estimated error of each ``fraction`` (the reference's change from rtol
-                   1e-12 to 1e-13, with torque plus chord_error × that basin's boundary
-                   length in the window, over the window area), at least 4 ulp.
-    running:       the running basin's fraction (0 when there is no running limit cycle).
-    running_error: the same for ``running`` (0 without a cycle).
-
-    The fractions and ``running`` sum to 1, to their errors."""
-
-    k: np.ndarray
-    fraction: np.ndarray
-    error: np.ndarray
-    running: float
-    running_error: float
 
 
 @runtime_checkable

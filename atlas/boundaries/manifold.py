@@ -40,6 +40,16 @@ _CELL, _MAX_CELLS = 0.3, 1 << 20
 #: Steps a DOP853 piece is first given room for (about 130 at rtol 1e-13 on the default
 #: window; more are made room for as needed).
 _STEPS = 1024
+#: Smallest speed [rad s⁻¹] a StableManifold is integrated to (well above its start's).
+_MIN_SPEED = 1e-3
+#: Gauss–Legendre nodes per part of a small window's boundary integral.
+_GAUSS_NODES = 20
+#: Windows whose shorter side is below this [rad-ish] get their areas at the window's scale
+#: (:meth:`StableManifold.boundary_fraction`); wider ones as differences of Q, whose rounding
+#: is negligible there.
+SMALL_WINDOW = 0.5
+#: Most boundaries a window's area walk visits before it gives up (a bug, never a window).
+_MAX_WALK = 100_000
 
 
 class _DenseOutput:
@@ -137,7 +147,9 @@ class StableManifold:
         if p.torque != 0.0:
             raise ValueError("StableManifold is the untilted pendulum's; with torque see "
                              "atlas.boundaries.tilted")
-        self.speed, self.rtol = float(speed), rtol
+        # at least _MIN_SPEED: the integration starts at θ̇ ≈ u2 · START_DISTANCE, and ends
+        # on crossing ``speed`` upwards (a window around the saddle asks for less)
+        self.speed, self.rtol = max(float(speed), _MIN_SPEED), rtol
         self.u2 = -p.saddle_eigenvalues()[1]
         e_theta, e_theta_dot = p.saddle_stable_direction()
         self.start = (math.pi - START_DISTANCE * e_theta, -START_DISTANCE * e_theta_dot)
@@ -291,6 +303,60 @@ class StableManifold:
                 q_a, q_b = self._state(self.tau_at(np.array([a, b])))[2]
                 total += q_a - q_b
         return total
+
+    def clipped_excess(self, u1: float, u2: float, lo: float, hi: float):
+        """(∫ (clip(L(u), lo, hi) − lo) du over [u1, u2], and where L lies there: +1 at or
+        above hi throughout, −1 at or below lo throughout, 0 otherwise or for an empty
+        interval), lo ≤ hi ≤ ``speed``: :meth:`clipped_integral` at the window's scale,
+        for small windows. The same cuts; a constant part is exactly 0 or (hi − lo) × its
+        length, and L itself is integrated by Gauss–Legendre quadrature
+        (:data:`_GAUSS_NODES` nodes on a part, exact to rounding for the short parts of a
+        small window) instead of as a difference of Q, whose rounding (≈ 1e-15 of Q) would
+        swamp the area of a window narrower than about 1e-4."""
+        if not u1 < u2:
+            return 0.0, 0
+        cuts = [u1, u2, self.start[0], self.theta_end]
+        for level in (lo, hi):
+            cuts += list(self._state(self._tau_at_speed(level))[0])
+        cuts = np.unique(np.clip(cuts, u1, u2))
+        x, w = np.polynomial.legendre.leggauss(_GAUSS_NODES)
+        total, kinds = 0.0, set()
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            value = float(self.left(0.5 * (a + b))[0])
+            if value <= lo:
+                kinds.add(-1)
+            elif value >= hi:
+                kinds.add(1)
+                total += (hi - lo) * (b - a)
+            else:
+                kinds.add(0)
+                nodes = 0.5 * (a + b) + 0.5 * (b - a) * x
+                total += 0.5 * (b - a) * float(np.dot(w, np.clip(self.left(nodes), lo, hi)
+                                                      - lo))
+        return total, (kinds.pop() if len(kinds) == 1 else 0)
+
+    def boundary_fraction(self, n: int, theta_window, theta_dot_window):
+        """(the fraction of the window below S_n, ∫ (clip(S_n(θ), θ̇min, θ̇max) − θ̇min) dθ
+        over the window's area; +1 if S_n lies at or above the window throughout, −1 at or
+        below it, else 0): :meth:`boundary_integral` at the window's scale
+        (:meth:`clipped_excess`)."""
+        (a, b), (lo, hi) = theta_window, theta_dot_window
+        saddle = n * math.pi
+        shift_left, shift_right = (n - 1) * math.pi, (n + 1) * math.pi
+        total, kinds = 0.0, set()
+        if a < saddle:  # left branch: S_n(θ) = L(θ − (n−1)π)
+            part, kind = self.clipped_excess(a - shift_left, min(b, saddle) - shift_left,
+                                             lo, hi)
+            total += part
+            kinds.add(kind)
+        if b > saddle:  # right branch: clip(−L(w), lo, hi) − lo = (hi − lo) − (clip(L(w),
+            # −hi, −lo) + hi), and L above −lo is S_n below lo
+            w1, w2 = shift_right - b, shift_right - max(a, saddle)
+            part, kind = self.clipped_excess(w1, w2, -hi, -lo)
+            total += (hi - lo) * (w2 - w1) - part
+            kinds.add(-kind)
+        area = (b - a) * (hi - lo)
+        return total / area, (kinds.pop() if len(kinds) == 1 else 0)
 
     def boundary_integral(self, n: int, theta_window, theta_dot_window) -> float:
         """∫ clip(S_n(θ), θ̇min, θ̇max) dθ over the θ window [rad² s⁻¹]."""
@@ -505,6 +571,24 @@ def _boundary_integrals(manifold: StableManifold, theta_window, theta_dot_window
     return g
 
 
+def _window_fractions(manifold: StableManifold, theta_window, theta_dot_window):
+    """{n: the fraction of the window below S_n} for every odd n from the highest boundary
+    entirely below the window to the lowest entirely above it (at the window's scale)."""
+    (a, b) = theta_window
+    centre = 2 * math.floor(0.5 * (a + b) / (2 * math.pi)) + 1
+    g, where = {}, {}
+    g[centre], where[centre] = manifold.boundary_fraction(centre, theta_window,
+                                                          theta_dot_window)
+    for step, wanted in ((2, 1), (-2, -1)):
+        n = centre
+        while where[n] != wanted:
+            n += step
+            if abs(n - centre) > _MAX_WALK:
+                raise RuntimeError("the basin areas found no boundary beyond the window")
+            g[n], where[n] = manifold.boundary_fraction(n, theta_window, theta_dot_window)
+    return g
+
+
 def basin_areas(pendulum: Pendulum, theta_window, theta_dot_window,
                 manifolds: tuple[StableManifold, StableManifold] | None = None) -> BasinAreas:
     """Exact area fractions of the window θ ∈ ``theta_window`` [rad] × θ̇ ∈
@@ -517,9 +601,27 @@ def basin_areas(pendulum: Pendulum, theta_window, theta_dot_window,
     area = width * (theta_dot_window[1] - theta_dot_window[0])
     if manifolds is None:
         manifolds = tuple(StableManifold(pendulum, speed, rtol) for rtol in (RTOL, RTOL_CHECK))
-    fine, coarse = (_boundary_integrals(m, theta_window, theta_dot_window) for m in manifolds)
+    small = min(width, theta_dot_window[1] - theta_dot_window[0]) < SMALL_WINDOW
+    integrals = _window_fractions if small else _boundary_integrals
+    fine, coarse = (integrals(m, theta_window, theta_dot_window) for m in manifolds)
     below, above = min(fine), max(fine)
     n = np.arange(min(below, min(coarse)), max(above, max(coarse)) + 1, 2)
+    if small:  # fractions below each S_n: 0 below the lowest, 1 above the highest
+        def below_fractions(g):
+            return np.diff([g.get(n_, 0.0 if n_ < min(g) else 1.0) for n_ in n])
+
+        fraction = below_fractions(fine)
+        # rounding of the coordinates at the window's scale: the shifted θ of a boundary
+        # copy and θ̇, each to an ulp, over the window's sides
+        big_u = max(abs(theta_window[0]), abs(theta_window[1])) + math.pi * (np.abs(n).max()
+                                                                            + 1)
+        big_v = max(abs(x) for x in theta_dot_window)
+        rounding = 16 * np.finfo(float).eps * (big_u / width + big_v / (
+            theta_dot_window[1] - theta_dot_window[0]))
+        error = np.maximum(np.abs(fraction - below_fractions(coarse)) + rounding,
+                           4 * np.finfo(float).eps)
+        return BasinAreas(k=(n[:-1] + 1) // 2, fraction=fraction, error=error,
+                          saddles=(int(below), int(above)))
 
     def fractions(g):
         edge = {n_: theta_dot_window[0 if n_ < min(g) else 1] * width for n_ in n}

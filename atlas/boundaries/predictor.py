@@ -25,12 +25,15 @@ from atlas.errors import SeparatrixError
 from atlas.physics.pendulum import START_DISTANCE, Pendulum
 from atlas.store.separatrices import BRANCHES
 
-__all__ = ["Predicted", "reference", "edge_speeds", "predict", "not_a_knot_spline", "sources",
+__all__ = ["Predicted", "reference", "edge_speeds", "window_boxes", "fine_spacing",
+           "predict", "not_a_knot_spline", "sources",
            "copies", "needed", "place"]
 
 _SPEED_GROWTH = 0.3  # max log-growth of the speed between vertices (near the saddle)
 _CHORD_AIM = 0.9  # aim at this × the allowed chord (curvature varies along it)
 _MAX_VERTICES = 1_000_000  # a branch 100 rad-ish long at MIN_MAX_SPACING
+#: Vertices across a window's shorter side (:func:`fine_spacing`).
+_WINDOW_VERTICES = 16
 
 
 def reference(p: Pendulum, window: Window) -> StableManifold:
@@ -71,17 +74,62 @@ def edge_speeds(window: Window) -> list[float]:
     return sorted({v for v in (*window.theta_dot, *(-x for x in window.theta_dot)) if v > 0})
 
 
-def predict(m: StableManifold, edges: list[float], max_spacing: float) -> Predicted:
+def window_boxes(m: StableManifold, window: Window) -> list:
+    """The window's copies in the frame of L (the left branch of π) that L can meet: for the
+    left branch of π's copies the window shifted by −2πj, for the right branch of −π's (the
+    reflection of L) the reflected window shifted by −2πj; as ((θ0, θ1), (v0, v1))."""
+    turn, out = 2.0 * math.pi, []
+    lo_theta, hi_theta = float(m.theta.min()) - 1.0, math.pi + 1.0
+    frames = {"left": (window.theta, window.theta_dot),
+              "right": ((-window.theta[1], -window.theta[0]),
+                        (-window.theta_dot[1], -window.theta_dot[0]))}
+    for b in sources(window):
+        (t0, t1), (v0, v1) = frames[b]
+        if v1 <= 0.0:
+            continue
+        for j in range(math.floor((t0 - hi_theta) / turn), math.ceil((t1 - lo_theta) / turn) + 1):
+            out.append(((t0 - turn * j, t1 - turn * j), (v0, v1)))
+    return out
+
+
+def fine_spacing(window: Window) -> float:
+    """The vertex spacing [rad-ish] within a window: 1/:data:`_WINDOW_VERTICES` of its
+    shorter side, so that any boundary crossing it has vertices inside (the configured
+    max_spacing is the spacing elsewhere, and wherever it is the finer one)."""
+    return min(window.theta[1] - window.theta[0],
+               window.theta_dot[1] - window.theta_dot[0]) / _WINDOW_VERTICES
+
+
+def _box_distance(y, boxes) -> float:
+    """Euclidean distance [rad-ish] of the point ``y`` from the nearest of ``boxes``."""
+    best = math.inf
+    for (t0, t1), (v0, v1) in boxes:
+        dx = max(t0 - y[0], 0.0, y[0] - t1)
+        dy = max(v0 - y[1], 0.0, y[1] - v1)
+        best = min(best, math.hypot(dx, dy))
+    return best
+
+
+def predict(m: StableManifold, edges: list[float], max_spacing: float, boxes=(),
+            fine: float = math.inf) -> Predicted:
     """Vertices along L, the left branch of π, walking the dense output of ``m`` in reversed
     time from the saddle to its end: chords ≤ ``max_spacing`` and ≤ max_spacing/√κ, the step
     in τ also limited by the growth of the speed |f| near the saddle (from max_spacing/10 at
     the saddle), and an extra vertex at every crossing of a speed in ``edges`` (bisection on
-    the smooth dense output)."""
+    the smooth dense output). Where ``fine`` [rad-ish] is smaller than that spacing, the
+    chords near the ``boxes`` (:func:`window_boxes`) shrink to it: no longer than half the
+    distance to the nearest box outside them (so a zoom costs a few dozen vertices per
+    decade of scale), ``fine`` inside; and the straight piece between the saddle and the
+    reference's first point gets vertices ``fine`` apart where a box holds it (a zoom into
+    the saddle)."""
     p = m.pendulum
     u2 = -p.saddle_eigenvalues()[1]
-    tau = min(max(0.0, math.log(0.1 * max_spacing / START_DISTANCE) / u2), m.tau_end)
+    refine = bool(boxes) and fine < max_spacing
+    first = 0.1 * (min(max_spacing, fine) if refine else max_spacing)
+    tau = min(max(0.0, math.log(first / START_DISTANCE) / u2), m.tau_end)
     y = m.at(tau)
-    verts = [(*y, tau)]
+    verts = _straight(m, boxes, fine, u2) if refine and tau == 0.0 else []
+    verts.append((*y, tau))
     while tau < m.tau_end:
         if len(verts) > _MAX_VERTICES:
             raise SeparatrixError(f"the stable manifold needs more than {_MAX_VERTICES} "
@@ -91,6 +139,8 @@ def predict(m: StableManifold, edges: list[float], max_spacing: float) -> Predic
         kappa = abs(f0 * g1 - f1 * g0) / speed**3  # curvature of the orbit [rad⁻¹]
         growth = abs(f0 * g0 + f1 * g1) / speed**2  # |d ln speed / d tau|
         h = max_spacing * min(1.0, 1.0 / math.sqrt(kappa)) if kappa > 0 else max_spacing
+        if refine:
+            h = min(h, max(fine, 0.5 * _box_distance(y, boxes)))
         span = min(_CHORD_AIM * h / speed, _SPEED_GROWTH / max(growth, 1e-300))
         while True:
             t = min(tau + span, m.tau_end)
@@ -106,6 +156,26 @@ def predict(m: StableManifold, edges: list[float], max_spacing: float) -> Predic
         tau, y = t, z
     arr = np.array(verts, float)
     return Predicted(1, "left", arr[:, 0], arr[:, 1], arr[:, 2], np.arange(arr.shape[0]))
+
+
+def _straight(m: StableManifold, boxes, fine: float, u2: float) -> list:
+    """Vertices on the straight piece of L from the saddle (π, 0) to its first integrated
+    point (the stable eigenvector, exact to O(START_DISTANCE²)), ``fine`` apart where it runs
+    through a box: (θ, θ̇, τ) with τ = ln(s/START_DISTANCE)/u2 ≤ 0, the linear flow's
+    reversed time, at distance s from the saddle."""
+    if not fine < START_DISTANCE:
+        return []
+    ex, ev = m.start[0] - math.pi, m.start[1]
+    s = np.arange(fine, START_DISTANCE, fine)[:_MAX_VERTICES]
+    theta, theta_dot = math.pi + s / START_DISTANCE * ex, s / START_DISTANCE * ev
+    near = np.zeros(s.size, bool)
+    for (t0, t1), (v0, v1) in boxes:
+        dx = np.maximum(np.maximum(t0 - theta, 0.0), theta - t1)
+        dy = np.maximum(np.maximum(v0 - theta_dot, 0.0), theta_dot - v1)
+        near |= np.hypot(dx, dy) <= fine
+    tau = np.log(s / START_DISTANCE) / u2
+    return [(float(a), float(b), float(c)) for a, b, c in zip(theta[near], theta_dot[near],
+                                                              tau[near])]
 
 
 def not_a_knot_spline(x: np.ndarray, y: np.ndarray, at: np.ndarray) -> np.ndarray:

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from atlas.boundaries.exact import FIND_CYCLE, RUNNING_SIDE, ExactAreas
+from atlas.boundaries.basins import FIND_CYCLE, RUNNING_SIDE, ExactAreas
 from atlas.boundaries.manifold import RTOL, RTOL_CHECK, _DenseOutput
 from atlas.boundaries.segments import (
     Segments,

@@ -23,6 +23,7 @@ import xarray as xr
 
 from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.boundaries.bisection import Labeller, field_normal, linger, locate
+from atlas.boundaries.certificate import cert_distance
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND, check, symmetry_error
 from atlas.boundaries.crossings import axis_crossings
 from atlas.boundaries.exact import (
@@ -31,7 +32,16 @@ from atlas.boundaries.exact import (
     UnboundedExact,
     exact_boundaries,
 )
-from atlas.boundaries.predictor import edge_speeds, needed, place, predict, reference, sources
+from atlas.boundaries.predictor import (
+    edge_speeds,
+    fine_spacing,
+    needed,
+    place,
+    predict,
+    reference,
+    sources,
+    window_boxes,
+)
 from atlas.boundaries.trace_tilted import trace_tilted
 from atlas.boundaries.window import Window, checked_window
 from atlas.physics.pendulum import Pendulum
@@ -97,8 +107,32 @@ def trace(
             from atlas.physics.running import running_barrier
 
             barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.tilted.cycle, dt=dt)
-        return trace_tilted(p, window, exact.tilted, barrier, t_max=t_max, **settings)
-    return _trace_untilted(p, window, **settings)
+        return unmeasured_shift(trace_tilted(p, window, exact.tilted, barrier, t_max=t_max,
+                                             **settings), window, exact)
+    return unmeasured_shift(_trace_untilted(p, window, **settings), window, exact)
+
+
+def unmeasured_shift(ds: xr.Dataset, window: Window, exact: ExactBoundaries) -> xr.Dataset:
+    """``ds`` with its ``discrepancy`` (the measured shift d_cert is built on) NaN, and a
+    warning saying why, when no traced point lies in the window although an exact boundary
+    comes within reach of it: the largest d_cert any accepted trace could give,
+    SAFETY·(DISCREPANCY_BOUND + tol + reference error). Beyond that reach every label of the
+    window is certified alike whatever the shift, so an empty trace keeps its 0 there."""
+    inside = window.margin(ds["theta"].values, ds["theta_dot"].values) >= 0
+    if inside.any():
+        return ds
+    (t0, t1), (v0, v1) = window.box
+    centre_dist, _ = exact.distance(np.array([0.5 * (t0 + t1)]), np.array([0.5 * (v0 + v1)]))
+    clearance = float(centre_dist[0]) - 0.5 * math.hypot(t1 - t0, v1 - v0)
+    reach = cert_distance(DISCREPANCY_BOUND, float(ds.attrs["tol"]), exact.reference_error)
+    if clearance > reach:
+        return ds
+    line = ("no point of a basin boundary could be located in the window although one "
+            f"passes within {max(clearance, 0.0):.1e} of it (d_cert would need its shift): "
+            "the RK4 map's boundary shift is not measured (NaN), so no label is certified "
+            "for the exact equation")
+    warnings = "\n".join(filter(None, [str(ds.attrs.get("warnings", "")), line]))
+    return ds.assign_attrs(discrepancy=math.nan, warnings=warnings)
 
 
 def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: float,
@@ -110,7 +144,8 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
     # the two source branches, over the stretch their copies in the window use: vertices on
     # the exact left branch of π, and their reflections for the right branch of −π
     ref = reference(p, window)
-    left = predict(ref, edge_speeds(window), max_spacing)
+    left = predict(ref, edge_speeds(window), max_spacing, window_boxes(ref, window),
+                   fine_spacing(window))
     grown = [g for b in sources(window)
              if (g := needed(left if b == "left" else left.reflected(), window)).theta.size]
 

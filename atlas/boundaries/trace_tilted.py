@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
+from atlas.boundaries.basins import RUNNING_SIDE
 from atlas.boundaries.bisection import (
     MAX_BRACKET,
     Labeller,
@@ -29,7 +30,7 @@ from atlas.boundaries.bisection import (
 )
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
 from atlas.boundaries.crossings import PROBE, tilted_crossings
-from atlas.boundaries.exact import RUNNING_SIDE
+from atlas.boundaries.predictor import fine_spacing
 from atlas.boundaries.window import Window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
@@ -145,21 +146,51 @@ def _vertices(exact, window: Window, max_spacing: float):
     outside the window —, (θ, θ̇) (N, 2)) of every branch in the window, about
     ``max_spacing`` apart along it."""
     rows = []  # (saddle j, branch, vertex index, θ, θ̇)
+    fine = fine_spacing(window)
     for j, name, theta, theta_dot in exact.curves(clip=False):
         step = np.hypot(np.diff(theta), np.diff(theta_dot))
         along = np.concatenate([[0.0], np.cumsum(step)])
         picks = np.unique(np.searchsorted(along, np.arange(_FIRST_VERTEX, along[-1],
                                                            max_spacing)))
         picks = picks[picks < theta.size]
-        inside = window.margin(theta[picks], theta_dot[picks]) >= 0
+        pos, x, v = along[picks], theta[picks], theta_dot[picks]
+        if fine < max_spacing:  # a small window: points on the chords, ``fine`` apart
+            pos, x, v = _fine_points(window, fine, along, theta, theta_dot, pos, x, v)
+        inside = window.margin(x, v) >= 0
         for number in np.flatnonzero(inside):  # numbered along the branch: gaps outside
-            i = picks[number]
-            rows.append((j, schema.BRANCHES.index(name), int(number), theta[i], theta_dot[i]))
+            rows.append((j, schema.BRANCHES.index(name), int(number), x[number], v[number]))
     saddle_j = np.array([r[0] for r in rows], np.int64)
     branch = np.array([r[1] for r in rows], np.int8)
     vertex = np.array([r[2] for r in rows], np.int32)
     base = np.array([(r[3], r[4]) for r in rows], float).reshape(-1, 2)
     return saddle_j, branch, vertex, base
+
+
+def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v):
+    """The picks (arc length ``pos``, θ ``x``, θ̇ ``v``) of a branch's polyline (arc
+    lengths ``along`` at its vertices ``theta``, ``theta_dot``), with points added on the
+    chords that come within ``fine`` [rad-ish] of the window, ``fine`` apart along the branch
+    (from ``fine`` off the saddle: there the chord is the stable eigenvector, to
+    O(START_DISTANCE²)); sorted along the branch. The chords are within the polylines' chord
+    error of the exact branch, far inside the bisection's first bracket."""
+    (t0, t1), (v0, v1) = window.box
+    ax, av, bx, bv = theta[:-1], theta_dot[:-1], theta[1:], theta_dot[1:]
+    near = ((np.maximum(ax, bx) >= t0 - fine) & (np.minimum(ax, bx) <= t1 + fine)
+            & (np.maximum(av, bv) >= v0 - fine) & (np.minimum(av, bv) <= v1 + fine))
+    extra = [np.arange(math.ceil(max(along[i], fine) / fine), math.floor(along[i + 1] / fine)
+                       + 1) * fine for i in np.flatnonzero(near)]
+    if not extra:
+        return pos, x, v
+    s = np.concatenate(extra)
+    s = s[(s > 0) & (s <= along[-1])]
+    seg = np.clip(np.searchsorted(along, s) - 1, 0, along.size - 2)
+    f = (s - along[seg]) / np.where(along[seg + 1] > along[seg], along[seg + 1] - along[seg],
+                                    1.0)
+    sx = theta[seg] + f * (theta[seg + 1] - theta[seg])
+    sv = theta_dot[seg] + f * (theta_dot[seg + 1] - theta_dot[seg])
+    order = np.argsort(np.concatenate([pos, s]), kind="stable")
+    return (np.concatenate([pos, s])[order], np.concatenate([x, sx])[order],
+            np.concatenate([v, sv])[order])
 
 
 def _shift_error(labels, base, normal, below, above, point, ok, tol: float):

@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 
 from atlas import defaults
-from atlas.kernels import TRAPPED, UNRESOLVED
 from atlas.kernels.cuda import VARIANTS, cuda_status, kernels
 from atlas.kernels.cuda_host import label_cuda
 from atlas.labels.trap import CHECK_EVERY, energy_cap, n_checks_for
+from atlas.status import TRAPPED, UNRESOLVED
 
 __all__ = ["run_gpu_bench", "format_gpu_rows", "TARGETS"]
 

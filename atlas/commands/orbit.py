@@ -38,15 +38,11 @@ def running_barrier_for(alpha: float, omega0: float, torque: float, dt: float):
     parameters: :func:`atlas.physics.running.running_barrier` at the RK4 step ``dt`` around
     :func:`atlas.physics.running.limit_cycle`. (None, None) when τ = 0 or there is no running
     cycle. Raises AtlasError where no barrier can be verified (dt too coarse)."""
-    from atlas.physics import running
+    from atlas.physics.pendulum import Pendulum
+    from atlas.physics.running import running_certificate
 
-    if torque == 0.0:
-        return None, None
-    cycle = running.limit_cycle(alpha, omega0, torque)
-    if cycle is None:
-        return None, None
     try:
-        barrier = running.running_barrier(alpha, omega0, torque, cycle, dt=dt)
+        cycle, barrier = running_certificate(Pendulum(alpha, omega0, torque), dt)
     except (ValueError, RuntimeError) as exc:
         raise AtlasError(f"running certificate: {exc}") from None
     return barrier, cycle

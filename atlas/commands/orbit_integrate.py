@@ -149,8 +149,7 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
         th, v, c, s = steps(th, v, c, s)
     limit = n_checks * check_every
     if result["status"] == TRAPPED:
-        level = settle * (2.0 * omega0 * omega0 if torque == 0.0 else
-                          Pendulum(alpha, omega0, torque).saddle_energy)
+        level = settle * Pendulum(alpha, omega0, torque).saddle_energy
         while len(thetas) - 1 < limit:
             c, s, _, energy = sync(th, v)
             if not energy > level:

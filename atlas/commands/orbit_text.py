@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from atlas.boundaries.exact import RUNNING_SIDE
+from atlas.boundaries.basins import RUNNING_SIDE
 from atlas.commands.orbit_integrate import Orbit
 from atlas.physics.pendulum import Pendulum
 from atlas.status import NONFINITE, RUNNING, STATUS_MEANINGS, TRAPPED
@@ -23,7 +23,6 @@ __all__ = ["header_line", "label_lines", "exact_line", "file_line"]
 
 TWO_PI = 2.0 * math.pi
 #: The name of each status code (as the file's CF flag_meanings say).
-STATUS_NAMES = STATUS_MEANINGS
 
 
 def header_line(orbit: Orbit) -> str:
@@ -41,7 +40,7 @@ def label_lines(orbit: Orbit, kernel_status: int, kernel_k: int) -> list[str]:
     same = kernel_status == orbit.status and (orbit.k is None or kernel_k == orbit.k)
     said_k = "" if kernel_status != TRAPPED else f", k = {kernel_k}"
     agree = "the same as atlas.label" if same else (
-        f"atlas.label says status {STATUS_NAMES[kernel_status]}{said_k}: a point on a "
+        f"atlas.label says status {STATUS_MEANINGS[kernel_status]}{said_k}: a point on a "
         "knife edge, decided by rounding")
     if orbit.status == TRAPPED:
         return _trapped_lines(orbit, agree)
@@ -50,7 +49,7 @@ def label_lines(orbit: Orbit, kernel_status: int, kernel_k: int) -> list[str]:
     why = ("NaN or inf met" if orbit.status == NONFINITE else
            "neither trapped nor certified running by t_max" if orbit.barrier is not None else
            "not trapped by t_max")
-    return [f"label        none: {STATUS_NAMES[orbit.status]} ({why}) ({agree})"]
+    return [f"label        none: {STATUS_MEANINGS[orbit.status]} ({why}) ({agree})"]
 
 
 def _rest(k: int) -> str:
@@ -149,6 +148,6 @@ def file_line(nearest: dict) -> str:
     grid_k = "none" if nearest["k"] is None else f"{nearest['k']:+d}"
     return (f"file         nearest grid point theta0 = {nearest['theta0']:.6g}, theta_dot0 = "
             f"{nearest['theta_dot0']:.6g}: stored k = {grid_k}, status "
-            f"{STATUS_NAMES.get(nearest['status'], nearest['status'])}, t_trap "
+            f"{STATUS_MEANINGS.get(nearest['status'], nearest['status'])}, t_trap "
             f"{nearest['t_trap']:.2f} s, boundary distance {nearest['distance']:.4g}"
             + ("" if nearest["inside"] else " (the orbit starts outside the atlas window)"))

@@ -4,8 +4,7 @@ A :class:`Backend` (cpu, cuda) knows whether it can run here (one line why not),
 tile size, the methods (:mod:`atlas.labels.methods`) it has kernels for and which kernel
 labels a tile; every kernel follows the contract of :mod:`atlas.kernels`, so they are
 interchangeable. The device is kept apart from the tile *scheduler* (local threads or Dask,
-:mod:`atlas.pipeline`): a config's or the CLI's backend word names both, and
-:func:`resolve` splits it, ``resolve("dask") == (BACKENDS["cpu"], "dask")``.
+:mod:`atlas.pipeline.schedule`), which also says which device a config's backend word means.
 """
 
 from __future__ import annotations
@@ -18,8 +17,7 @@ from atlas import defaults
 from atlas.labels.methods import METHODS, load
 from atlas.labels.methods import lookup as lookup_method
 
-__all__ = ["Backend", "BACKENDS", "KERNELS", "SCHEDULERS", "WORDS", "lookup", "resolve",
-           "resolve_method"]
+__all__ = ["Backend", "BACKENDS", "KERNELS", "lookup", "resolve_method"]
 
 #: The kernel variants every backend offers: None (its fast kernel) and "straightforward"
 #: (the plain one-orbit-per-thread kernel, libm sin, that the fast one is checked against).
@@ -107,31 +105,12 @@ BACKENDS: dict[str, Backend] = {b.name: b for b in (
             status="atlas.kernels.cuda:cuda_status", requires="atlas.kernels.cuda:require_cuda"),
 )}
 
-#: Schedulers of a sweep's tiles: "local" (threads of this process) or "dask".
-SCHEDULERS = ("local", "dask")
-#: The backend words of configs (``execution.backend``) and of ``atlas run --backend``, each
-#: as (backend, scheduler).
-WORDS: dict[str, tuple[str, str]] = {"cpu": ("cpu", "local"), "cuda": ("cuda", "local"),
-                                     "dask": ("cpu", "dask")}
-
-
 def lookup(name: str) -> Backend:
     """The :class:`Backend` called ``name`` ("cpu", "cuda"); ValueError (one line) otherwise."""
     try:
         return BACKENDS[name]
     except (KeyError, TypeError):
         raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {name!r}") from None
-
-
-def resolve(word: str) -> tuple[Backend, str]:
-    """(Backend, scheduler name) for a config's or the CLI's backend word: "cpu" and "cuda"
-    run their kernels on the local scheduler, "dask" the CPU kernels on Dask's. ValueError
-    (one line) for another word."""
-    try:
-        backend, scheduler = WORDS[word]
-    except (KeyError, TypeError):
-        raise ValueError(f"backend must be one of {tuple(WORDS)}, got {word!r}") from None
-    return BACKENDS[backend], scheduler
 
 
 def resolve_method(backend: str, kernel: str | None, method: str | None) -> str:

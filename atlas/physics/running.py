@@ -26,7 +26,7 @@ import numpy as np
 from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import START_DISTANCE, Pendulum, tilt
 
-__all__ = ["LimitCycle", "RunningCertificate", "BarrierCheck", "limit_cycle",
+__all__ = ["running_certificate", "LimitCycle", "RunningCertificate", "BarrierCheck", "limit_cycle",
            "homoclinic_threshold", "running_barrier", "check_barrier", "contains",
            "rk4_allowance", "CYCLE_SAMPLES", "BARRIER_SAMPLES", "TOP_MARGIN"]
 
@@ -180,11 +180,11 @@ def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-
     dθ̇/dθ = θ̈/θ̇, dt/dθ = 1/θ̇ (regular: θ̇ > 0 on the cycle). Accuracy: ``error`` (the
     change from rtol·10), about 1e-11 relative at the default rtol.
     """
-    from scipy.integrate import solve_ivp
-
     _check(alpha, omega0)
     if torque == 0.0:
-        return None
+        return None  # before scipy's import: an untilted run never pays it
+    from scipy.integrate import solve_ivp
+
     direction = 1 if torque > 0 else -1
     found = [_fixed_point(_Turn(alpha, omega0, abs(torque), r), omega0)
              for r in (rtol, 10.0 * rtol)]
@@ -205,6 +205,19 @@ def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-
     return LimitCycle(theta0=direction * theta_s, theta=direction * theta,
                       theta_dot=direction * sol.y[0], time=sol.y[1], period=period,
                       direction=direction, error=error)
+
+
+def running_certificate(pendulum: Pendulum, dt: float):
+    """(limit cycle, running barrier) of ``pendulum`` for the RK4 map at step ``dt`` [s]: the
+    running limit cycle (:func:`limit_cycle`) and the forward-invariant region around it
+    (:func:`running_barrier`) that the kernels test; (None, None) where there is no cycle.
+    ValueError (one line) where no barrier can be verified at ``dt``. The one place a sweep,
+    a trace and ``atlas orbit`` build it."""
+    cycle = limit_cycle(pendulum.alpha, pendulum.omega0, pendulum.torque)
+    if cycle is None:
+        return None, None
+    return cycle, running_barrier(pendulum.alpha, pendulum.omega0, pendulum.torque, cycle,
+                                  dt=dt)
 
 
 def homoclinic_threshold(alpha: float, omega0: float, *, rtol: float = 1e-12) -> float:

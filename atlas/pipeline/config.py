@@ -1,6 +1,6 @@
 """Sweep configs: YAML validated by pydantic v2. Every default is written once, here.
 
-A config names the pendulum (α, ω0 — a list for either makes a parameter atlas), the
+A config names the pendulum (α, ω0, τ — a list for any makes a parameter atlas), the
 (θ0, θ̇0) grid, the integrator, the separatrix tracing, the execution backend and the output
 path. Numbers may be written as π expressions: ``3pi``, ``-pi/2``, ``2*pi``, ``0.5pi``.
 Any problem is raised as :class:`atlas.errors.ConfigError` with one line naming the key.
@@ -32,7 +32,6 @@ from pydantic import (
 from atlas import defaults
 from atlas.defaults import METHODS
 from atlas.errors import ConfigError
-from atlas.labels.backends import WORDS
 from atlas.layout import PARAMETERS
 from atlas.limits import MAX_RATE, MIN_RATE
 
@@ -265,11 +264,18 @@ class SeparatricesConfig(_Strict):
     max_spacing: Number = Field(default=defaults.MAX_SPACING, gt=0)
 
 
+#: The backend words of configs (``execution.backend``) and of ``atlas run --backend``, each a
+#: device (:data:`atlas.labels.backends.BACKENDS`) and a tile scheduler
+#: (:data:`atlas.pipeline.schedule.SCHEDULERS`).
+BACKEND_WORDS: dict[str, tuple[str, str]] = {"cpu": ("cpu", "local"), "cuda": ("cuda", "local"),
+                                             "dask": ("cpu", "dask")}
+
+
 class ExecutionConfig(_Strict):
     """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write; by
     default ``defaults.TILE_ORBITS``, on the GPU ``defaults.TILE_ORBITS_CUDA``)."""
 
-    backend: Literal[tuple(WORDS)] = "cpu"
+    backend: Literal[tuple(BACKEND_WORDS)] = "cpu"
     tile_orbits: int | None = Field(default=None, ge=1)
     workers: int | None = Field(default=None, ge=1)
     scheduler: str | None = None
@@ -289,7 +295,7 @@ class Config(_Strict):
     @model_validator(mode="after")
     def _runnable(self):
         """Checks across sections, so that a valid config never fails after work began."""
-        from atlas.labels.backends import resolve
+        from atlas.labels.backends import lookup as lookup_backend
         from atlas.labels.labelling import check_integration, check_torque_reach
         from atlas.labels.methods import lookup as lookup_method
         from atlas.labels.trap import CHECK_EVERY
@@ -297,7 +303,8 @@ class Config(_Strict):
 
         dt, t_max = self.integrator.dt, self.integrator.t_max
         try:
-            resolve(self.execution.backend)[0].check_method(self.integrator.method)
+            device = lookup_backend(BACKEND_WORDS[self.execution.backend][0])
+            device.check_method(self.integrator.method)
         except ValueError as exc:
             raise ValueError(f"integrator.{exc}") from None
         if not lookup_method(self.integrator.method).running and any(self.pendulum.torques):

@@ -1,7 +1,8 @@
-"""The Dask scheduler: tiles as tasks on a dask.distributed cluster, one writer on the client.
+"""The Dask scheduler: tiles as tasks on a dask.distributed cluster.
 
-Workers compute tiles (:func:`atlas.pipeline.schedule.compute_tile`) and send the arrays
-back; the client writes each as it arrives, so HDF5 needs no parallel driver and the crash
+Workers compute tiles (:func:`atlas.pipeline.schedule.compute_tile`); for HDF5 they send the
+arrays back and the client writes each as it arrives (no parallel driver needed), for Zarr
+they write their tile into the store themselves and send its tally; either way the crash
 and resume guarantees are those of the local scheduler. At most ``2 × workers`` tiles are in
 flight. ``execution.scheduler`` names an existing scheduler (``tcp://host:8786``), otherwise a
 LocalCluster of ``execution.workers`` processes starts. A task runs Numba with (its host's
@@ -72,7 +73,8 @@ def numba_threads_here(slots_by_host: dict[str, int]) -> int | None:
 
 def dask_results(cfg, todo, args_of: Callable[[int], tuple], compute_tile, run_identity: str,
                  ) -> Iterator[tuple[int, tuple]]:
-    """Yield (tile index, (attractor, status, t_trap)) as tiles finish on the cluster."""
+    """Yield (tile index, what ``compute_tile`` returned: (arrays, tally), or a tally for a
+    tile its worker wrote) as tiles finish on the cluster."""
     from distributed import as_completed
 
     client, cluster = _client(cfg.execution.scheduler, cfg.execution.workers)

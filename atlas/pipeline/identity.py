@@ -12,9 +12,8 @@ from datetime import datetime, timezone
 import numpy as np
 import xarray as xr
 
-from atlas.labels import backends
 from atlas.labels.trap import CHECK_EVERY
-from atlas.pipeline.config import Config, config_hash, integrator_json
+from atlas.pipeline.config import BACKEND_WORDS, Config, config_hash, integrator_json
 from atlas.store.schema import FORMAT_VERSION
 
 __all__ = ["run_identity", "identity_hash", "file_attrs", "library_versions"]
@@ -35,7 +34,7 @@ def run_identity(cfg: Config, backend: str) -> dict:
             "separatrices": (cfg.separatrices.model_dump(mode="json")
                              if cfg.separatrices.enabled else {"enabled": False}),
             "check_every": int(CHECK_EVERY), "atlas_version": __version__,
-            "kernels": backends.resolve(backend)[0].name}
+            "kernels": BACKEND_WORDS[backend][0]}
 
 
 def identity_hash(identity: dict) -> str:

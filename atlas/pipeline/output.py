@@ -16,16 +16,20 @@ import os
 import shutil
 from pathlib import Path
 
+import numpy as np
+
 from atlas.errors import AtlasError, OutputInTheWay
 from atlas.layout import Layout
 from atlas.store.formats import format_for
 from atlas.store.reader import is_atlas_file
+from atlas.store.schema import MAP_VARIABLES
 
 __all__ = ["check_output_target", "check_output_path", "BYTES_PER_ORBIT"]
 
-#: Bytes one orbit is expected to take on disk: an estimate from the labels uncompressed
-#: (int16 + int8 + float32), not a bound (boundary_distance is not counted).
-BYTES_PER_ORBIT = 7
+#: Bytes one orbit takes on disk at most: every per-orbit variable of the file uncompressed,
+#: from their stored dtypes (attractor int16 + status int8 + t_trap float32 +
+#: boundary_distance float32 = 11 bytes; compression only lowers it).
+BYTES_PER_ORBIT = sum(np.dtype(v.dtype).itemsize for v in MAP_VARIABLES.values())
 
 
 def check_output_target(output, config=None, *, force: bool = False) -> None:

@@ -123,10 +123,8 @@ def running_certificates(pendulums: list[Pendulum], dt: float) -> tuple[list, li
     one line naming integrator.dt)."""
     cycles, barriers = [], []
     for p in pendulums:
-        cycle = running.limit_cycle(p.alpha, p.omega0, p.torque) if p.torque else None
         try:
-            barrier = (None if cycle is None else
-                       running.running_barrier(p.alpha, p.omega0, p.torque, cycle, dt=dt))
+            cycle, barrier = running.running_certificate(p, dt)
         except ValueError as exc:
             raise AtlasError(f"integrator.dt: {exc} (torque = {p.torque:g})") from None
         cycles.append(cycle)

@@ -12,19 +12,22 @@ scheduler.
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future
+from typing import NamedTuple
 
 from atlas import defaults
 from atlas.boundaries.certificate import Certifier
+from atlas.labels.backends import Backend
+from atlas.labels.backends import lookup as lookup_backend
 from atlas.labels.labelling import label
 from atlas.layout import Layout
 from atlas.physics.barrier import RunningBarrier
-from atlas.pipeline.config import Config
+from atlas.pipeline.config import BACKEND_WORDS, Config
 from atlas.store.partial import TileStore
 
-__all__ = ["compute_tile", "tile_args", "local_results", "compute_tile_into_store",
-           "dask_tile_results"]
+__all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "tile_args", "local_results",
+           "compute_tile_into_store", "dask_tile_results"]
 
 
 def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice, dt, t_max,
@@ -81,7 +84,8 @@ def _in_background(fn, *args, **kwargs) -> Future:
     return future
 
 
-def local_results(cfg, layout, certifiers, todo, backend) -> Iterator[tuple[int, tuple]]:
+def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
+                  ) -> Iterator[tuple[int, tuple]]:
     """(index, (arrays, tally)) of the tiles ``todo`` in order, each computed one tile ahead
     in a background thread, so tile i+1 is computed while the caller writes tile i (the
     Numba kernels run without the GIL, and so do zlib and fsync in the write). At most one
@@ -92,10 +96,11 @@ def local_results(cfg, layout, certifiers, todo, backend) -> Iterator[tuple[int,
     import numba
 
     threads = numba.get_num_threads()  # the caller's setting: Numba's is per thread
+    layout = tiles.layout
 
     def start(index):
         return _in_background(compute_tile, *tile_args(cfg, layout, certifiers, index),
-                              backend=backend, numba_threads=threads)
+                              backend=device, numba_threads=threads)
 
     ahead = start(todo[0]) if len(todo) else None
     for position, index in enumerate(todo):
@@ -114,9 +119,11 @@ def compute_tile_into_store(fmt, folder, layout, index, *args, numba_threads=Non
     return tally
 
 
-def dask_tile_results(cfg, tiles: TileStore, certifiers, todo) -> Iterator[tuple[int, tuple]]:
+def dask_tile_results(cfg, tiles: TileStore, certifiers, todo, device: str = "cpu"
+                      ) -> Iterator[tuple[int, tuple]]:
     """(index, (arrays, tally)), or for a format that takes parallel writes (Zarr)
-    (index, tally) of a tile the worker has written itself."""
+    (index, tally) of a tile the worker has written itself. The workers run the CPU kernels
+    (``device`` "cpu": the only device of the Dask scheduler)."""
     from atlas.pipeline.distributed import dask_results
 
     layout = tiles.layout
@@ -132,3 +139,32 @@ def dask_tile_results(cfg, tiles: TileStore, certifiers, todo) -> Iterator[tuple
 
         task = compute_tile
     yield from dask_results(cfg, todo, args_of, task, tiles.manifest["attrs"]["run_identity"])
+
+
+class Scheduler(NamedTuple):
+    """A way to run a sweep's tiles: ``results(cfg, tiles, certifiers, todo, device)`` yields
+    (index, (arrays, tally)) for the caller to write, or (index, tally) for a tile that its
+    worker wrote itself, which is the case where ``worker_writes(tiles)``."""
+
+    results: Callable[..., Iterator[tuple[int, tuple]]]
+    worker_writes: Callable[[TileStore], bool]
+
+
+#: Every tile scheduler by name: this process, one tile ahead; or a Dask cluster.
+SCHEDULERS: dict[str, Scheduler] = {
+    "local": Scheduler(local_results, lambda tiles: False),
+    "dask": Scheduler(dask_tile_results, lambda tiles: tiles.format.parallel_tile_writes),
+}
+
+
+def resolve(word: str) -> tuple[Backend, Scheduler]:
+    """(device, scheduler) of a config's or the command line's backend word
+    (:data:`atlas.pipeline.config.BACKEND_WORDS`): "cpu" and "cuda" run their device's
+    kernels here, "dask" the CPU kernels on a Dask cluster. ValueError (one line) for
+    another word."""
+    try:
+        device, scheduler = BACKEND_WORDS[word]
+    except (KeyError, TypeError):
+        raise ValueError(f"backend must be one of {tuple(BACKEND_WORDS)}, got {word!r}"
+                         ) from None
+    return lookup_backend(device), SCHEDULERS[scheduler]

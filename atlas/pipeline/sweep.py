@@ -1,17 +1,19 @@
 """The sweep: a config's grid of initial conditions → tiles → a basin atlas on disk.
 
-The grid (θ̇0 rows × θ0 columns, for every α, ω0 of a parameter atlas) is cut into tiles of
-whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled independently
-(:func:`compute_tile`, which any backend can run) and each finished tile is written at once
-(:mod:`atlas.store.partial`, one atomically written file per tile in ``<output>.partial/``) while
-the next tile is computed, so memory is bounded by two tiles and a crash loses only tiles in
-flight; when all are done the output's format (:func:`atlas.store.formats.format_for`:
-HDF5, or Zarr for ``NAME.zarr``) assembles the file. Orbits never interact, so results do not
-depend on tile size, backend or thread count.
+The grid (θ̇0 rows × θ0 columns, for every α, ω0, τ of a parameter atlas) is cut into tiles
+of whole rows (about ``execution.tile_orbits`` orbits each). Tiles are labelled
+independently (:func:`atlas.pipeline.schedule.compute_tile`, on any device and scheduler)
+and each finished tile is written at once (:mod:`atlas.store.partial`, one atomically
+written file per tile in ``<output>.partial/``) while the next tile is computed, so memory
+is bounded by two tiles and a crash loses only tiles in flight; when all are done the
+output's format (:func:`atlas.store.formats.format_for`: HDF5, or Zarr for ``NAME.zarr``)
+assembles the file. Orbits never interact, so results do not depend on tile size, backend
+or thread count.
 
 A run continues the partial run at its output if that has the same identity
-(:func:`run_identity`: grid, physics, integrator, kernel check interval, atlas version, kernel
-class) and refuses one of another identity unless ``restart=True`` discards it.
+(:func:`atlas.pipeline.identity.run_identity`: grid, physics, integrator, kernel check
+interval, atlas version, kernel class) and refuses one of another identity unless
+``restart=True`` discards it.
 """
 
 from __future__ import annotations
@@ -29,7 +31,6 @@ import xarray as xr
 from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.boundaries.certificate import Certifier, add_tallies
 from atlas.errors import AtlasError, InputFileError, StorageError
-from atlas.labels import backends
 from atlas.labels.trap import energy_cap, trap_margin
 from atlas.layout import PARAMETERS, Layout, point_label
 from atlas.pipeline import points
@@ -37,7 +38,7 @@ from atlas.pipeline.config import Config
 from atlas.pipeline.identity import file_attrs, run_identity
 from atlas.pipeline.lock import output_lock
 from atlas.pipeline.output import check_output_path, check_output_target
-from atlas.pipeline.schedule import dask_tile_results, local_results
+from atlas.pipeline.schedule import Scheduler, resolve
 from atlas.store.formats import format_for
 from atlas.store.partial import (
     DamagedTile,
@@ -59,7 +60,7 @@ def layout_of(cfg: Config, backend: str | None = None) -> Layout:
     word, default ``execution.backend``): ``execution.tile_orbits`` orbits per tile, or by
     default the device's (:attr:`atlas.labels.backends.Backend.tile_orbits`: a GPU tile
     fills the GPU)."""
-    device, _ = backends.resolve(backend or cfg.execution.backend)
+    device, _ = resolve(backend or cfg.execution.backend)
     tile = cfg.execution.tile_orbits or device.tile_orbits
     g = cfg.grid
     theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
@@ -152,13 +153,13 @@ def _orbits(layout: Layout, tiles) -> int:
 
 
 def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], device: str,
-                  scheduler: str, quiet: bool) -> None:
-    """Label and certify the tiles still to do and store each as it finishes (the local
-    backends compute the next tile meanwhile, :func:`_local_results`)."""
+                  scheduler: Scheduler, quiet: bool) -> None:
+    """Label and certify the tiles still to do on ``device`` ("cpu", "cuda") and store each as
+    it finishes, as ``scheduler`` runs them (the local one computes the next tile meanwhile:
+    :func:`atlas.pipeline.schedule.local_results`)."""
     layout, todo = tiles.layout, tiles.todo()
-    written_by_workers = scheduler == "dask" and tiles.format.parallel_tile_writes
-    results = (dask_tile_results(cfg, tiles, certifiers, todo) if scheduler == "dask"
-               else local_results(cfg, layout, certifiers, todo, device))
+    written_by_workers = scheduler.worker_writes(tiles)
+    results = scheduler.results(cfg, tiles, certifiers, todo, device)
     total = _orbits(layout, range(layout.n_tiles))
     with _progress(total, total - _orbits(layout, todo), quiet) as bar:
         for index, result in results:
@@ -207,7 +208,7 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     groups = points.groups(tiles.layout, pendulums, traced, cycles, barriers)
     phase.done("exact boundaries and areas")
     for _ in range(3):
-        device, scheduler = backends.resolve(backend)
+        device, scheduler = resolve(backend)
         _compute_into(tiles, cfg, certifiers, device.name, scheduler, quiet)
         phase.done("map (label and certify tiles)")
         try:
@@ -243,7 +244,7 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
     """
     check_output_target(cfg.output, config_path, force=force)
     backend = backend or cfg.execution.backend
-    device, _ = backends.resolve(backend)
+    device, _ = resolve(backend)
     try:
         device.check_method(cfg.integrator.method)
     except ValueError as exc:  # a --backend override of a valid config: name the config

@@ -150,8 +150,8 @@ def require_certificate(tree: xr.DataTree, path) -> None:
     if not stores_certificate(tree.attrs):
         version = format_version(tree.attrs, path)
         raise InputFileError(f"{path} was written in format {version}, which does not store "
-                             "the certificate its labels used; recompute it with `atlas run "
-                             "CONFIG --restart`")
+                             "the certificate its labels used; recompute it by running its "
+                             "config again (`atlas run CONFIG`)")
 
 
 def stored_certificate(tree: xr.DataTree, point: dict[str, float]) -> StoredCertificate | None:

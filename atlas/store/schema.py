@@ -21,7 +21,7 @@ import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.layout import Layout
-from atlas.status import ATTRACTOR_FILL, STATUS_MEANINGS
+from atlas.status import ATTRACTOR_FILL, IN_FILE, STATUS_MEANINGS
 
 __all__ = ["FORMAT_VERSION", "OLDEST_FORMAT", "CERTIFICATE_FORMAT", "SCHEMA", "MapVariable",
            "MAP_VARIABLES", "FILLS", "STATUS_FLAGS", "chunks_of", "BASIN_VARIABLES",
@@ -40,16 +40,12 @@ CERTIFICATE_FORMAT = 4
 #: Root attribute ``atlas_schema`` of every atlas file, complete or not.
 SCHEMA = "atlas-basin-map/1"
 
-#: ``status``'s CF flags, from :data:`atlas.status.STATUS_MEANINGS`.
+#: ``status``'s CF flags and comment, from :data:`atlas.status.STATUS_MEANINGS` and
+#: :data:`atlas.status.IN_FILE`.
 STATUS_FLAGS = {"flag_values": np.array(list(STATUS_MEANINGS), np.int8),
                 "flag_meanings": " ".join(STATUS_MEANINGS.values()),
-                "comment": "trapped: certified for the exact equation (energy trap of the RK4 "
-                           "map, and farther than d_cert from every basin boundary); "
-                           "near_boundary: trapped, certified for the RK4 map only; running "
-                           "(torque): in the running barrier of the RK4 map and farther than "
-                           "d_cert from every basin boundary, certified for the exact equation "
-                           "to converge to the running limit cycle; running_near_boundary: "
-                           "running, certified for the RK4 map only"}
+                "comment": "; ".join(f"{STATUS_MEANINGS[code]}: {text}"
+                                     for code, text in IN_FILE.items())}
 
 
 @dataclass(frozen=True)
@@ -66,8 +62,10 @@ class MapVariable:
 #: The basin map's variables, in file order.
 MAP_VARIABLES = {
     "attractor": MapVariable(np.int16, ATTRACTOR_FILL, ATTRACTOR_FILL, {
-        "long_name": "index k of the attractor (2*pi*k, 0) reached",
-        "units": "1", "comment": "fill value where status != trapped"}),
+        "long_name": "index k of the attractor (theta* + 2*pi*k, 0) reached, "
+                     "theta* = asin(torque/omega0^2)",
+        "units": "1", "comment": "fill value where no well label applies (status unresolved, "
+                                 "nonfinite, running or running_near_boundary)"}),
     "status": MapVariable(np.int8, None, np.int8(0), {
         "long_name": "labelling status", "units": "1", **STATUS_FLAGS}),
     "t_trap": MapVariable(np.float32, np.float32(np.nan), np.float32(np.nan), {
@@ -160,7 +158,8 @@ def summary_dataset(layout: Layout, points: list[dict]) -> xr.Dataset:
         values = np.array([p[name] for p in points], np.float64).reshape(lead)
         data[name] = (lead_dims, values, {"units": "1", **attrs})
     return xr.Dataset(data, coords={"k": ("k", np.array(ks, np.int16), {
-        "long_name": "attractor index: the rest state (2*pi*k, 0)", "units": "1"})})
+        "long_name": "attractor index: the rest state (theta* + 2*pi*k, 0), "
+                     "theta* = asin(torque/omega0^2)", "units": "1"})})
 
 
 def summary_tree(layout: Layout, root_vars: xr.Dataset, groups: dict[str, xr.Dataset],

@@ -25,9 +25,10 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
              "torque [rad/s^2])"]
     for point in every:
         lines.append(f"pendulum  {point_label(point)}")
-        lines += ["  " + line for line in _basin_lines(at_point(ds, point))]
-        lines += ["  " + line for line in _torque_lines(tree, point)]
         sep = point_group(tree, "separatrices", point)
+        lines += ["  " + line for line in _basin_lines(at_point(ds, point),
+                                                       traced=sep is not None)]
+        lines += ["  " + line for line in _torque_lines(tree, point)]
         if sep is not None:
             lines += ["  " + line for line in separatrix_lines(sep)]
     unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
@@ -37,9 +38,11 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
     return lines
 
 
-def _basin_lines(ds: xr.Dataset) -> list[str]:
+def _basin_lines(ds: xr.Dataset, traced: bool = False) -> list[str]:
     """The basins of one parameter point: exact area fractions first, then the grid counts
-    with their error bound and measured error, then d_cert and the certified share."""
+    with their error bound and measured error, then d_cert and the certified share (why
+    d_cert is missing: separatrices disabled, or, ``traced``, traced without measuring a
+    boundary shift)."""
     present = (ds["basin_fraction_exact"].values > 0) | (ds["basin_fraction"].values > 0)
     ks = ds["k"].values[present]
     exact = ds["basin_fraction_exact"].values[present]
@@ -73,6 +76,10 @@ def _basin_lines(ds: xr.Dataset) -> list[str]:
                      f"the exact equation: farther than d_cert = {d_cert:.1e} from every "
                      "basin boundary (status trapped or running); the others for the RK4 "
                      "map only")
+    elif traced:
+        lines.append("certified d_cert not measured (the separatrices measured no boundary "
+                     "shift in this window; see their warning): labels are certified for the "
+                     "RK4 map only (status near_boundary or running_near_boundary)")
     else:
         lines.append("certified d_cert not measured (separatrices disabled): labels are "
                      "certified for the RK4 map only (status near_boundary)")
@@ -132,8 +139,11 @@ def separatrix_lines(ds: xr.Dataset) -> list[str]:
             f"({'within' if symmetry <= symmetry_bound else 'EXCEEDS'} bound "
             f"{symmetry_bound:.0e})" if symmetry == symmetry else
             "not checked (the window needs one of them only)")),
-        f"check vs DOP853 stable manifold: max distance {disc:.1e} "
-        f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e}); "
+        (f"check vs DOP853 stable manifold: max distance {disc:.1e} "
+         f"({'within' if disc <= bound else 'EXCEEDS'} bound {bound:.0e}); "
+         if disc == disc else
+         "check vs DOP853 stable manifold: boundary shift not measured (see the warning); ")
+        +
         f"polyline error {float(ds.attrs['polyline_error']):.1e}; "
         f"{int(ds.attrs['n_orbits'])} orbits labelled, {int(ds.attrs['n_unresolved'])} "
         "uncertified (left out, never counted as either side)",

@@ -28,8 +28,8 @@ from atlas.views.style import (
     WELL_COLORS,
     axes,
     critical_point_markers,
-    pi_ticks,
     point_title,
+    window_ticks,
 )
 
 if TYPE_CHECKING:
@@ -68,9 +68,8 @@ def _grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kw
                       aspect="auto", interpolation="nearest", **kwargs)
     ax.set_xlim(th[0], th[-1])
     ax.set_ylim(v[0], v[-1])
-    pi_ticks(ax, th[0], th[-1])
-    ax.set_xlabel("θ0 [rad]")
-    ax.set_ylabel("θ̇0 [rad/s]")
+    window_ticks(ax, th[0], th[-1], "x", "θ0", "rad", pi=True)
+    window_ticks(ax, v[0], v[-1], "y", "θ̇0", "rad/s")
     return image
 
 

@@ -53,7 +53,6 @@ DIST_STEPS = 256
 _DIST_OFFSET = 128  # log2 d from -128 to +128 fits uint16 at 256 steps per octave
 _T_NAN = np.iinfo(np.uint32).max
 #: The name of each status code (as the file's CF flag_meanings say).
-STATUS_NAMES = STATUS_MEANINGS
 #: The running basin's colour as RGB (:data:`atlas.views.style.RUNNING_COLOR`, a grey).
 RUNNING_RGB = (round(255 * float(RUNNING_COLOR)),) * 3
 
@@ -131,7 +130,7 @@ def _running(tree: xr.DataTree, point: dict[str, float], barrier) -> dict:
     each where the point has no running cycle): the barrier its labels were certified with,
     as stored (``barrier``, :class:`atlas.store.reader.StoredBarrier`), g as a float64 blob;
     the stored cycle (about ``CYCLE_DRAWN`` segments, rounded to 1e-4) to draw."""
-    cycle = point_group(tree, "limit_cycle", point) if point.get("torque", 0.0) else None
+    cycle = point_group(tree, "limit_cycle", point)  # only points with a running cycle
     if cycle is None or barrier is None:
         return {"barrier": None, "cycle": None}
     theta, theta_dot = cycle["theta"].values, cycle["theta_dot"].values
@@ -173,7 +172,9 @@ def _name(ds: xr.Dataset) -> str:
 
 
 def payload(tree: xr.DataTree, path: Path) -> dict:
-    """Everything the page shows, as JSON-ready data."""
+    """Everything the page shows, as JSON-ready data. A file of format 3, which does not store
+    the certificate, is refused (InputFileError, one line)."""
+    require_certificate(tree, path)
     ds = tree.to_dataset(inherit=False)
     dt, t_max = float(ds.attrs["dt"]), float(ds.attrs["t_max"])
     check_every = int(ds.attrs["check_every"])
@@ -209,7 +210,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         "theta0": _uniform(ds["theta0"].values, "theta0", path),
         "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
         "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
-        "status_names": {str(k): v for k, v in STATUS_NAMES.items()},
+        "status_names": {str(k): v for k, v in STATUS_MEANINGS.items()},
         "colors": list(WELL_COLORS), "points": points,
     }
 
@@ -247,7 +248,6 @@ def write_view(path: str | Path, output: str | Path | None = None) -> Path:
         raise AtlasError(f"{output}: the output folder {output.parent} is not a directory")
     tree = open_atlas(path)
     try:
-        require_certificate(tree, path)
         for name in ("attractor", "status", "t_trap"):
             if name not in tree.to_dataset(inherit=False):
                 raise InputFileError(f"{path}: no {name} variable in this atlas")

@@ -12,7 +12,7 @@ import numpy as np
 
 __all__ = ["STYLE", "MAP_SIZE", "CURVE_SIZE", "PNG_OPTIONS", "WELL_COLORS", "RUNNING_COLOR",
            "SEPARATRIX_COLOR", "CYCLE_COLOR", "pi_label", "pi_ticks", "point_title",
-           "critical_point_markers", "axes"]
+           "critical_point_markers", "axes", "window_ticks"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
@@ -42,6 +42,44 @@ def pi_ticks(ax, lo: float, hi: float, axis: str = "x") -> None:
     getattr(ax, f"set_{axis}ticks")(n * np.pi)
     getattr(ax, f"set_{axis}ticklabels")([pi_label(k) for k in n])
 
+
+
+#: SI prefixes of the tick scales of a narrow window: 10⁻³ m, 10⁻⁶ µ, …
+_PREFIXES = {0: "", -3: "m", -6: "µ", -9: "n", -12: "p", -15: "f"}
+
+
+def window_ticks(ax, lo: float, hi: float, axis: str, name: str, unit: str,
+                 pi: bool = False) -> None:
+    """Ticks and label of one axis of a map over [lo, hi] (``unit`` "rad" or "rad/s"),
+    readable at any width: at multiples of π where ``pi`` and two of them fit (θ of a wide
+    window); else plain numbers, which in a window too narrow for plain ticks to tell apart
+    (zooms: hi − lo below 1, or far from 0) are the offsets from a reference near the
+    centre, in units with an SI prefix: "θ̇0 − 2.4149382176 [µrad/s]", ticks −0.4 … 0.4."""
+    from matplotlib.ticker import MaxNLocator
+
+    width, centre = hi - lo, 0.5 * (lo + hi)
+    if pi and np.floor(hi / np.pi) - np.ceil(lo / np.pi) >= 1:
+        pi_ticks(ax, lo, hi, axis)
+        getattr(ax, f"set_{axis}label")(f"{name} [{unit}]")
+        return
+    power = int(min(0, max(-15, 3 * np.floor(np.log10(width) / 3)))) if width > 0 else 0
+    if power == 0 and abs(centre) <= 100 * width:
+        getattr(ax, f"set_{axis}label")(f"{name} [{unit}]")
+        return
+    ref, text = 0.0, "0"
+    if abs(centre) > 10 * width:  # the reference: the centre, to the digits that matter
+        text = next(f"{centre:.{d}g}" for d in range(1, 18)
+                    if abs(float(f"{centre:.{d}g}") - centre) <= width * 1e-4)
+        ref = float(text)
+    scale = 10.0 ** power
+    ticks = MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]).tick_values(
+        (lo - ref) / scale, (hi - ref) / scale)
+    ticks = ticks[(ticks >= (lo - ref) / scale - 1e-9) & (ticks <= (hi - ref) / scale + 1e-9)]
+    getattr(ax, f"set_{axis}ticks")(ref + ticks * scale)
+    getattr(ax, f"set_{axis}ticklabels")([f"{t:g}".replace("-", "−") for t in ticks])
+    shown = (f"{name} − {text}" if ref > 0 else f"{name} + {text.lstrip('-')}" if ref
+             else name)
+    getattr(ax, f"set_{axis}label")(f"{shown} [{_PREFIXES[power]}{unit}]")
 
 
 def point_title(point: dict[str, float]) -> str:

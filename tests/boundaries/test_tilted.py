@@ -19,7 +19,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import atlas
-from atlas.boundaries.exact import RUNNING_SIDE
+from atlas.boundaries.basins import RUNNING_SIDE
 from atlas.boundaries.tilted import TiltedBoundaries
 from atlas.physics.pendulum import Pendulum
 from atlas.physics.running import homoclinic_threshold, limit_cycle, running_barrier

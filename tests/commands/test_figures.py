@@ -13,8 +13,8 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from matplotlib.colors import same_color  # noqa: E402
 
+from atlas import linear
 from atlas.commands import figures  # noqa: E402
-from atlas.physics import linear
 
 UNITS = {"θ [rad]", "θ̇ [rad/s]", "t [s]"}
 

@@ -245,7 +245,7 @@ def test_orbit_refuses_a_format_3_file_with_one_line(swing_file, tmp_path, capsy
     err = capsys.readouterr().err.strip()
     assert err.startswith("atlas: error: ") and "\n" not in err
     assert "written in format 3, which does not store the certificate" in err
-    assert "atlas run CONFIG --restart" in err and not out.exists()
+    assert "(`atlas run CONFIG`)" in err and not out.exists()
 
 
 @pytest.mark.slow

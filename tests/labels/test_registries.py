@@ -18,7 +18,7 @@ from atlas.kernels import TRAPPED, UNRESOLVED
 from atlas.kernels.rk4 import record_straightforward, record_torque
 from atlas.kernels.trigfree import SYNC_EVERY, record_trigfree, record_trigfree_torque
 from atlas.labels import backends, methods
-from atlas.labels.backends import BACKENDS, resolve, resolve_method
+from atlas.labels.backends import BACKENDS, resolve_method
 from atlas.labels.methods import METHODS
 from atlas.labels.trap import CHECK_EVERY, energy_cap, n_checks_for
 from atlas.physics.pendulum import tilt
@@ -192,16 +192,6 @@ def test_availability_is_reported_in_one_line():
         message = str(err.value)
         assert message.startswith("backend 'cuda': ") and "\n" not in message
         assert "atlas[cuda]" in message
-
-
-def test_resolve_splits_the_backend_word_into_device_and_scheduler():
-    assert resolve("cpu") == (BACKENDS["cpu"], "local")
-    assert resolve("cuda") == (BACKENDS["cuda"], "local")
-    assert resolve("dask") == (BACKENDS["cpu"], "dask")
-    assert set(backends.WORDS) == {"cpu", "cuda", "dask"}
-    assert {s for _, s in backends.WORDS.values()} == set(backends.SCHEDULERS)
-    with pytest.raises(ValueError, match="backend must be one of"):
-        resolve("tpu")
 
 
 def test_a_backend_hands_out_the_kernel_of_a_method():

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from atlas.physics import linear
+from atlas import linear
 from atlas.physics.pendulum import Pendulum
 
 EPS = np.finfo(float).eps
@@ -262,3 +262,13 @@ def test_invalid_parameters_raise(alpha, omega0, message):
         linear.solve_saddle(0.1, 0.0, [0.0, 1.0], alpha=alpha, omega0=omega0)
     with pytest.raises(ValueError, match=message):
         linear.amplitude_phase(0.1, 0.0, alpha, omega0)
+
+
+def test_the_closed_forms_keep_their_public_name():
+    """``atlas.linear`` is the public name of atlas.physics.linear, for every spelling."""
+    import atlas.linear
+    from atlas.linear import solve
+
+    import atlas.physics.linear
+
+    assert atlas.linear is atlas.physics.linear and solve is atlas.physics.linear.solve

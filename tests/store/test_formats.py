@@ -296,7 +296,7 @@ def test_a_format_3_file_is_read_without_a_certificate(good, tmp_path):
             require_certificate(tree, path)
         assert str(err.value) == (
             f"{path} was written in format 3, which does not store the certificate its "
-            "labels used; recompute it with `atlas run CONFIG --restart`")
+            "labels used; recompute it by running its config again (`atlas run CONFIG`)")
     finally:
         tree.close()
     # a format-3 file still has the rest of its schema checked

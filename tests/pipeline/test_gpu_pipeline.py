@@ -17,7 +17,7 @@ import pytest
 import atlas
 from atlas.errors import StorageError
 from atlas.kernels.cuda_host import CHUNK_CAP, MEMORY_FRACTION, WAVES, chunk_orbits
-from atlas.pipeline import schedule, sweep
+from atlas.pipeline import schedule
 from atlas.store.partial import TileStore
 from atlas.store.reader import describe
 from tests.helpers import write_config
@@ -131,11 +131,11 @@ def _config(tmp_path, name="look.h5", backend="cpu"):
     return atlas.load_config(path)
 
 
-def _sequential(cfg, layout, certifiers, todo, backend):
+def _sequential(cfg, tiles, certifiers, todo, device):
     """The sweep as it was: each tile computed when the one before is written."""
     for index in todo:
-        yield index, schedule.compute_tile(*schedule.tile_args(cfg, layout, certifiers, index),
-                                        backend=backend)
+        yield index, schedule.compute_tile(
+            *schedule.tile_args(cfg, tiles.layout, certifiers, index), backend=device)
 
 
 def _arrays(tree):
@@ -147,7 +147,8 @@ def _arrays(tree):
 def reference(tmp_path, monkeypatch):
     """The arrays of the 8-tile atlas computed one tile at a time."""
     with monkeypatch.context() as m:
-        m.setattr(sweep, "local_results", _sequential)
+        m.setitem(schedule.SCHEDULERS, "local",
+                  schedule.Scheduler(_sequential, lambda tiles: False))
         return _arrays(atlas.run(_config(tmp_path, "sequential.h5"), quiet=True))
 
 
@@ -272,12 +273,12 @@ cfg = atlas.load_config({config!r})
 got = atlas.run(cfg, quiet=True).to_dataset(inherit=False)
 pinned = len(made)
 
-def sequential(cfg, layout, certifiers, todo, backend):
+def sequential(cfg, tiles, certifiers, todo, device):
     for index in todo:
-        yield index, schedule.compute_tile(*schedule.tile_args(cfg, layout, certifiers, index),
-                                        backend=backend)
+        yield index, schedule.compute_tile(*schedule.tile_args(cfg, tiles.layout, certifiers,
+                                                               index), backend=device)
 
-sweep.local_results = sequential
+schedule.SCHEDULERS["local"] = schedule.Scheduler(sequential, lambda tiles: False)
 ref = atlas.run(cfg.model_copy(update={{"output": cfg.output.with_name("seq.h5")}}),
                 quiet=True).to_dataset(inherit=False)
 print(json.dumps({{"pinned": pinned, "tiles": int(sweep.layout_of(cfg).n_tiles),

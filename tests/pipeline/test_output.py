@@ -69,4 +69,4 @@ def test_where_a_run_cannot_write(tmp_path):
     with pytest.raises(AtlasError, match="is not a directory"):
         check_output_path(blocker / "out.h5", layout)
     with pytest.raises(AtlasError, match="may need up to"):
-        check_output_path(tmp_path / "huge.h5", _layout(10**5, alphas=1000))  # 70 PB
+        check_output_path(tmp_path / "huge.h5", _layout(10**5, alphas=1000))  # 110 PB
