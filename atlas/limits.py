@@ -16,7 +16,7 @@ import numpy as np
 MIN_RATE, MAX_RATE = 1e-6, 1e6
 #: Most RK4 steps one orbit may take: step counts are int32 in every kernel.
 MAX_STEPS = int(np.iinfo(np.int32).max)
-#: Largest |k| of an attractor (2πk, 0): ``attractor`` is int16 in the file.
+#: Largest |k| of an attractor (θ* + 2πk, 0): ``attractor`` is int16 in the file.
 MAX_WELL = int(np.iinfo(np.int16).max)
 #: Largest relative safety margin m of the energy trap (:func:`atlas.labels.trap.trap_margin`):
 #: beyond it dt is so coarse that the trap would certify little or nothing.

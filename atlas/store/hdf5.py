@@ -35,7 +35,7 @@ from atlas.errors import InputFileError
 from atlas.layout import Layout
 from atlas.store.durable import fsync
 from atlas.store.format import Format, reason
-from atlas.store.schema import FILLS, MAP_VARIABLES, SCHEMA, chunks_of
+from atlas.store.schema import FILLS, LABEL_VARIABLES, MAP_VARIABLES, SCHEMA, chunks_of
 
 __all__ = ["HDF5", "StoredRows", "encode_chunk", "decode_chunk", "DEFLATE_LEVEL"]
 
@@ -96,7 +96,7 @@ class HDF5(Format):
                 attrs = {name: _plain_attr(value) for name, value in f.attrs.items()
                          if not name.startswith("_")}
                 has_map = all(isinstance(f.get(name), h5py.Dataset)
-                              for name in ("attractor", "status", "t_trap"))
+                              for name in LABEL_VARIABLES)
         except Exception as exc:  # OSError for most damage; h5py raises others too
             raise InputFileError(f"{path}: not a readable HDF5 file ({reason(exc)})") from None
         if attrs.get("atlas_schema") != SCHEMA or not has_map:

@@ -24,6 +24,7 @@ from atlas.layout import Layout
 from atlas.status import ATTRACTOR_FILL, IN_FILE, STATUS_MEANINGS
 
 __all__ = ["FORMAT_VERSION", "OLDEST_FORMAT", "CERTIFICATE_FORMAT", "SCHEMA", "MapVariable",
+           "LABEL_VARIABLES",
            "MAP_VARIABLES", "FILLS", "STATUS_FLAGS", "chunks_of", "BASIN_VARIABLES",
            "POINT_VARIABLES", "CERTIFICATE_POINT_VARIABLES", "summary_dataset",
            "summary_tree", "BARRIER_DIM", "BARRIER_G", "BARRIER_ATTRS", "with_barrier"]
@@ -76,6 +77,8 @@ MAP_VARIABLES = {
         "units": "1", "comment": "rad and rad s-1 taken as one unit; boundaries are the stable "
         "manifolds of the saddles integrated by DOP853 (rtol 1e-13)"}),
 }
+#: The map variables every atlas file has (files before boundary_distance lack only it).
+LABEL_VARIABLES = ("attractor", "status", "t_trap")
 #: The padding of each map variable (a tile's edge chunk; the label arrays' fill values).
 FILLS = {name: var.padding for name, var in MAP_VARIABLES.items()}
 

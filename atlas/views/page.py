@@ -41,6 +41,7 @@ from atlas.status import (
     TRAPPED,
 )
 from atlas.store.reader import open_atlas, require_certificate, stored_certificate
+from atlas.store.schema import LABEL_VARIABLES
 from atlas.store.separatrices import branches
 from atlas.store.validate import file_method
 from atlas.views.style import RUNNING_COLOR, WELL_COLORS
@@ -248,7 +249,7 @@ def write_view(path: str | Path, output: str | Path | None = None) -> Path:
         raise AtlasError(f"{output}: the output folder {output.parent} is not a directory")
     tree = open_atlas(path)
     try:
-        for name in ("attractor", "status", "t_trap"):
+        for name in LABEL_VARIABLES:
             if name not in tree.to_dataset(inherit=False):
                 raise InputFileError(f"{path}: no {name} variable in this atlas")
         page = build_page(tree, path)
