@@ -17,9 +17,9 @@ import signal
 import sys
 from pathlib import Path
 
+from atlas.defaults import BACKEND_WORDS
 from atlas.errors import EXIT_BAD_INPUT, AtlasError, Terminated
 from atlas.labels.backends import BACKENDS
-from atlas.pipeline.config import BACKEND_WORDS
 
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143

@@ -26,6 +26,10 @@ TILE_ORBITS = 1 << 18                       #: orbits per tile of a sweep
 #: tile fills the device several times over and its chunks overlap on two streams
 TILE_ORBITS_CUDA = 1 << 22
 OUTPUT = "outputs/default.h5"               #: output file of a config without `output:`
+#: The backend words of configs (``execution.backend``, default the first) and of
+#: ``atlas run --backend``, each a device (:data:`atlas.labels.backends.BACKENDS`) and a tile
+#: scheduler (:data:`atlas.pipeline.schedule.SCHEDULERS`).
+BACKEND_WORDS = {"cpu": ("cpu", "local"), "cuda": ("cuda", "local"), "dask": ("cpu", "dask")}
 
 
 def problem() -> dict:

@@ -30,7 +30,7 @@ from pydantic import (
 )
 
 from atlas import defaults
-from atlas.defaults import METHODS
+from atlas.defaults import BACKEND_WORDS, METHODS
 from atlas.errors import ConfigError
 from atlas.layout import PARAMETERS
 from atlas.limits import MAX_RATE, MIN_RATE
@@ -262,13 +262,6 @@ class SeparatricesConfig(_Strict):
     enabled: bool = True
     tol: Number = Field(default=defaults.SEPARATRIX_TOL, gt=0, lt=1e-3)
     max_spacing: Number = Field(default=defaults.MAX_SPACING, gt=0)
-
-
-#: The backend words of configs (``execution.backend``) and of ``atlas run --backend``, each a
-#: device (:data:`atlas.labels.backends.BACKENDS`) and a tile scheduler
-#: (:data:`atlas.pipeline.schedule.SCHEDULERS`).
-BACKEND_WORDS: dict[str, tuple[str, str]] = {"cpu": ("cpu", "local"), "cuda": ("cuda", "local"),
-                                             "dask": ("cpu", "dask")}
 
 
 class ExecutionConfig(_Strict):

@@ -12,8 +12,9 @@ from datetime import datetime, timezone
 import numpy as np
 import xarray as xr
 
+from atlas.defaults import BACKEND_WORDS
 from atlas.labels.trap import CHECK_EVERY
-from atlas.pipeline.config import BACKEND_WORDS, Config, config_hash, integrator_json
+from atlas.pipeline.config import Config, config_hash, integrator_json
 from atlas.store.schema import FORMAT_VERSION
 
 __all__ = ["run_identity", "identity_hash", "file_attrs", "library_versions"]

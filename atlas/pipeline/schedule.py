@@ -18,12 +18,13 @@ from typing import NamedTuple
 
 from atlas import defaults
 from atlas.boundaries.certificate import Certifier
+from atlas.defaults import BACKEND_WORDS
 from atlas.labels.backends import Backend
 from atlas.labels.backends import lookup as lookup_backend
 from atlas.labels.labelling import label
 from atlas.layout import Layout
 from atlas.physics.barrier import RunningBarrier
-from atlas.pipeline.config import BACKEND_WORDS, Config
+from atlas.pipeline.config import Config
 from atlas.store.partial import TileStore
 
 __all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "tile_args", "local_results",
@@ -159,7 +160,7 @@ SCHEDULERS: dict[str, Scheduler] = {
 
 def resolve(word: str) -> tuple[Backend, Scheduler]:
     """(device, scheduler) of a config's or the command line's backend word
-    (:data:`atlas.pipeline.config.BACKEND_WORDS`): "cpu" and "cuda" run their device's
+    (:data:`atlas.defaults.BACKEND_WORDS`): "cpu" and "cuda" run their device's
     kernels here, "dask" the CPU kernels on a Dask cluster. ValueError (one line) for
     another word."""
     try:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from atlas.defaults import BACKEND_WORDS
 from atlas.labels.backends import BACKENDS
-from atlas.pipeline.config import BACKEND_WORDS
 from atlas.pipeline.schedule import SCHEDULERS, resolve
 
 
