@@ -9,7 +9,7 @@ CONFIG ?= configs/default.yaml
 output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
 
 .DEFAULT_GOAL := help
-.PHONY: help run test test-fast atlas figures bench faults lint clean venv
+.PHONY: stability help run test test-fast atlas figures bench faults lint clean venv docs
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -e 's/:.*## /\t/' | expand -t 10
@@ -17,34 +17,46 @@ help: ## list the targets
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip uninstall --quiet --yes atlas  # the distribution's name before pendulum-atlas
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $@
 
 venv: $(STAMP) ## create .venv and install atlas with its dev tools
 
 # The atlas file is a target of its config: recomputed only when the config (or the
-# installed package) changed. A config without `output:` writes atlas's default path.
+# installed package) changed. A config without `output:` writes atlas's default path. Its
+# figures are a target of the file: drawn when missing or older than the file, also after an
+# `atlas run` of the same config made the file itself up to date. (`atlas plot` writes
+# NAME.png, the basin map, with the others: it stands for all of them.)
 OUT := $(or $(call output_of,$(CONFIG)),outputs/default.h5)
+FIGURE := $(basename $(OUT)).png
 
 $(OUT): $(CONFIG) $(STAMP)
 	$(BIN)/atlas run $(CONFIG) -o $@
-	$(BIN)/atlas plot $@
 
-run: $(OUT) ## compute configs/default.yaml → outputs/default.h5 and outputs/default.png
+$(FIGURE): $(OUT)
+	$(BIN)/atlas plot $<
 
-atlas: $(OUT) ## compute any config: make atlas CONFIG=configs/x.yaml
+run: $(FIGURE) ## compute configs/default.yaml → outputs/default.h5 and outputs/default.png
+
+atlas: $(FIGURE) ## compute any config and draw its figures: make atlas CONFIG=configs/x.yaml
 
 # pytest-xdist: one worker per core (TEST_WORKERS=0: all in this process), each worker taking
 # whole test files so that a module's fixtures are built once. On the 2-core machine, otherwise
 # idle, the whole suite takes about 5 min 30 s in one process and 3 min 20 s in two.
 TEST_WORKERS ?= auto
 
-test: $(STAMP) ## check the import rules, then run the whole test suite (TEST_WORKERS=0: one process)
+test: $(STAMP) ## import rules, the docs (--strict), then the whole test suite (TEST_WORKERS=0: one process)
 	$(BIN)/lint-imports --no-cache
+	$(MKDOCS) build --strict --quiet
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 test-fast: $(STAMP) ## the fast subset: every test not marked slow (under a minute)
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile -m "not slow"
+
+stability: $(STAMP) ## Menck's figure, exact: configs/swing_stability.yaml (1,001 torques) → outputs/swing_stability*.png
+	$(BIN)/atlas stability configs/swing_stability.yaml -v
+	$(BIN)/atlas plot outputs/swing_stability.h5
 
 figures: $(STAMP) ## the essay's Figures 1-12 → outputs/figures/
 	$(BIN)/atlas figures
@@ -54,6 +66,19 @@ bench: $(STAMP) ## benchmark table → outputs/bench.json
 
 faults: $(STAMP) ## soak: kill -9, SIGTERM, disk full, lock races, Dask faults; prints one table
 	$(BIN)/python -m tools.faults
+
+# The documentation site (mkdocs.yml → site/). --strict: a broken link, anchor or API reference
+# (mkdocstrings reads the docstrings from the sources) fails the build.
+MKDOCS := NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs
+
+docs: $(STAMP) ## the documentation site → site/index.html (mkdocs build --strict)
+	$(MKDOCS) build --strict
+
+# docs/tutorial.ipynb is stored with its outputs (a code host shows its figures): this runs it
+# in a fresh kernel and stores them, stamped with the hash of its code (the tests check it).
+.PHONY: notebook
+notebook: $(STAMP) ## run docs/tutorial.ipynb and store it with its outputs (figures, printouts)
+	$(BIN)/python tests/commands/test_tutorial.py
 
 lint: $(STAMP) ## ruff
 	$(BIN)/ruff check atlas tests tools

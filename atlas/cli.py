@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import re
 import signal
 import sys
 from pathlib import Path
@@ -23,6 +24,8 @@ from atlas.labels.backends import BACKENDS
 
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
+#: The figure formats ``atlas plot --format`` offers: raster PNG, vector SVG and PDF.
+PLOT_FORMATS = ("png", "svg", "pdf")
 
 
 def _raise_terminated(signum, frame):
@@ -41,6 +44,44 @@ class _Parser(argparse.ArgumentParser):
         raise AtlasError(f"{where}: {message}" if where else message)
 
 
+#: What a negative number looks like on the command line of the commands that take numbers
+#: (``atlas orbit FILE -pi/2 1``, ``atlas zoom FILE -3 0.5 --width 1e-3``): a minus, then a
+#: digit, a point, ``pi``, ``π`` or a parenthesis. argparse takes only -1 and -0.5 for
+#: numbers and everything else starting with a minus for an option; none of atlas's options
+#: looks like this.
+_NEGATIVE_NUMBER = re.compile(r"^-(\d|\.\d|pi|π|\()")
+
+
+def _takes_negative_numbers(parser: argparse.ArgumentParser) -> None:
+    """Let ``parser`` read every :data:`_NEGATIVE_NUMBER` as a value, not as an unknown option
+    (argparse has no public switch for it: its own matcher is replaced)."""
+    parser._negative_number_matcher = _NEGATIVE_NUMBER
+
+
+def _version() -> str:
+    """The installed distribution's version (``pendulum-atlas``), or the package's where it is
+    run from a source tree that is not installed."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("pendulum-atlas")
+    except PackageNotFoundError:
+        from atlas._version import __version__
+
+        return __version__
+
+
+class _VersionAction(argparse.Action):
+    """``atlas --version``: the version, looked up only when asked (not on every start)."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"atlas {_version()}")
+        parser.exit()
+
+
 def _cmd_run(args) -> int:
     from atlas.pipeline.config import load_config
 
@@ -49,8 +90,11 @@ def _cmd_run(args) -> int:
 
 
     try:
+        from atlas.pipeline.preflight import ask
+
         tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend,
-                         force=args.force, config_path=args.config, open_result=False)
+                         force=args.force, config_path=args.config, open_result=False,
+                         confirm=ask(yes=args.yes, quiet=args.quiet))
     except KeyboardInterrupt as exc:
         from atlas.store.partial import partial_path
 
@@ -67,13 +111,32 @@ def _cmd_run(args) -> int:
         print(f"wrote {cfg.output}")
         for line in summary_lines(tree):
             print("  " + line)
-    return 0
+    return sweep.accuracy_exit(tree, cfg.output, accept_inexact=args.accept_inexact)
+
+
+def _add_point_selectors(p: argparse.ArgumentParser, what: str, default: str) -> None:
+    """``--point I``, ``--alpha A``, ``--omega0 W``, ``--torque T`` (each repeatable): the
+    parameter points of an atlas whose ``what`` is shown (:mod:`atlas.views.selectors`)."""
+    p.add_argument("--point", type=int, action="append", metavar="I",
+                   help=f"{what} parameter point I (0 the first, -1 the last); repeatable; "
+                   f"default: {default}")
+    for name, unit, letter in (("alpha", "1/s", "A"), ("omega0", "rad/s", "W"),
+                               ("torque", "rad/s^2", "T")):
+        p.add_argument(f"--{name}", type=float, action="append", metavar=letter,
+                       help=f"{what} the point(s) of the nearest {name} [{unit}] (outside "
+                       "the atlas's range: refused); repeatable")
+
+
+def _point_selectors(args) -> dict:
+    """The point selectors of ``atlas info`` and ``atlas plot``, as
+    :func:`atlas.views.selectors.choose_points` takes them."""
+    return {name: getattr(args, name) for name in ("point", "alpha", "omega0", "torque")}
 
 
 def _cmd_info(args) -> int:
     from atlas.views.info import info_lines
 
-    for line in info_lines(args.file):
+    for line in info_lines(args.file, _point_selectors(args)):
         print(line)
     return 0
 
@@ -81,7 +144,14 @@ def _cmd_info(args) -> int:
 def _cmd_plot(args) -> int:
     from atlas.views.plotting import plot_file
 
-    for path in plot_file(args.file):  # all that is drawn is read before a PNG is written
+    if not (args.dpi is None or 10 <= args.dpi <= 2400):
+        raise AtlasError(f"plot: --dpi must be between 10 and 2400 pixels per inch, "
+                         f"got {args.dpi:g}")
+    if args.outdir is not None:
+        _check_folder(Path(args.outdir))  # made once the file is read (bad input: none)
+    # all that is drawn is read before a figure is written
+    for path in plot_file(args.file, args.outdir, args.format, args.dpi,
+                          _point_selectors(args)):
         print(f"wrote {path}")
     return 0
 
@@ -94,6 +164,17 @@ def _output_folder(folder: Path) -> Path:
         raise AtlasError(f"{folder}: cannot create the output folder "
                          f"({exc.strerror or exc})") from None
     return folder
+
+
+def _check_folder(folder: Path) -> None:
+    """One clear AtlasError unless ``folder`` is a folder or could be made (no file in the
+    way of it or of a folder above it); nothing is created."""
+    for place in (folder, *folder.parents):
+        if place.exists():
+            if not place.is_dir():
+                raise AtlasError(f"{folder}: cannot create the output folder ({place} is a "
+                                 "file)")
+            return
 
 
 def _cmd_figures(args) -> int:
@@ -170,18 +251,26 @@ def _cmd_zoom(args) -> int:
     return 0
 
 
-def _add_view_orbit_zoom(sub, common) -> None:
-    p = sub.add_parser("view", parents=[common],
-                       help="OUT.html: a self-contained interactive page of an atlas file")
-    p.add_argument("file")
+def _add_view_orbit_zoom(sub) -> None:
+    p = sub.add_parser("view", help="OUT.html: a self-contained interactive page of an atlas "
+                       "file")
+    p.add_argument("file", help="an atlas file (atlas run's output)")
     p.add_argument("-o", "--output", help="the page (default: the atlas file with .html)")
     p.set_defaults(func=_cmd_view)
 
-    p = sub.add_parser("orbit", parents=[common],
+    p = sub.add_parser("orbit",
                        help="one orbit: label, certificate, phase curve and theta(t) as PNG",
-                       description="atlas orbit [FILE] THETA0 THETA_DOT0: numbers or pi "
-                       "expressions; put -- before a negative pi expression (-- -pi/2 1)")
-    p.add_argument("values", nargs="+", metavar="[FILE] THETA0 THETA_DOT0")
+                       usage="%(prog)s [-h] [FILE] THETA0 THETA_DOT0 [--alpha ALPHA] "
+                       "[--omega0 OMEGA0]\n                   [--torque TORQUE] [--dt DT] "
+                       "[--t-max T_MAX] [-o OUTPUT]",
+                       description="atlas orbit [FILE] THETA0 THETA_DOT0: one orbit from "
+                       "(THETA0 [rad], THETA_DOT0 [rad/s]), numbers or pi expressions, negative "
+                       "ones as they are (atlas orbit FILE -pi/2 1); with an atlas FILE at its "
+                       "parameters and certificate, else give --alpha and --omega0")
+    _takes_negative_numbers(p)
+    p.add_argument("values", nargs="+", metavar="[FILE] THETA0 THETA_DOT0",
+                   help="an atlas file (optional), then the initial angle theta0 [rad] and "
+                   "angular velocity theta_dot0 [rad/s]")
     p.add_argument("--alpha", help="damping [1/s] (with a file: selects a parameter point)")
     p.add_argument("--omega0", help="natural frequency [rad/s] (with a file: selects a point)")
     p.add_argument("--torque", help="torque [rad/s^2] (default 0; with a file: selects a point)")
@@ -191,14 +280,15 @@ def _add_view_orbit_zoom(sub, common) -> None:
                    "file, else outputs/orbit.png)")
     p.set_defaults(func=_cmd_orbit)
 
-    p = sub.add_parser("zoom", parents=[common],
+    p = sub.add_parser("zoom",
                        help="the YAML config of a square window centred on a point, at an "
                        "atlas file's parameters",
                        description="atlas zoom FILE THETA0 THETA_DOT0 --width W: the config "
                        "of a window W wide in theta0 [rad] and theta_dot0 [rad/s] centred on "
                        "(THETA0, THETA_DOT0), at FILE's parameters and integrator; numbers or "
-                       "pi expressions; put the options first and -- before a negative pi "
-                       "expression (atlas zoom --width 1 FILE -- -pi/2 1)")
+                       "pi expressions, negative ones as they are (atlas zoom FILE -pi/2 1 "
+                       "--width 1e-3)")
+    _takes_negative_numbers(p)
     p.add_argument("file", help="an atlas file (atlas run's output)")
     p.add_argument("theta0", help="the window's centre theta0 [rad]")
     p.add_argument("theta_dot0", help="the window's centre theta_dot0 [rad/s]")
@@ -214,11 +304,22 @@ def _add_view_orbit_zoom(sub, common) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="atlas", description="Phase-space atlas of the damped pendulum "
-                     "θ̈ = −ω0² sin θ − 2αθ̇ + τ: basins of attraction, separatrices, figures.")
+                     "θ̈ = −ω0² sin θ − 2αθ̇ + τ: basins of attraction, separatrices, figures. "
+                     "Angles are in radians; numbers may be pi expressions (3pi, -pi/2).",
+                     epilog="Exit status: 0 done; 1 the environment failed a run (disk full, "
+                     "write refused; finished tiles kept); 2 bad input (nothing written); 3 "
+                     "the output is locked by another run; 4 a run wrote its file but an "
+                     "accuracy check exceeded its bound (0 with --accept-inexact); 130/143 "
+                     "interrupted (Ctrl-C/SIGTERM; finished tiles kept). `atlas COMMAND -h` "
+                     "for a command's help.")
+    parser.add_argument("--version", action=_VersionAction,
+                        help="print the version of atlas and exit")
+    # -v where there is progress to log: `atlas run` (and commands that run sweeps)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("-v", "--verbose", action="count", default=0,
-                        help="log progress (-v) and every tile written (-vv)")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+                        help="log the time of each stage of the run (-v) and every tile "
+                        "written (-vv)")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     p = sub.add_parser("run", parents=[common],
                        help="compute the atlas of a YAML config into HDF5 (or Zarr: NAME.zarr)")
@@ -237,31 +338,55 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override execution.backend: the device (cpu, cuda) or the CPU on a "
                    "Dask cluster (dask)")
     p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    p.add_argument("--yes", action="store_true", help="start a big run without asking "
+                   "(on a terminal, a run of about 2 min or 1 GB or more asks first)")
+    p.add_argument("--accept-inexact", action="store_true", help="exit 0 although the "
+                   "separatrix check exceeds its bound (else exit 4; the file is written)")
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("info", parents=[common], help="describe an atlas file")
-    p.add_argument("file")
+    p = sub.add_parser("info", help="describe an atlas file: parameters, basin fractions, "
+                       "d_cert, separatrices, provenance")
+    p.add_argument("file", help="an atlas file (atlas run's output, NAME.h5 or NAME.zarr); "
+                   "for an interrupted run, how far it got")
+    _add_point_selectors(p, "print the detail of", "a parameter atlas's points as one "
+                         "table")
     p.set_defaults(func=_cmd_info)
 
-    p = sub.add_parser("plot", parents=[common], help="PNG figures next to an atlas file")
-    p.add_argument("file")
+    p = sub.add_parser("plot", help="the figures of an atlas file (basin map, trapping "
+                       "time, boundary distance, curves of swept parameters)")
+    p.add_argument("file", help="an atlas file (atlas run's output)")
+    p.add_argument("--outdir", help="write the figures into this folder, made if needed "
+                   "(default: next to the file, NAME.png, NAME_t_trap.png, ...)")
+    p.add_argument("--format", choices=PLOT_FORMATS, default="png",
+                   help="the figures' file format (default png; svg and pdf are vector, with "
+                   "the basin maps as embedded images)")
+    p.add_argument("--dpi", type=float, help="resolution in pixels per inch (default 150; "
+                   "the maps' images hold at most 1200 pixels per axis whatever the dpi)")
+    _add_point_selectors(p, "draw only the full maps of", "a parameter atlas's basin maps "
+                         "as small multiples, the t_trap and distance maps of its first "
+                         "point")
     p.set_defaults(func=_cmd_plot)
 
-    p = sub.add_parser("figures", parents=[common], help="the essay's Figures 1-12")
-    p.add_argument("--outdir", default="outputs/figures")
+    p = sub.add_parser("figures", help="the essay's Figures 1-12, redrawn")
+    p.add_argument("--outdir", default="outputs/figures",
+                   help="the folder to write them into, made if needed (default "
+                   "outputs/figures)")
     p.set_defaults(func=_cmd_figures)
 
-    p = sub.add_parser("bench", parents=[common],
-                       help="benchmark table, written to outputs/bench.json")
+    p = sub.add_parser("bench", help="benchmark table, written to outputs/bench.json")
     p.add_argument("--quick", action="store_true", help="fewer sizes and repetitions")
     p.add_argument("--backend", choices=tuple(BACKENDS), default="cpu",
                    help="the device to benchmark (cuda: the GPU rows)")
-    p.add_argument("--output", default="outputs/bench.json")
+    p.add_argument("--output", default="outputs/bench.json",
+                   help="the JSON file of the results (default outputs/bench.json)")
     p.add_argument("--gpu-sweep", type=int, action="append", metavar="N",
                    help="with a GPU: also time atlas run --backend cuda of the N x N default "
                         "atlas, end to end (repeatable; 16384 is the target's size)")
     p.set_defaults(func=_cmd_bench)
-    _add_view_orbit_zoom(sub, common)
+    _add_view_orbit_zoom(sub)
+    from atlas.commands.stability import add_parser as add_stability
+
+    add_stability(sub, common)
     return parser
 
 
@@ -311,8 +436,12 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGTERM, _raise_terminated)
     args = None
     try:
-        args = build_parser().parse_args(argv)
-        _configure_logging(args.verbose)
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if args.command is None:  # a bare `atlas`: what it can do
+            parser.print_help()
+            return 0
+        _configure_logging(getattr(args, "verbose", 0))
         return args.func(args)
     except AtlasError as exc:
         print(f"atlas: error: {_one_line(str(exc))}", file=sys.stderr)

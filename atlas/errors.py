@@ -10,7 +10,11 @@ Failures become messages in one place, the CLI (:func:`atlas.cli.main`), which p
   :class:`StorageError`, a disk full or a write refused; :class:`SeparatrixError`): the
   finished tiles are kept and running the same command again continues;
 * **3** — the output is locked by another run (:class:`atlas.pipeline.lock.OutputLocked`, an
-  :class:`EnvironmentFailure` too).
+  :class:`EnvironmentFailure` too);
+* **4** — :data:`EXIT_INEXACT`: a run finished and wrote its file, but an accuracy check
+  exceeded its bound (the traced separatrices farther from the DOP853 stable manifold than
+  the bound the certificate assumes); ``atlas run --accept-inexact`` exits 0 instead. Not an
+  exception: the work is kept and the CLI says so (:func:`atlas.pipeline.sweep.accuracy_exit`).
 
 Ctrl-C and SIGTERM are not errors: the CLI exits 130 and 143 (:class:`Terminated`).
 """
@@ -19,6 +23,8 @@ Ctrl-C and SIGTERM are not errors: the CLI exits 130 and 143 (:class:`Terminated
 EXIT_BAD_INPUT = 2
 #: Exit status of a failure of the environment during a run (disk full, write refused).
 EXIT_ENVIRONMENT = 1
+#: Exit status of a run whose file was written but whose accuracy check exceeded its bound.
+EXIT_INEXACT = 4
 
 
 class AtlasError(Exception):

@@ -65,6 +65,14 @@ def _round_up(x: float) -> float:
     return math.ceil(x / unit) * unit
 
 
+def finest_tol(theta_window, theta_dot_window) -> float:
+    """The finest separatrix ``tol`` [rad-ish] double precision resolves in this window
+    ([rad], [rad s⁻¹]): ``MIN_TOL_ULPS`` (64) spacings of doubles at its largest |θ| or |θ̇|,
+    rounded up to two significant digits (1.2e-13 for |θ| ≤ 3π; 1.9e-12 for |θ| ≤ 180)."""
+    scale = max(abs(float(x)) for x in (*theta_window, *theta_dot_window))
+    return _round_up(MIN_TOL_ULPS * float(np.spacing(scale)))
+
+
 def check_separatrix_settings(theta_window, theta_dot_window, tol: float,
                               max_spacing: float) -> None:
     """Raise ValueError, with a one-line reason naming the setting, unless

@@ -23,7 +23,8 @@ UNRESOLVED = 1
 #: A NaN or inf state was met.
 NONFINITE = 2
 #: Set after labelling (never by a kernel): trapped, but closer than d_cert to a basin
-#: boundary, so certified for the RK4 map only.
+#: boundary — or d_cert was not measured (NaN: no separatrices traced), which leaves every
+#: label here — so certified for the RK4 map only.
 NEAR_BOUNDARY = 3
 #: Certified to converge to the running limit cycle (τ ≠ 0): the orbit entered the running
 #: barrier's forward-invariant region. ``attractor`` keeps its fill value; the direction of
@@ -49,10 +50,14 @@ IN_FILE = {
              "d_cert from every basin boundary)",
     UNRESOLVED: "no certificate held before t_max",
     NONFINITE: "a NaN or inf state was met",
-    NEAR_BOUNDARY: "trapped, certified for the RK4 map only (closer than d_cert to a basin "
-                   "boundary)",
+    NEAR_BOUNDARY: "trapped, certified for the RK4 map only: closer than d_cert to a basin "
+                   "boundary, or d_cert not measured (NaN: separatrices disabled, or no "
+                   "boundary traced in the window), so that no label is certified for the "
+                   "exact equation",
     RUNNING: "with torque: in the running barrier of the RK4 map and farther than d_cert from "
              "every basin boundary, certified for the exact equation to converge to the "
              "running limit cycle",
-    RUNNING_NEAR_BOUNDARY: "running, certified for the RK4 map only",
+    RUNNING_NEAR_BOUNDARY: "running, certified for the RK4 map only: closer than d_cert to a "
+                           "basin boundary, on another basin's side, or d_cert not measured "
+                           "(NaN: separatrices disabled, or no boundary traced)",
 }

@@ -93,7 +93,7 @@ def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
 
 
 def lock_is_free(output: Path) -> bool:
-    """True if no process holds ``output``'s lock (the lock file itself stays in place)."""
+    """True if no process holds ``output``'s lock (taking it to see: it is removed again)."""
     from atlas.pipeline.lock import OutputLocked, output_lock
 
     try:

@@ -101,6 +101,8 @@ class Certifier:
         status = np.asarray(status)
         has_label, running = labelled(status), status == RUNNING
         agree = (has_label | running) & (_basin(attractor, status) == side)
+        # d_cert NaN (no boundary shift measured: separatrices disabled or none traced)
+        # certifies nothing: every label stays near_boundary, as IN_FILE says
         certified = agree & (dist > self.d_cert)
         status = np.where(has_label & ~certified, NEAR_BOUNDARY, status)
         status = np.where(running & ~certified, RUNNING_NEAR_BOUNDARY, status).astype(np.int8)

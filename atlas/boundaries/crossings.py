@@ -77,5 +77,12 @@ def tilted_crossings(exact, labels, window: Window, tol: float):
     up = np.column_stack([np.zeros(speeds.size), np.ones(speeds.size)])
     below = exact.side(np.zeros(speeds.size), speeds - PROBE)
     above = exact.side(np.zeros(speeds.size), speeds + PROBE)
-    lo, hi, _ = bisect_between(labels, base, up, below, above, tol=tol, half_width=PROBE)
+    # from the exact crossing ± FIRST_BRACKET·tol, widened as needed (the RK4 map's boundary
+    # lies ≈ 1e-9 from it); a crossing that fails so is bisected again from ±PROBE
+    lo, hi, ok = bisect_between(labels, base, up, below, above, tol=tol,
+                                half_width=FIRST_BRACKET * tol)
+    again = np.flatnonzero(~ok)
+    if again.size:
+        lo[again], hi[again], _ = bisect_between(labels, base[again], up[again], below[again],
+                                                 above[again], tol=tol, half_width=PROBE)
     return speeds + 0.5 * (lo + hi), hi - lo, below, above

@@ -74,6 +74,12 @@ class ExactBoundaries(Protocol):
         """(lowest, highest) saddle n of the boundaries within ``radius`` [rad-ish] of each
         point, a superset (flattened; (0, 0) where none)."""
 
+    def nearest_point(self, theta, theta_dot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(distance [rad-ish], θ [rad], θ̇ [rad s⁻¹]) of the nearest point of the nearest
+        basin boundary to each point (the foot of :meth:`distance`); (inf, nan, nan) if
+        none. From a rest state: its minimal fatal shock (Halekotte & Feudel, Sci. Rep. 10,
+        11783, 2020)."""
+
 
 def exact_boundaries(pendulum: Pendulum, window: Box, *, cycle=FIND_CYCLE) -> ExactBoundaries:
     """The exact basin boundaries of ``pendulum`` (α > 0) over ``window``: the one place
@@ -170,6 +176,30 @@ class UntiltedExact:
     def saddles_within(self, theta, theta_dot, radius: float):
         return self._index(_FIRST_MARGIN).saddles_within(theta, theta_dot, radius)
 
+    def nearest_point(self, theta, theta_dot):
+        """The foot of :meth:`distance` on the boundary of saddle n: Newton's method on the
+        dense output of L (:meth:`StableManifold.foot_points`, ≈ 1e-13) for both branches of
+        that saddle, integrated past the point's speed plus its distance."""
+        from atlas.boundaries.manifold import to_left_branch
+
+        theta, theta_dot = np.broadcast_arrays(np.asarray(theta, float),
+                                               np.asarray(theta_dot, float))
+        dist, n = self.distance(theta, theta_dot)
+        speed = float(np.max(np.abs(theta_dot) + dist, initial=0.0)) + _FIRST_MARGIN
+        manifold = StableManifold(self.pendulum, speed)
+        best = np.full(theta.shape, np.inf)
+        foot_theta, foot_theta_dot = np.full(theta.shape, np.nan), np.full(theta.shape, np.nan)
+        for right in (False, True):
+            x, v = to_left_branch(n, right, theta, theta_dot)
+            tau, dist = manifold.foot_points(x, v)
+            fx, fv = manifold.at(np.reshape(tau, theta.shape))
+            fx = (n + 1) * math.pi - fx if right else fx + (n - 1) * math.pi
+            better = np.reshape(dist, theta.shape) < best
+            best = np.where(better, np.reshape(dist, theta.shape), best)
+            foot_theta = np.where(better, fx, foot_theta)
+            foot_theta_dot = np.where(better, -fv if right else fv, foot_theta_dot)
+        return best, foot_theta, foot_theta_dot
+
 
 def _reference_error(fine: StableManifold, coarse: StableManifold) -> float:
     """Largest distance of the reference manifold at rtol 1e-12 (``coarse``) from the one at
@@ -213,6 +243,48 @@ class TiltedExact:
     def side(self, theta, theta_dot):
         return self.tilted.side(theta, theta_dot)
 
+    def nearest_point(self, theta, theta_dot):
+        """The nearest point of the polylines of every translate of the boundary, exactly (for
+        the polylines; error ``reference_error``): the nearer of the two saddles around the
+        point bounds the distance (a saddle is on its boundary); then every segment of any
+        translate that may come nearer than that (those with an end within the bound plus the
+        longest segment) is measured."""
+        from atlas.boundaries.segments import segment_distance
+
+        theta, theta_dot = np.broadcast_arrays(np.asarray(theta, float),
+                                               np.asarray(theta_dot, float))
+        curves = self.tilted.curves(clip=False)
+        j0 = curves[0][0]
+        branches = [(t, v) for j, _, t, v in curves if j == j0]
+        ax, ay = (np.concatenate([c[:-1] for c in part]) for part in zip(*branches))
+        bx, by = (np.concatenate([c[1:] for c in part]) for part in zip(*branches))
+        longest = float(np.hypot(bx - ax, by - ay).max())
+        turn = 2.0 * math.pi
+        saddle = self.tilted.saddle_theta(j0)
+        out = [np.full(theta.shape, np.inf), np.full(theta.shape, np.nan),
+               np.full(theta.shape, np.nan)]
+        for i in np.ndindex(theta.shape):
+            p, q = float(theta[i]), float(theta_dot[i])
+            offset = math.remainder(p - saddle, turn)  # from the nearest saddle's θ
+            reach = math.hypot(min(abs(offset), turn - abs(offset)), q) + longest
+            near = np.flatnonzero(np.abs(ay - q) <= reach)
+            m = math.ceil(reach / turn) + 1
+            shift = np.round((p - ax[near]) / turn)[None, :] + np.arange(-m, m + 1)[:, None]
+            keep = np.abs(p - turn * shift - ax[near]) <= reach
+            near, shift = np.broadcast_to(near, shift.shape)[keep], shift[keep]
+            x = p - turn * shift  # the point in the frame of translate j0
+            d = segment_distance(x, q, ax[near], ay[near], bx[near], by[near])
+            best = int(np.argmin(d))
+            e = near[best]
+            dx, dy = bx[e] - ax[e], by[e] - ay[e]
+            s = ((x[best] - ax[e]) * dx + (q - ay[e]) * dy) / max(dx * dx + dy * dy,
+                                                                  np.finfo(float).tiny)
+            s = min(max(s, 0.0), 1.0)
+            out[0][i] = d[best]
+            out[1][i] = ax[e] + s * dx + turn * shift[best]
+            out[2][i] = ay[e] + s * dy
+        return tuple(out)
+
     def distance(self, theta, theta_dot):
         dist, j = self.tilted.distance(theta, theta_dot)
         return dist, 2 * np.asarray(j, np.int64) + 1
@@ -236,14 +308,14 @@ class TiltedExact:
                 and theta_dot.min() >= u0 and theta_dot.max() <= u1)
         key = "window" if near else "all"
         if key not in self._vertices:
-            curves = self.tilted.curves(clip=False)
-            t = np.concatenate([t for _, _, t, _ in curves])
-            v = np.concatenate([v for _, _, _, v in curves])
-            n = np.concatenate([np.full(t.size, 2 * j + 1) for j, _, t, _ in curves])
-            if near:
-                m = _VERTEX_MARGIN
-                keep = (t >= w0 - m) & (t <= w1 + m) & (v >= u0 - m) & (v <= u1 + m)
-                t, v, n = t[keep], v[keep], n[keep]
+            m = _VERTEX_MARGIN
+            parts = []  # (θ, θ̇, n) of each branch, cut to the window's margin when near
+            for j, _, t, v in self.tilted.iter_curves(clip=False):
+                if near:
+                    keep = (t >= w0 - m) & (t <= w1 + m) & (v >= u0 - m) & (v <= u1 + m)
+                    t, v = t[keep], v[keep]
+                parts.append((t, v, np.full(t.size, 2 * j + 1)))
+            t, v, n = (np.concatenate([q[i] for q in parts]) for i in range(3))
             box = ((t.min(), t.max()), (v.min(), v.max())) if t.size else ((0, 1), (0, 1))
             self._vertices[key] = (t, v, n, box, bins(t, v, box, _VERTEX_CELL))
         t, v, n, ((t0, _), (v0, _)), (cell, shape, start, items) = self._vertices[key]
@@ -274,6 +346,10 @@ class UnboundedExact:
     def distance(self, theta, theta_dot):
         shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
         return np.full(shape, np.inf), np.zeros(shape, np.int64)
+
+    def nearest_point(self, theta, theta_dot):
+        shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
+        return np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, np.nan)
 
     def saddles_within(self, theta, theta_dot, radius: float):
         size = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))

@@ -2,9 +2,10 @@
 
 θ̈ = −ω0² sin θ − 2αθ̇ + τ (α > 0 [s⁻¹], ω0 [rad s⁻¹], τ [rad s⁻²]). The rest states are
 (θ* + 2πk, 0), θ* = arcsin(τ/ω0²) (*well k*), the saddles s_j = (π − θ* + 2πj, 0). Each
-saddle's two stable branches are integrated once, for j = 0, by scipy's DOP853 (rtol = atol
-= 1e-13, dense output) in reversed time from 1e-7 along the stable eigenvector until they
-leave a band of θ̇ around the window; every other branch is a 2π translate, and
+saddle's two stable branches are integrated once, for j = 0, by DOP853 (rtol = atol
+= 1e-13, dense output; compiled, :mod:`atlas.kernels.dop853`) in reversed time from 1e-7
+along the stable eigenvector until they leave a band of θ̇ around the window; every other
+branch is a 2π translate, and
 (θ, θ̇, τ) → (−θ, −θ̇, −τ) gives τ < 0. Above the homoclinic torque the basins are tongues
 in a running basin (*bistable*, checked against :func:`atlas.physics.running.limit_cycle`),
 below it strips. The branches are polylines with chord error ≤ ``CHORD_TOL``; sides (ray
@@ -24,13 +25,7 @@ import numpy as np
 
 from atlas.boundaries.basins import FIND_CYCLE, RUNNING_SIDE, ExactAreas
 from atlas.boundaries.manifold import RTOL, RTOL_CHECK, _DenseOutput
-from atlas.boundaries.segments import (
-    Segments,
-    clip,
-    inside_length,
-    segment_distance,
-    shoelace,
-)
+from atlas.boundaries.segments import Segments, segment_distance
 from atlas.physics.pendulum import START_DISTANCE, Pendulum
 
 __all__ = ["TiltedBoundaries", "RUNNING_SIDE", "CHORD_TOL", "MAX_SEGMENT", "MARGIN"]
@@ -51,30 +46,22 @@ _TWO_PI = 2.0 * math.pi
 def _branch(p: Pendulum, sign: int, rtol: float, bottom: float, top: float):
     """DOP853 along the branch of the saddle (π − θ*, 0) of ``p`` (τ ≥ 0) arriving from the
     left (``sign`` −1, L) or right (+1, R), in reversed time from START_DISTANCE along the
-    stable eigenvector, until θ̇ leaves (bottom, top). Returns (dense output of (θ, θ̇),
-    reversed-time steps, 'top' or 'bottom')."""
-    from scipy.integrate import solve_ivp
+    stable eigenvector, until θ̇ leaves (bottom, top) (compiled:
+    :func:`atlas.kernels.dop853.integrate`, scipy's method step for step). Returns (dense
+    output of (θ, θ̇), reversed-time steps, 'top' or 'bottom')."""
+    from atlas.kernels.dop853 import BAND, EVENT, REVERSED, solve
 
     s = p.saddle_angle
     e0, e1 = p.saddle_stable_direction()
     start = [s + sign * START_DISTANCE * e0, sign * START_DISTANCE * e1]
-
-    rhs = p.reversed_rhs
-
-    def above(_, y):
-        return y[1] - top
-
-    def below(_, y):
-        return y[1] - bottom
-
-    above.terminal = below.terminal = True
-    above.direction, below.direction = 1, -1
     t_cap = 1e4 * (1.0 / p.alpha + 1.0 / p.omega0)
-    sol = solve_ivp(rhs, (0.0, t_cap), start, method="DOP853", rtol=rtol, atol=rtol,
-                    dense_output=True, events=(above, below))
-    if sol.status != 1:
-        raise RuntimeError(f"a stable branch did not leave the band ({sol.message})")
-    return _DenseOutput.from_scipy([sol.sol]), sol.t, "top" if sol.t_events[0].size else "bottom"
+    sol = solve(REVERSED, (p.alpha, p.omega0, p.torque, 0.0), BAND, (bottom, top), start,
+                t_cap, rtol, (rtol,), dim=2)
+    if sol.status != EVENT:
+        raise RuntimeError(f"a stable branch did not leave the band (status {sol.status})")
+    end = sol.y[-1, 1]
+    dense = _DenseOutput(sol.t, sol.t_old, sol.h, sol.y_old[:, :2], sol.F[:, :, :2])
+    return dense, sol.t, "top" if end - top >= bottom - end else "bottom"
 
 
 def _refine(dense, t, tol: float, longest: float):
@@ -196,11 +183,11 @@ class TiltedBoundaries:
                                "torque?)")
         self.chord_error = self._fine.chord_error
         self.reference_error = self._reference_error()
-        self._pieces = self._monotone_pieces()
         self._indices = {}
+        self._order = self._sorted = None  # Γ_0's vertices sorted by θ, for the indices
 
     def __getstate__(self):  # sent to workers without the distance indices (rebuilt there)
-        return {**self.__dict__, "_indices": {}}
+        return {**self.__dict__, "_indices": {}, "_order": None, "_sorted": None}
 
     # ------------------------------------------------------------------ frames
     def _canonical(self, theta, theta_dot):
@@ -251,9 +238,13 @@ class TiltedBoundaries:
         (the first vertex is the saddle itself) to where it leaves the band. With ``clip``,
         only the parts in the window (each run of vertices inside, with one vertex beyond
         either end so that it reaches the window's edge), one entry per run."""
+        return list(self.iter_curves(clip))
+
+    def iter_curves(self, clip: bool = True):
+        """:meth:`curves` one entry at a time (unclipped, all translates of a monostable
+        pendulum's branches together take hundreds of MB; one at a time, a few)."""
         (a, b), (v0, v1) = self.window
         ct, _ = self._canonical_window()
-        out = []
         f = self._fine
         for k in self._translates(*ct):
             for name, xy in (("left", f.left), ("right", f.right)):
@@ -262,7 +253,7 @@ class TiltedBoundaries:
                 branch = name if self.sign > 0 else {"left": "right", "right": "left"}[name]
                 j = self._saddle(k)
                 if not clip:
-                    out.append((j, branch, theta, theta_dot))
+                    yield j, branch, theta, theta_dot
                     continue
                 inside = (theta >= a) & (theta <= b) & (theta_dot >= v0) & (theta_dot <= v1)
                 near = inside.copy()
@@ -270,27 +261,9 @@ class TiltedBoundaries:
                 near[:-1] |= inside[1:]
                 edges = np.flatnonzero(np.diff(np.concatenate([[0], near, [0]]).astype(int)))
                 for start, stop in zip(edges[::2], edges[1::2]):
-                    out.append((j, branch, theta[start:stop], theta_dot[start:stop]))
-        return out
+                    yield j, branch, theta[start:stop], theta_dot[start:stop]
 
     # ------------------------------------------------------------------ side
-    def _monotone_pieces(self):
-        """Γ_0's polyline cut where θ turns: (θ ascending, θ̇ there) per piece, for the
-        vertical-ray crossings (each piece covers θ ∈ [min, max), as its segments do)."""
-        f = self._fine
-        step = np.sign(np.diff(f.theta))
-        cuts = np.concatenate([[0], np.flatnonzero(step[1:] != step[:-1]) + 1,
-                               [f.theta.size - 1]])
-        pieces = []
-        for i, j in zip(cuts[:-1], cuts[1:]):
-            x, y = f.theta[i:j + 1], f.theta_dot[i:j + 1]
-            if x[0] == x[-1]:
-                continue
-            if x[0] > x[-1]:
-                x, y = x[::-1], y[::-1]
-            pieces.append((x, y))
-        return pieces
-
     def side(self, theta, theta_dot):
         """The basin of the exact equation each point (θ [rad], θ̇ [rad s⁻¹], broadcast) lies
         in: the well k (rest state (arcsin(τ/ω0²) + 2πk, 0), the kernels' ``attractor``), or
@@ -306,28 +279,14 @@ class TiltedBoundaries:
                              "integrated boundaries")
         if x.size == 0:
             return np.zeros(shape, np.int64)
-        order = np.argsort(x, kind="stable")
-        xs, vs = x[order], v[order]
-        ks = self._translates(xs[0], xs[-1])
+        lo, hi = float(x.min()), float(x.max())
+        ks = self._translates(lo, hi)
         f = self._fine
-        top_end = f.theta[0] if f.ends[0] == "top" else None
-        label = np.full(x.size, RUNNING_SIDE if self.bistable else ks.start, np.int64)
-        odd = np.zeros(x.size, bool)
-        for k in ks:
-            odd[:] = False
-            shift = _TWO_PI * k
-            for px, py in self._pieces:
-                i0, i1 = np.searchsorted(xs, [px[0] + shift, px[-1] + shift])
-                if i1 > i0:
-                    odd[i0:i1] ^= np.interp(xs[i0:i1] - shift, px, py) > vs[i0:i1]
-            if top_end is not None:  # L_k continues left above the band
-                odd[:np.searchsorted(xs, top_end + shift)] ^= True
-            if self.bistable:
-                label[odd] = k
-            else:
-                label += ~odd  # well k' < smallest k with odd parity
-        out = np.empty(x.size, np.int64)
-        out[order] = label
+        # L_k continues left above the band when it leaves at the top
+        flip = (f.theta[0] + _TWO_PI * np.arange(ks.start, ks.stop) if f.ends[0] == "top"
+                else np.full(len(ks), -np.inf))
+        index = self._index(lo - self.margin - MAX_SEGMENT, hi + self.margin + MAX_SEGMENT)
+        out = index.sides(x, v, ks.start, ks.stop - 1, flip, self.bistable, RUNNING_SIDE)
         if self.sign < 0:
             out = np.where(out == RUNNING_SIDE, out, -out)
         return out.reshape(shape)
@@ -339,16 +298,24 @@ class TiltedBoundaries:
         key = (theta_lo, theta_hi)
         if key not in self._indices:
             f = self._fine
+            if self._order is None:  # Γ_0's vertices by θ, once: each translate's are a slice
+                self._order = np.argsort(f.theta, kind="stable")
+                self._sorted = f.theta[self._order]
+            last = f.theta.size - 1
             runs = []
             for k in self._translates(theta_lo, theta_hi):
-                x = f.theta + _TWO_PI * k
-                inside = (x >= theta_lo) & (x <= theta_hi)
-                near = inside.copy()
-                near[1:] |= inside[:-1]
-                near[:-1] |= inside[1:]
-                edges = np.flatnonzero(np.diff(np.concatenate([[0], near, [0]]).astype(int)))
-                for start, stop in zip(edges[::2], edges[1::2]):
-                    runs.append((x[start:stop], f.theta_dot[start:stop], k))
+                shift = _TWO_PI * k
+                lo = np.searchsorted(self._sorted, theta_lo - shift, side="left")
+                hi = np.searchsorted(self._sorted, theta_hi - shift, side="right")
+                inside = np.sort(self._order[lo:hi])  # θ + shift ∈ [theta_lo, theta_hi]
+                if not inside.size:
+                    continue
+                near = np.sort(np.clip(np.concatenate([inside - 1, inside, inside + 1]), 0,
+                                       last))
+                near = near[np.r_[True, np.diff(near) != 0]]  # and their neighbours, once
+                cuts = np.flatnonzero(np.diff(near) > 1) + 1
+                for run in np.split(near, cuts):
+                    runs.append((f.theta[run] + shift, f.theta_dot[run], k))
             self._indices = {**dict(list(self._indices.items())[-1:]), key: Segments(runs)}
         return self._indices[key]
 
@@ -393,25 +360,23 @@ class TiltedBoundaries:
 
     def _fractions(self, f: _Fundamental, ks, window):
         """Area fraction of ``window`` (canonical) in well k's basin, for each k in ``ks``,
-        and the boundary length in the window (for the chord error)."""
+        and the boundary length in the window (for the chord error): compiled polygon
+        clipping (:mod:`atlas.kernels.polygon`)."""
+        from atlas.kernels.polygon import inside_lengths, window_areas
+
         (a, b), (lo, hi) = window
-        cx, cy = 0.5 * (a + b), 0.5 * (lo + hi)  # centred coordinates for the shoelace
         x, y = self._polygon(f)
-        x, y = clip(*clip(x, y, 1, lo, True), 1, hi, False)
-        area = (b - a) * (hi - lo)
-        fractions, lengths = [], []
-        for k in ks:
-            shift = _TWO_PI * k
-            px, py = clip(*clip(x + shift - cx, y - cy, 0, a - cx, True), 0, b - cx, False)
-            fractions.append(shoelace(px, py) / area)
-            box = ((a - shift, b - shift), (lo, hi))
-            length = inside_length(f.theta, f.theta_dot, box)
-            if not self.bistable:
-                length += inside_length(f.theta, f.theta_dot, ((a - shift + _TWO_PI,
-                                                                  b - shift + _TWO_PI),
-                                                                 (lo, hi)))
-            lengths.append(length)
-        return np.array(fractions), np.array(lengths)
+        shifts = _TWO_PI * np.array(ks, np.float64)
+        areas, lengths = np.empty(shifts.size), np.empty(shifts.size)
+        window_areas(np.ascontiguousarray(x), np.ascontiguousarray(y), shifts, a, b, lo, hi,
+                     areas)
+        theta, theta_dot = np.ascontiguousarray(f.theta), np.ascontiguousarray(f.theta_dot)
+        inside_lengths(theta, theta_dot, shifts, a, b, lo, hi, lengths)
+        if not self.bistable:
+            more = np.empty(shifts.size)
+            inside_lengths(theta, theta_dot, shifts - _TWO_PI, a, b, lo, hi, more)
+            lengths += more
+        return areas / ((b - a) * (hi - lo)), lengths
 
     def areas(self) -> ExactAreas:
         """The exact area fraction of the window in each well's basin and in the running basin

@@ -5,9 +5,12 @@ window is located, not copied: vertices about ``max_spacing`` apart on the exact
 boundaries (:class:`atlas.boundaries.tilted.TiltedBoundaries`, DOP853), each bisected across
 the curve, along the normal of the vector field, on certified RK4 labels (the tilted trap
 and the running barrier) between the exact sides read at ±1e-3 (well k or the running
-basin) until narrower than ``tol`` [rad-ish]. The 2π shift is checked on relocated copies
-(``shift_error``); ``discrepancy``, the located points' largest distance from the exact
-boundaries, is the RK4 map's boundary shift (≈ 1e-9 at dt = 0.01 s) that sets d_cert.
+basin) until narrower than ``tol`` [rad-ish] — from the exact curve's prediction, as
+without torque: every 8th vertex of a run from a bracket of a few tol around the exact
+curve, widened as needed, the others from a spline of those offsets (:func:`_locate`). The
+2π shift is checked on relocated copies (``shift_error``); ``discrepancy``, the located
+points' largest distance from the exact boundaries, is the RK4 map's boundary shift (≈ 1e-9
+at dt = 0.01 s) that sets d_cert.
 Same ``/separatrices`` schema as without torque (:mod:`atlas.store.separatrices`).
 Derivation: docs/design/separatrices.md.
 """
@@ -22,6 +25,7 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.boundaries.basins import RUNNING_SIDE
 from atlas.boundaries.bisection import (
+    FIRST_BRACKET,
     MAX_BRACKET,
     Labeller,
     bisect_between,
@@ -30,7 +34,7 @@ from atlas.boundaries.bisection import (
 )
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
 from atlas.boundaries.crossings import PROBE, tilted_crossings
-from atlas.boundaries.predictor import fine_spacing
+from atlas.boundaries.predictor import fine_spacing, not_a_knot_spline
 from atlas.boundaries.window import Window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
@@ -39,6 +43,11 @@ __all__ = ["trace_tilted"]
 
 _SHIFT_STRIDE = 8  # every 8th located vertex is located again on its 2π-shifted copy
 _FIRST_VERTEX = 1e-3  # no vertex closer [rad-ish] to its saddle: the field vanishes there
+#: The strides of the levels of :func:`_locate` along each run of vertices, and the
+#: half-widths [tol] of the first brackets around the spline's prediction at each level
+#: (the first level has no prediction: ±FIRST_BRACKET·tol around the exact curve).
+_STRIDES, _HALF_WIDTHS = (8, 1), (FIRST_BRACKET, 0.45)
+_KNOT_TOL = 8.0  # the spline's knots are located to tol/8
 
 
 def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
@@ -68,7 +77,7 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     ``reference_error`` (the exact boundaries' own error: chord + DOP853).
     """
     labels = Labeller(p, dt, t_max + linger(p, tol), backend, method, barrier)
-    saddle_j, branch, vertex, base = _vertices(exact, window, max_spacing)
+    saddle_j, branch, vertex, arc, base = _vertices(exact, window, max_spacing)
     normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1])) if base.size \
         else base.copy()
     below = exact.side(base[:, 0] - PROBE * normal[:, 0], base[:, 1] - PROBE * normal[:, 1])
@@ -77,10 +86,11 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     # has no boundary to bisect across there: it is left out, and counted
     keep = below != above
     skipped = int((~keep).sum())
-    saddle_j, branch, vertex = saddle_j[keep], branch[keep], vertex[keep]
+    saddle_j, branch, vertex, arc = saddle_j[keep], branch[keep], vertex[keep], arc[keep]
     base, normal, below, above = base[keep], normal[keep], below[keep], above[keep]
-    lo, hi, ok = bisect_between(labels, base, normal, below, above, tol=tol,
-                                half_width=PROBE)
+    run = np.cumsum(np.r_[True, (np.diff(saddle_j) != 0) | (np.diff(branch) != 0)
+                          | (np.diff(vertex) != 1)]) if vertex.size else vertex
+    lo, hi, ok = _locate(labels, base, normal, below, above, run, arc, tol)
     point = base + 0.5 * (lo + hi)[:, None] * normal
     dist, _ = exact.distance(point[:, 0], point[:, 1]) if point.size else (np.zeros(0), None)
     # a vertex that could not be located leaves the shift unmeasured there: NaN, so that d_cert
@@ -133,7 +143,8 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
                 "(atlas.boundaries.tilted: "
                 "DOP853 in reversed time, rtol = atol = 1e-13), at most max_spacing apart; "
                 "each located by bisection across the curve on certified RK4 labels (tilted "
-                "trap, running barrier) "
+                "trap, running barrier), from brackets around the exact curve (every 8th "
+                "vertex) or around a spline of those offsets (the others), "
                 "until the bracket is narrower than tol; every copy located on its own "
                 "labels (shift_error: the 2 pi shift between copies); discrepancy = max "
                 "distance of the points to the exact boundaries"),
@@ -143,27 +154,33 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
 
 def _vertices(exact, window: Window, max_spacing: float):
     """The vertices to locate: (saddle j, branch flag, vertex number along the branch — gaps
-    outside the window —, (θ, θ̇) (N, 2)) of every branch in the window, about
-    ``max_spacing`` apart along it."""
-    rows = []  # (saddle j, branch, vertex index, θ, θ̇)
+    outside the window —, arc length from the saddle [rad-ish], (θ, θ̇) (N, 2)) of every
+    branch in the window, about ``max_spacing`` apart along it."""
+    parts = []  # (saddle j, branch, vertex numbers, θ, θ̇, arc lengths) per branch
     fine = fine_spacing(window)
-    for j, name, theta, theta_dot in exact.curves(clip=False):
-        step = np.hypot(np.diff(theta), np.diff(theta_dot))
-        along = np.concatenate([[0.0], np.cumsum(step)])
-        picks = np.unique(np.searchsorted(along, np.arange(_FIRST_VERTEX, along[-1],
-                                                           max_spacing)))
-        picks = picks[picks < theta.size]
+    arcs = {}  # every translate of a branch has its arc lengths and picks: computed once
+    for j, name, theta, theta_dot in exact.iter_curves(clip=False):
+        if name not in arcs:
+            step = np.hypot(np.diff(theta), np.diff(theta_dot))
+            along = np.concatenate([[0.0], np.cumsum(step)])
+            picks = np.unique(np.searchsorted(along, np.arange(_FIRST_VERTEX, along[-1],
+                                                               max_spacing)))
+            arcs[name] = along, picks[picks < theta.size]
+        along, picks = arcs[name]
         pos, x, v = along[picks], theta[picks], theta_dot[picks]
         if fine < max_spacing:  # a small window: points on the chords, ``fine`` apart
             pos, x, v = _fine_points(window, fine, along, theta, theta_dot, pos, x, v)
-        inside = window.margin(x, v) >= 0
-        for number in np.flatnonzero(inside):  # numbered along the branch: gaps outside
-            rows.append((j, schema.BRANCHES.index(name), int(number), x[number], v[number]))
-    saddle_j = np.array([r[0] for r in rows], np.int64)
-    branch = np.array([r[1] for r in rows], np.int8)
-    vertex = np.array([r[2] for r in rows], np.int32)
-    base = np.array([(r[3], r[4]) for r in rows], float).reshape(-1, 2)
-    return saddle_j, branch, vertex, base
+        number = np.flatnonzero(window.margin(x, v) >= 0)  # along the branch: gaps outside
+        parts.append((np.full(number.size, j, np.int64),
+                      np.full(number.size, schema.BRANCHES.index(name), np.int8),
+                      number.astype(np.int32), x[number], v[number], pos[number]))
+
+    def cat(i, dtype):
+        return np.concatenate([q[i] for q in parts]).astype(dtype) if parts \
+            else np.zeros(0, dtype)
+
+    base = np.column_stack([cat(3, float), cat(4, float)]).reshape(-1, 2)
+    return cat(0, np.int64), cat(1, np.int8), cat(2, np.int32), cat(5, float), base
 
 
 def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v):
@@ -193,18 +210,84 @@ def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v
             np.concatenate([v, sv])[order])
 
 
+def _locate(labels, base, normal, below, above, run, arc, tol: float):
+    """Bisect across every vertex from the exact curve's prediction, level by level (as
+    :func:`atlas.boundaries.bisection.locate` without torque, one level deeper): first every
+    ``_STRIDES[0]``-th vertex of each run (and its last), from the bracket ±FIRST_BRACKET·tol
+    around the exact curve, widened ×8 while an end carries the other side (the RK4 map's
+    boundary lies O(dt⁴) ≈ 1e-9 from the exact one: a few widenings and ~20 halvings,
+    instead of ~30 from ±PROBE); then, at each finer stride, a cubic spline over arc length
+    of the offsets located so far predicts the new vertices, whose first bracket is
+    ±``_HALF_WIDTHS`` tol around the prediction (widened as needed) — at the last level
+    ±0.45·tol, usually final: two labels per vertex. Knots are located to tol/``_KNOT_TOL``,
+    the last level to tol. A vertex that fails is bisected again from ±PROBE. Returns
+    (s_lo, s_hi, ok) along ``normal`` from ``base``, as
+    :func:`atlas.boundaries.bisection.bisect_between`."""
+    n = run.size
+    lo, hi, ok = np.zeros(n), np.zeros(n), np.zeros(n, bool)
+    known = np.zeros(n, bool)
+    start = np.flatnonzero(np.diff(run, prepend=-1) != 0)
+    stop = np.append(start[1:], n)
+    local = np.arange(n) - np.repeat(start, stop - start)
+    last = np.zeros(n, bool)
+    last[stop - 1] = True
+    for level, (stride, half) in enumerate(zip(_STRIDES, _HALF_WIDTHS)):
+        pick = ~known & ((local % stride == 0) | last)
+        offset, predicted = np.zeros(n), np.zeros(n, bool)
+        if level:
+            centre = np.where(known, 0.5 * (lo + hi), 0.0)
+            for a, b in zip(start, stop):
+                have = np.flatnonzero(known[a:b] & ok[a:b]) + a
+                todo = np.flatnonzero(pick[a:b]) + a
+                if not (todo.size and have.size >= 2):
+                    continue
+                if have.size >= 4 and np.all(np.diff(arc[have]) > 0):
+                    offset[todo] = not_a_knot_spline(arc[have], centre[have], arc[todo])
+                else:
+                    offset[todo] = np.interp(arc[todo], arc[have], centre[have])
+                predicted[todo] = True
+        idx = np.flatnonzero(pick)
+        width = np.where(predicted[idx], half, FIRST_BRACKET) * tol
+        final = level == len(_STRIDES) - 1
+        for group in (predicted[idx], ~predicted[idx]):  # one bracket width per call
+            g = idx[group]
+            if not g.size:
+                continue
+            g_lo, g_hi, ok[g] = bisect_between(
+                labels, base[g] + offset[g, None] * normal[g], normal[g], below[g], above[g],
+                tol=tol if final else tol / _KNOT_TOL, half_width=float(width[group][0]))
+            lo[g], hi[g] = offset[g] + g_lo, offset[g] + g_hi
+        known |= pick
+    again = np.flatnonzero(~ok | ~(hi - lo < tol))
+    if again.size:
+        lo[again], hi[again], ok[again] = bisect_between(
+            labels, base[again], normal[again], below[again], above[again], tol=tol,
+            half_width=PROBE)
+    return lo, hi, ok
+
+
 def _shift_error(labels, base, normal, below, above, point, ok, tol: float):
     """The 2π shift: every ``_SHIFT_STRIDE``-th located vertex, shifted by 2π and located
     again on its own labels (the next well's side), must land on the shifted point. Returns
-    (largest distance [rad-ish], number of pairs compared)."""
+    (largest distance [rad-ish] plus the copy's bracket half-width, number of pairs
+    compared)."""
     pick = np.flatnonzero(ok)[::_SHIFT_STRIDE]
     shifted = base[pick] + np.array([2.0 * math.pi, 0.0])
 
     def next_well(side):
         return np.where(side == RUNNING_SIDE, side, side + 1)
 
-    s_lo, s_hi, s_ok = bisect_between(labels, shifted, normal[pick], next_well(below[pick]),
-                                      next_well(above[pick]), tol=tol, half_width=PROBE)
-    moved = shifted + 0.5 * (s_lo + s_hi)[:, None] * normal[pick]
-    gap = np.hypot(*(moved - point[pick] - np.array([2.0 * math.pi, 0.0])).T)
+    # the 2π shift predicts the copy's point (the RK4 map is 2π-periodic in θ, to
+    # rounding): its first bracket is the last level's ±0.45·tol around the located one's
+    # offset, widened ×8 as needed (a shift error shows as wider brackets, then as gap)
+    offset = np.einsum("ij,ij->i", point[pick] - base[pick], normal[pick])
+    s_lo, s_hi, s_ok = bisect_between(labels, shifted + offset[:, None] * normal[pick],
+                                      normal[pick], next_well(below[pick]),
+                                      next_well(above[pick]), tol=tol,
+                                      half_width=_HALF_WIDTHS[-1] * tol)
+    moved = shifted + (offset + 0.5 * (s_lo + s_hi))[:, None] * normal[pick]
+    # the copy's midpoint may sit exactly on the prediction: its bracket's half-width is
+    # the resolution of the comparison
+    gap = np.hypot(*(moved - point[pick] - np.array([2.0 * math.pi, 0.0])).T) \
+        + 0.5 * (s_hi - s_lo)
     return float(gap[s_ok].max(initial=0.0)), int(s_ok.sum())

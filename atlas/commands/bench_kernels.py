@@ -153,16 +153,20 @@ def equal_dt(p: dict) -> tuple[float, float, float]:
 
 def _row(variant, steps_s, orbits_s, map_s, atlas_map_s, note=""):
     return {"variant": variant, "steps_per_s": steps_s, "orbits_per_s": orbits_s,
-            "map_512_s": map_s, "ratio_to_atlas": map_s / atlas_map_s, "note": note}
+            "map_s": map_s, "ratio_to_atlas": map_s / atlas_map_s, "note": note}
 
 
 
 
-def kernel_rows(p: dict, repeats: int, quick: bool, lsoda_sample: int) -> dict:
-    """The basin-map and bulk rows of problem ``p`` on the MAP_N² grid (module docstring):
-    {"map", "bulk", "best_of_repeats_s", "summary", "atlas_s": the default map's time}."""
+def kernel_rows(p: dict, repeats: int, quick: bool, lsoda_sample: int,
+                side: int = MAP_N) -> dict:
+    """The basin-map and bulk rows of problem ``p`` on the ``side``² grid of the default
+    window (module docstring): {"map", "bulk", "best_of_repeats_s", "summary", "atlas_s": the
+    default map's time}. Every row's ratio compares the same orbits. ``quick``: fewer bulk
+    and numpy steps, and no trig-free row at equal accuracy (finding its step traces the
+    default window's separatrices five times or more: tens of seconds)."""
     full_steps = n_checks_for(p["t_max"], p["dt"], 1)  # steps to t_max
-    theta0, theta_dot0 = defaults.grid(MAP_N)
+    theta0, theta_dot0 = defaults.grid(side)
     n = theta0.size
 
     # basin map, early exit
@@ -179,12 +183,10 @@ def kernel_rows(p: dict, repeats: int, quick: bool, lsoda_sample: int) -> dict:
                   "straightforward numba propagate": 5 if quick else 20,
                   "numpy whole grid": np_steps}
     default_bulk, trigfree_bulk = list(bulk_steps)[:2]
-    dt_equal, equal_shift, default_shift = equal_dt(p)
-    p_equal = {**p, "dt": dt_equal}
-    t = median_times({
+    equal = None if quick else equal_dt(p)  # (dt, its boundary shift, the default's)
+    runs = {
         "lanes": label_run(label_lanes, theta0, theta_dot0, CHECK_EVERY, p),
         "trigfree": label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p),
-        "trigfree_equal": label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY, p_equal),
         "sf1": label_run(label_straightforward, theta0, theta_dot0, 1, p),
         "sf16": label_run(label_straightforward, theta0, theta_dot0, CHECK_EVERY, p),
         default_bulk: _propagate_run(propagate_lanes, theta0, theta_dot0,
@@ -195,7 +197,11 @@ def kernel_rows(p: dict, repeats: int, quick: bool, lsoda_sample: int) -> dict:
             propagate_straightforward, theta0, theta_dot0,
             bulk_steps["straightforward numba propagate"], p),
         "numpy whole grid": _propagate_run(_numpy_propagate, theta0, theta_dot0, np_steps, p),
-    }, repeats)
+    }
+    if equal is not None:
+        runs["trigfree_equal"] = label_run(label_trigfree, theta0, theta_dot0, CHECK_EVERY,
+                                           {**p, "dt": equal[0]})
+    t = median_times(runs, repeats)
     atlas_s, trigfree_s, sf1_s, sf16_s = (t[k][0] for k in ("lanes", "trigfree", "sf1", "sf16"))
     rates = {name: n * steps / t[name][0] for name, steps in bulk_steps.items()}
     np_map_s = n * full_steps / rates["numpy whole grid"]
@@ -206,11 +212,12 @@ def kernel_rows(p: dict, repeats: int, quick: bool, lsoda_sample: int) -> dict:
              n / atlas_s, atlas_s, atlas_s),
         _row(f"trig-free lanes, method rk4-trigfree (check every {CHECK_EVERY})",
              useful / trigfree_s, n / trigfree_s, trigfree_s, atlas_s),
-        _row(f"trig-free lanes at dt = {dt_equal:g} s, as accurate as the default",
-             useful * p["dt"] / dt_equal / t["trigfree_equal"][0], n / t["trigfree_equal"][0],
-             t["trigfree_equal"][0], atlas_s,
-             f"boundary shift {equal_shift:.2g} vs the default's {default_shift:.2g}; "
-             "steps/s counts its steps"),
+        *([] if equal is None else [_row(
+            f"trig-free lanes at dt = {equal[0]:g} s, as accurate as the default",
+            useful * p["dt"] / equal[0] / t["trigfree_equal"][0], n / t["trigfree_equal"][0],
+            t["trigfree_equal"][0], atlas_s,
+            f"boundary shift {equal[1]:.2g} vs the default's {equal[2]:.2g}; "
+            "steps/s counts its steps")]),
         _row("straightforward numba (check every step)", useful / sf1_s, n / sf1_s, sf1_s,
              atlas_s),
         _row(f"straightforward numba (check every {CHECK_EVERY})", useful / sf16_s,
@@ -228,8 +235,19 @@ def kernel_rows(p: dict, repeats: int, quick: bool, lsoda_sample: int) -> dict:
     ]
 
     mismatches = label_mismatches(atl, ref16)
+    summary = {"map_speedup": sf1_s / atlas_s,
+               "trigfree_map_speedup": atlas_s / trigfree_s,
+               "default_bulk_msteps_s": rates[default_bulk] / 1e6,
+               "bulk_msteps_s": rates[trigfree_bulk] / 1e6,
+               "bulk_msteps_s_best": n * bulk_steps[trigfree_bulk] / t[trigfree_bulk][1] / 1e6,
+               "bulk_speedup": rates[trigfree_bulk] / rates["straightforward numba propagate"],
+               "bulk_vs_lanes": rates[trigfree_bulk] / rates[default_bulk]}
+    if equal is not None:
+        summary["trigfree_equal_accuracy"] = {
+            "dt": equal[0], "boundary_shift": equal[1], "default_boundary_shift": equal[2],
+            "map_speedup": atlas_s / t["trigfree_equal"][0]}
     return {
-        "map": {"rows": map_rows,
+        "map": {"rows": map_rows, "side": side,
                 "labels_equal_straightforward": mismatches == 0,
                 "trigfree_labels_equal_straightforward": label_mismatches(atl_tf, ref_tf) == 0,
                 "label_mismatches": mismatches,
@@ -238,19 +256,7 @@ def kernel_rows(p: dict, repeats: int, quick: bool, lsoda_sample: int) -> dict:
                 "useful_steps": useful},
         "bulk": {"rows": bulk_rows},
         "best_of_repeats_s": {name: best for name, (_, best) in t.items()},
-        "summary": {"map_speedup": sf1_s / atlas_s,
-                    "trigfree_map_speedup": atlas_s / trigfree_s,
-                    "trigfree_equal_accuracy": {
-                        "dt": dt_equal, "boundary_shift": equal_shift,
-                        "default_boundary_shift": default_shift,
-                        "map_speedup": atlas_s / t["trigfree_equal"][0]},
-                    "default_bulk_msteps_s": rates[default_bulk] / 1e6,
-                    "bulk_msteps_s": rates[trigfree_bulk] / 1e6,
-                    "bulk_msteps_s_best": n * bulk_steps[trigfree_bulk]
-                    / t[trigfree_bulk][1] / 1e6,
-                    "bulk_speedup": rates[trigfree_bulk]
-                    / rates["straightforward numba propagate"],
-                    "bulk_vs_lanes": rates[trigfree_bulk] / rates[default_bulk]},
+        "summary": summary,
         "atlas_s": atlas_s,
     }
 

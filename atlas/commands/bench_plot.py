@@ -1,6 +1,6 @@
 """``atlas bench``, the plotting rows: ``atlas plot`` of generated atlases, time and memory.
 
-For each grid side (512² and 4096²; 1536² in a quick run) the default config's atlas is
+For each grid side (512² and 4096²; 256² only in a quick run) the default config's atlas is
 written first (:func:`atlas.run`, separatrices on), then timed: in process
 (:func:`atlas.views.plotting.plot_atlas` of the file opened lazily, as the CLI opens it;
 median of the repeats) and the whole command in a fresh interpreter (wall, and peak RSS of
@@ -23,9 +23,9 @@ from atlas.status import NEAR_BOUNDARY, TRAPPED
 
 __all__ = ["PLOT_SIDES", "QUICK_PLOT_SIDES", "PLOT_TARGET_S", "plot_rows"]
 
-#: Grid sides of the plotting rows (a quick run: the second is smaller).
+#: Grid sides of the plotting rows (a quick run: one small atlas, one repeat).
 PLOT_SIDES = (512, 4096)
-QUICK_PLOT_SIDES = (512, 1536)
+QUICK_PLOT_SIDES = (256,)
 #: Target of the plotting rows: ``atlas plot`` of the default 512² atlas, the whole command.
 PLOT_TARGET_S = 1.0
 
@@ -118,9 +118,10 @@ def _cli_plot(path) -> tuple[float, float | None, float | None]:
     return wall, *(None if kb == "nan" else float(kb) * 1024 for kb in (hwm, drawing))
 
 
-def plot_rows(sides, repeats: int) -> dict:
+def plot_rows(sides, repeats: int, quick: bool = False) -> dict:
     """``atlas plot`` of generated atlases (module docstring), warm: atlas's bytecode cache
-    written first (:func:`atlas.commands.bench_e2e.warm_bytecode`)."""
+    written first (:func:`atlas.commands.bench_e2e.warm_bytecode`). ``quick``: the whole
+    command only, once (the in-process time and the memory rows are None)."""
     from atlas.commands.bench_e2e import warm_bytecode
     from atlas.pipeline.config import load_config
     from atlas.pipeline.sweep import run
@@ -146,7 +147,8 @@ def plot_rows(sides, repeats: int) -> dict:
                 finally:
                     tree.close()
 
-            t = median_times({"plot": plot}, repeats if side <= 1024 else min(repeats, 3))
+            t = ({"plot": (None, None)} if quick else
+                 median_times({"plot": plot}, repeats if side <= 1024 else min(repeats, 3)))
             # the whole command: the median of as many runs as the in-process row (a fresh
             # interpreter each; the first also warms the file cache), peak RSS the largest
             cli = [_cli_plot(path) for _ in range(repeats if side <= 1024 else 1)]
@@ -158,7 +160,9 @@ def plot_rows(sides, repeats: int) -> dict:
                          "cli_s": cli_s, "cli_best_s": min(c[0] for c in cli),
                          "cli_peak_rss_bytes": cli_rss,
                          "cli_drawing_peak_rss_bytes": drawing_rss,
-                         "streamed_peak_bytes": _peak_bytes(_streamed_maps, path),
-                         "whole_peak_bytes": _peak_bytes(_whole_array_maps, path),
+                         "streamed_peak_bytes": None if quick else _peak_bytes(_streamed_maps,
+                                                                               path),
+                         "whole_peak_bytes": None if quick else _peak_bytes(_whole_array_maps,
+                                                                            path),
                          "image": [-(-side // -(-side // MAX_PIXELS))] * 2})
     return {"rows": rows, "max_pixels": MAX_PIXELS, "target_cli_512_s": PLOT_TARGET_S}

@@ -1,7 +1,8 @@
 """``atlas bench``, the scaling rows: the default map on finer grids and on more threads.
 
 The atlas map (the default lanes, :func:`atlas.kernels.lanes.label_lanes`) of the default
-window at 256² … 4096² (wall time, orbits/s, ns per orbit), and the 1024² map on 1, 2, 4, …
+window at 256² … 4096² (wall time, orbits/s, ns per orbit; 128² and 256² in a quick run), and
+the 1024² map (128² in a quick run) on 1, 2, 4, …
 Numba threads up to all of them: speed-up and parallel efficiency against one thread, and
 whether the labels equal one thread's (they must: orbits never interact).
 """
@@ -18,7 +19,8 @@ from atlas.labels.trap import CHECK_EVERY
 __all__ = ["SCALING", "QUICK_SCALING", "size_rows", "thread_rows"]
 
 SCALING = (256, 512, 1024, 2048, 4096)
-QUICK_SCALING = (256, 512, 1024)
+#: A quick run's sides: a few tenths of a second each (the per-orbit cost is the same).
+QUICK_SCALING = (128, 256)
 
 
 def size_rows(sizes, repeats: int, p: dict) -> list[dict]:

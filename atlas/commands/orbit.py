@@ -23,7 +23,13 @@ import numpy as np
 from atlas import defaults
 from atlas.commands.orbit_file import FilePoint, nearest_grid_point, open_point
 from atlas.commands.orbit_integrate import Orbit, integrate
-from atlas.commands.orbit_text import exact_line, file_line, header_line, label_lines
+from atlas.commands.orbit_text import (
+    exact_line,
+    file_line,
+    header_line,
+    label_lines,
+    outside_line,
+)
 from atlas.errors import AtlasError, InputFileError
 from atlas.labels.labelling import check_integration
 from atlas.labels.trap import CHECK_EVERY
@@ -152,6 +158,8 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
             lines.append(exact_line(orbit, *_exact(orbit, window, shift, tol)))
         if nearest is not None:
             lines.append(file_line(nearest))
+            if not nearest["inside"]:
+                lines.insert(0, outside_line(source.point))
     except BaseException:
         if source is not None:
             source.tree.close()
@@ -170,7 +178,11 @@ def default_output(file: str | Path | None) -> Path:
 
 
 def check_file_argument(text: str) -> None:
-    """Refuse a first positional argument that is neither a number nor an existing file."""
+    """Refuse a first positional argument that is neither a number nor an existing file (the
+    output of an interrupted run, not written yet, is left to the reader, whose message says
+    how to finish it)."""
+    from atlas.store.reader import interrupted_run
+
     path = Path(text)
-    if not path.exists():
+    if not path.exists() and interrupted_run(path) is None:
         raise InputFileError(f"{text}: no such file (atlas orbit [FILE] THETA0 THETA_DOT0)")

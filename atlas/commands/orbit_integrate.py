@@ -6,9 +6,11 @@ plain Python with libm) and tests, every ``check_every`` steps as the kernels do
 order, the energy trap of the (tilted) wells at the level :func:`atlas.labels.trap.
 energy_cap` (or the level a file's run used), then (with a torque and a running barrier) the
 kernels' running test. It keeps the whole trajectory, and follows it on after the
-certificate (until it has nearly settled, or two more turns) for the pictures. Its labels
-equal :func:`atlas.label`'s straightforward kernel's except where rounding decides
-(``tests/commands/test_orbit.py``).
+certificate for the pictures: a trapped orbit until it has nearly settled, a running one
+until it is on the limit cycle (two successive turns cross the certificate's phase at speeds
+that agree to ``settle``). Its labels equal :func:`atlas.label`'s straightforward kernel's
+except where rounding decides (``tests/commands/test_orbit.py``). :func:`wrapped` draws an
+orbit into a window of the map, a whole number of turns at a time.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import Pendulum, tilt
 from atlas.status import NONFINITE, RUNNING, TRAPPED, UNRESOLVED
 
-__all__ = ["Orbit", "integrate"]
+__all__ = ["Orbit", "integrate", "wrapped", "window_period"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -37,15 +39,15 @@ TWO_PI = 2.0 * math.pi
 class Orbit:
     """One orbit from (θ0 [rad], θ̇0 [rad s⁻¹]) of θ̈ = −ω0² sin θ − 2αθ̇ + τ: its trajectory
     ``t`` [s], ``theta``, ``theta_dot`` (followed past the certificate until it has nearly
-    settled, or for ``turns`` more turns when running), and its label: ``status`` (0 trapped,
-    1 unresolved, 2 nonfinite, 4 running), ``k``, ``t_trap`` [s] (the time of the trap or of
-    the running certificate), the well energy ``energy`` E_k at the trap against ``cap``
-    (:func:`atlas.labels.trap.energy_cap`: 2ω0²(1 − m) when τ = 0), ``margin`` m,
-    ``trap_index`` (the trajectory index of the certificate), ``direction`` (sign(τ) when
-    running, else 0),
-    the running certificate ``barrier`` that was tested (None: none), the limit ``cycle``
-    (an :class:`atlas.physics.running.LimitCycle`, when known, for the pictures) and the
-    ``method`` that stepped it."""
+    settled, or, running, for ``turns`` more turns, at least those asked for, until it is on
+    the limit cycle; ``settled``: whether it got there before t_max), and its label:
+    ``status`` (0 trapped, 1 unresolved, 2 nonfinite, 4 running), ``k``, ``t_trap`` [s] (the
+    time of the trap or of the running certificate), the well energy ``energy`` E_k at the
+    trap against ``cap`` (:func:`atlas.labels.trap.energy_cap`: 2ω0²(1 − m) when τ = 0),
+    ``margin`` m, ``trap_index`` (the trajectory index of the certificate), ``direction``
+    (sign(τ) when running, else 0), the running certificate ``barrier`` that was tested
+    (None: none), the limit ``cycle`` (an :class:`atlas.physics.running.LimitCycle`, when
+    known, for the pictures) and the ``method`` that stepped it."""
 
     theta0: float
     theta_dot0: float
@@ -68,6 +70,8 @@ class Orbit:
     barrier: RunningBarrier | None = field(default=None, repr=False)
     cycle: object = field(default=None, repr=False)
     method: str = defaults.METHOD
+    turns: int = 0
+    settled: bool = False
 
     @property
     def rest_angle(self) -> float:
@@ -99,10 +103,12 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
     :class:`atlas.physics.barrier.RunningBarrier` of direction sign(τ), as :func:`atlas.label`
     takes; None: no orbit is labelled running). After the trap the orbit goes on until
     E_k < ``settle`` times the trap's saddle energy (for the pictures), after the running
-    certificate for ``turns`` more turns, either at most to t_max. Raises ValueError for
-    settings atlas cannot certify (:func:`atlas.labels.labelling.check_integration`) or a
-    barrier whose direction is not sign(τ), TypeError for a ``running`` that is not a
-    RunningBarrier.
+    certificate for at least ``turns`` more turns and until two successive turns return to
+    the certificate's phase (mod 2π) at speeds within ``settle`` (relative) of each other:
+    on the limit cycle; either at most to t_max (``settled`` says which ended it). Raises
+    ValueError for settings atlas cannot certify
+    (:func:`atlas.labels.labelling.check_integration`) or a barrier whose direction is not
+    sign(τ), TypeError for a ``running`` that is not a RunningBarrier.
     ``method``: the discretisation (:data:`atlas.kernels.METHODS`), as :func:`atlas.label`'s
     straightforward kernel of that method steps it. ``cap`` [rad² s⁻²], ``margin``: the
     trap's level and margin a run used (an atlas file's); None: :func:`atlas.labels.trap.
@@ -153,13 +159,52 @@ def integrate(theta0: float, theta_dot0: float, *, alpha: float, omega0: float,
         while len(thetas) - 1 < limit:
             c, s, _, energy = sync(th, v)
             if not energy > level:
+                result["settled"] = True
                 break
             th, v, c, s = steps(th, v, c, s)
     elif result["status"] == RUNNING:
-        start = th
-        while len(thetas) - 1 < limit and abs(th - start) < turns * TWO_PI:
+        # the speeds at which the orbit returns to the certificate's phase, θ_cert + 2πn
+        # (linear between steps): on the cycle once two successive ones agree to ``settle``
+        # (the return map contracts by e^(−2αT) per turn of period T)
+        start, sign, last = th, running.direction, None
+        result["turns"] = 0
+        while len(thetas) - 1 < limit and not (result["turns"] >= turns
+                                               and result.get("settled")):
+            first = len(thetas)
             th, v, c, s = steps(th, v, *sync(th, v)[:2])
+            for i in range(first, len(thetas)):
+                x0, x1 = sign * (thetas[i - 1] - start), sign * (thetas[i] - start)
+                while x0 < TWO_PI * (result["turns"] + 1) <= x1:
+                    f = (TWO_PI * (result["turns"] + 1) - x0) / (x1 - x0)
+                    u = speeds[i - 1] + f * (speeds[i] - speeds[i - 1])
+                    result["settled"] = last is not None and abs(u - last) < settle * abs(u)
+                    last = u
+                    result["turns"] += 1
     theta, theta_dot = np.array(thetas), np.array(speeds)
     return Orbit(theta0, theta_dot0, float(alpha), float(omega0), float(dt), float(t_max),
                  np.arange(theta.size) * dt, theta, theta_dot, cap=cap, margin=margin,
                  torque=torque, barrier=running, method=method, **result)
+
+
+def window_period(lo: float, hi: float) -> float:
+    """The period [rad] an orbit is wrapped with in the θ window [lo, hi]: the whole turns,
+    2π each, that fit in its width (0 for a window narrower than one turn)."""
+    return TWO_PI * math.floor((hi - lo) / TWO_PI + 1e-9)
+
+
+def wrapped(theta: np.ndarray, theta_dot: np.ndarray, lo: float, hi: float
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """An orbit's phase curve (θ [rad], θ̇ [rad s⁻¹]) drawn in the θ window [lo, hi]: θ
+    where it lies inside, else shifted by the multiple of :func:`window_period` that brings
+    it inside (the phase portrait repeats every 2π in θ, one well further per turn), with a
+    NaN row wherever the shift changes, so that a drawn line breaks there instead of
+    crossing the window. A window narrower than one turn: the curve unchanged."""
+    theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
+    period = window_period(lo, hi)
+    if period == 0.0:
+        return theta, theta_dot
+    turns = np.where(theta > hi, -np.ceil((theta - hi) / period),
+                     np.where(theta < lo, np.ceil((lo - theta) / period), 0.0))
+    cuts = np.flatnonzero(np.diff(turns)) + 1
+    return (np.insert(theta + turns * period, cuts, np.nan),
+            np.insert(theta_dot, cuts, np.nan))

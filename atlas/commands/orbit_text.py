@@ -19,7 +19,7 @@ from atlas.commands.orbit_integrate import Orbit
 from atlas.physics.pendulum import Pendulum
 from atlas.status import NONFINITE, RUNNING, STATUS_MEANINGS, TRAPPED
 
-__all__ = ["header_line", "label_lines", "exact_line", "file_line"]
+__all__ = ["header_line", "label_lines", "exact_line", "file_line", "outside_line"]
 
 TWO_PI = 2.0 * math.pi
 #: The name of each status code (as the file's CF flag_meanings say).
@@ -151,3 +151,13 @@ def file_line(nearest: dict) -> str:
             f"{STATUS_MEANINGS.get(nearest['status'], nearest['status'])}, t_trap "
             f"{nearest['t_trap']:.2f} s, boundary distance {nearest['distance']:.4g}"
             + ("" if nearest["inside"] else " (the orbit starts outside the atlas window)"))
+
+
+def outside_line(point) -> str:
+    """The warning printed first when the initial condition lies outside the atlas window
+    (``point``: the parameter point's map, with coordinates theta0 and theta_dot0): the
+    stored label shown is that of the nearest edge point, not of the orbit."""
+    th, v = point["theta0"].values, point["theta_dot0"].values
+    return (f"warning      the initial condition lies outside the atlas window theta0 in "
+            f"[{th[0]:.6g}, {th[-1]:.6g}] rad, theta_dot0 in [{v[0]:.6g}, {v[-1]:.6g}] "
+            f"rad/s: the file's label below is the nearest edge point's, not the orbit's")

@@ -20,15 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from atlas.errors import AtlasError, InputFileError
+from atlas.errors import AtlasError
 from atlas.limits import MIN_TOL_ULPS
 
 __all__ = ["Zoom", "zoom_config", "width_tag", "write_zoom", "DEFAULT_NUM"]
 
 #: Orbits per axis of a zoom window by default: odd, so that the centre is a grid point.
 DEFAULT_NUM = 101
-
-_CONFIG_SUFFIXES = (".yaml", ".yml", ".json")
 
 
 @dataclass(frozen=True)
@@ -56,14 +54,6 @@ def _yaml_number(x: float) -> str:
     if "e" in text and "." not in text.split("e")[0]:
         text = text.replace("e", ".0e", 1)
     return text
-
-
-def _check_file(file: str | Path) -> Path:
-    path = Path(file)
-    if path.suffix.lower() in _CONFIG_SUFFIXES and path.is_file():
-        raise InputFileError(f"{path}: a config, not an atlas file; run it first "
-                             f"(atlas run {path}) and zoom into the file it writes")
-    return path
 
 
 def _check_window(theta0: float, theta_dot0: float, width: float, num: int) -> None:
@@ -100,7 +90,7 @@ def zoom_config(file: str | Path, theta0: float, theta_dot0: float, width: float
     from atlas.pipeline.config import _first_error as first_error
     from atlas.store.reader import describe
 
-    path = _check_file(file)
+    path = Path(file)  # a config given for it is refused with a hint by the reader
     if not (math.isfinite(width) and width > 0):  # before the file is opened
         raise AtlasError(f"--width must be a finite number > 0, got {width:g}")
     point = open_point(path, alpha=alpha, omega0=omega0, torque=torque)

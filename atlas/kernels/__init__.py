@@ -17,9 +17,12 @@ The full contract, term by term: docs/design/kernels.md#the-kernel-contract.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import os
+import weakref
+from collections.abc import Callable
 from pathlib import Path
 
 from atlas.defaults import METHODS  # noqa: F401 (the discretisations, re-exported)
@@ -92,8 +95,39 @@ def cached_njit(**options):
         except OSError:
             pass
         try:
-            return numba.njit(cache=True, **options)(func)
+            kernel = numba.njit(cache=True, **options)(func)
         finally:
             numba.config.CACHE_DIR = saved
+        _CACHED.add(kernel)
+        return kernel
 
     return decorate
+
+
+#: Every kernel made by :func:`cached_njit`: the ones whose compilation a warm cache spares.
+_CACHED = weakref.WeakSet()
+
+
+@contextlib.contextmanager
+def on_cold_compile(callback: Callable[[str], None]):
+    """Within the block, call ``callback(name)`` (from whichever thread compiles) each time
+    Numba starts compiling one of the kernels of :func:`cached_njit`, named by its Python
+    name. Numba compiles such a kernel only where its on-disk cache has no entry for the
+    signature, or a stale one (Numba checks the source file's time stamp and size): a warm
+    cache only loads machine code and calls nothing. Other jitted functions (inlined helpers
+    compiled as part of a kernel, plain ``njit`` functions) are not reported: they are compiled
+    in every process, cache or not. Uses Numba's event API (``numba.core.event``,
+    the ``"numba:compile"`` event, which Numba raises after a cache miss only)."""
+    from numba.core import event
+
+    class _Listener(event.Listener):
+        def on_start(self, ev):
+            kernel = ev.data.get("dispatcher") if ev.data else None
+            if kernel is not None and kernel in _CACHED:
+                callback(getattr(kernel, "__name__", "kernel"))
+
+        def on_end(self, ev):
+            pass
+
+    with event.install_listener("numba:compile", _Listener()):
+        yield

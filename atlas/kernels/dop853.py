@@ -1,17 +1,22 @@
-"""DOP853 for the stable manifold of the saddle (π, 0), compiled: :func:`stable_manifold`.
+"""DOP853, compiled: every manifold and cycle atlas integrates on the run path.
 
-The exact basin boundaries without torque (:mod:`atlas.boundaries.manifold`) are one curve,
-the left branch L of (π, 0), integrated in reversed time at rtol = atol = 1e-13 with dense
-output together with Q(τ) = ∫ θ̇² dτ: eq. (1) with τ = 0 reversed, (θ, θ̇, Q)' = (−θ̇,
-ω0² sin θ + 2αθ̇, θ̇²). The method is scipy's ``solve_ivp(method="DOP853")`` step for step
-(scipy's import alone took a tenth of an ``atlas run``): the Dormand–Prince 8(5,3) pair with
+:func:`integrate` solves one of three problems (``kind``) of eq. (1) with torque τ until a
+terminal event: REVERSED, the stable manifolds in reversed time with Q(τ) = ∫ θ̇² dτ,
+(θ, θ̇, Q)' = (−θ̇, ω0² sin θ + 2αθ̇ − τ, θ̇²) — without torque the left branch L of (π, 0)
+(:mod:`atlas.boundaries.manifold`, :func:`stable_manifold`), with torque the tilted branches
+until θ̇ leaves a band (:mod:`atlas.boundaries.tilted`); FLOW, forward time, the turns of
+the running limit cycle's Poincaré map (:mod:`atlas.physics.running`); ALONG_THETA, an orbit
+(or the running barrier's lower curve) as a function of θ. The method is scipy's
+``solve_ivp(method="DOP853")`` step for step (scipy's import alone took a tenth of an
+``atlas run``): the Dormand–Prince 8(5,3) pair with
 its 7th-order dense output (Hairer, Nørsett & Wanner, *Solving ODEs I*, 2nd ed., §II.5–6; the
 coefficients of Hairer's ``dop853.f``), held as a :class:`Tableau` that checks its own
 consistency; that code's step-size control as scipy implements it (error norm
 |err5|²/√(|err5|² + 0.01|err3|²), safety 0.9, factors in [0.2, 10], exponent −1/8) and its
-initial step (§II.4); a terminal event min(E − e_stop, θ_min − θ) located on the dense output
-by bisection to 4 ulp, where the solution ends, as ``solve_ivp``'s does. Accuracy: scipy's
-DOP853 on the same problem to rounding (tests/kernels/test_dop853.py).
+initial step (§II.4); a terminal event (ENERGY … BELOW) located on the dense output by
+bisection to 4 ulp, where the solution ends, as ``solve_ivp``'s does. Accuracy: scipy's
+DOP853 on the same problem to rounding (tests/kernels/test_dop853.py,
+tests/kernels/test_dop853_torque.py).
 """
 
 from __future__ import annotations
@@ -24,8 +29,9 @@ import numpy as np
 
 from atlas.kernels import cached_njit
 
-__all__ = ["stable_manifold", "FINISHED", "EVENT", "STEP_TOO_SMALL", "FULL", "Tableau",
-           "TABLEAU"]
+__all__ = ["integrate", "solve", "Solution", "stable_manifold", "dense_output", "FINISHED", "EVENT",
+           "STEP_TOO_SMALL", "FULL", "REVERSED", "FLOW", "ALONG_THETA", "ENERGY", "BAND", "TURN",
+           "BELOW", "NONE", "Tableau", "TABLEAU"]
 
 #: Statuses of :func:`stable_manifold`: reached t_bound; stopped at the event; the step
 #: fell below 10 ulp of τ; more steps than the output arrays hold (call again with more).
@@ -147,41 +153,80 @@ _D = np.array([
 TABLEAU = Tableau(c=_C, a=_A, b=_B, e3=_E3, e5=_E5, d=_D)
 
 
+#: The problems :func:`integrate` solves (``kind``), y = (y0, y1, y2), params = (α, ω0, τ, ε):
+#: REVERSED: eq. (1) with τ in reversed time and Q, (θ, θ̇, Q)' = (−θ̇, −θ̈, θ̇²);
+#: FLOW: eq. (1) with τ forward, (θ, θ̇, Q)' = (θ̇, θ̈, θ̇²);
+#: ALONG_THETA: the orbit as a function of the angle x = θ, y = (θ̇, t, ·):
+#: (θ̇, t)' = ((θ̈ − ε)/θ̇, 1/θ̇) (ε = 0: an orbit; ε > 0: a curve the flow crosses upward).
+REVERSED, FLOW, ALONG_THETA = 0, 1, 2
+#: The terminal events (``event``), g(x, y) crossing 0 upwards, event_params = (e0, e1):
+#: ENERGY: min(E − e0, e1 − θ) (the untilted manifold: faster than e0, left of e1);
+#: BAND: max(θ̇ − e1, e0 − θ̇) (θ̇ leaves the band (e0, e1)); TURN: max(θ − e0, −θ̇) (θ reaches
+#: e0, or θ̇ falls to 0); BELOW: e0 − y0 (y0 falls to e0); NONE: no event.
+ENERGY, BAND, TURN, BELOW, NONE = 0, 1, 2, 3, 4
+
+
 @nb.njit
-def _rhs(y, alpha, omega0, out):
-    """Eq. (1) in reversed time, and θ̇² for Q."""
-    out[0] = -y[1]
-    out[1] = omega0 * omega0 * math.sin(y[0]) + 2.0 * alpha * y[1]
+def _rhs(kind, x, y, params, out):
+    """The right-hand side of problem ``kind`` at x (see REVERSED, FLOW, ALONG_THETA).
+    θ̈ = τ − X, X = ω0² sin θ + 2αθ̇, written so that REVERSED with τ = 0 gives the untilted
+    manifold's doubles (−(0 − X) = X exactly)."""
+    alpha, omega0, torque = params[0], params[1], params[2]
+    if kind == ALONG_THETA:
+        accel = torque - (omega0 * omega0 * math.sin(x) + 2.0 * alpha * y[0])
+        out[0] = (accel - params[3]) / y[0]
+        out[1] = 1.0 / y[0]
+        out[2] = 0.0
+        return
+    accel = torque - (omega0 * omega0 * math.sin(y[0]) + 2.0 * alpha * y[1])
+    if kind == REVERSED:
+        out[0] = -y[1]
+        out[1] = -accel
+    else:
+        out[0] = y[1]
+        out[1] = accel
     out[2] = y[1] * y[1]
 
 
 @nb.njit
-def _event(y, omega0, e_stop, theta_min):
-    """min(E − e_stop, θ_min − θ), E = ½θ̇² + 2ω0² sin²(θ/2): both grow along L."""
-    s = math.sin(0.5 * y[0])
-    energy = 0.5 * y[1] * y[1] + 2.0 * omega0 * omega0 * s * s
-    return min(energy - e_stop, theta_min - y[0])
+def _event(event, y, params, event_params):
+    """g of the terminal ``event`` (see ENERGY … NONE); the solution ends where g first
+    crosses 0 upwards."""
+    e0, e1 = event_params[0], event_params[1]
+    if event == ENERGY:  # E = ½θ̇² + 2ω0² sin²(θ/2): grows along the untilted manifold
+        s = math.sin(0.5 * y[0])
+        omega0 = params[1]
+        energy = 0.5 * y[1] * y[1] + 2.0 * omega0 * omega0 * s * s
+        return min(energy - e0, e1 - y[0])
+    if event == BAND:
+        return max(y[1] - e1, e0 - y[1])
+    if event == TURN:
+        return max(y[0] - e0, -y[1])
+    if event == BELOW:
+        return e0 - y[0]
+    return -1.0
 
 
 @nb.njit
-def _rms(v, scale):
+def _rms(v, scale, dim):
     total = 0.0
-    for i in range(v.size):
+    for i in range(dim):
         total += (v[i] / scale[i]) ** 2
-    return math.sqrt(total / v.size)
+    return math.sqrt(total / dim)
 
 
 @nb.njit
-def _initial_step(t0, y0, f0, t_bound, rtol, atol, alpha, omega0):
-    """The first step (Hairer, Nørsett & Wanner §II.4, as scipy's select_initial_step)."""
+def _initial_step(kind, t0, y0, f0, t_bound, rtol, atol, params, dim):
+    """The first step (Hairer, Nørsett & Wanner §II.4, as scipy's select_initial_step), over
+    the first ``dim`` components."""
     interval = abs(t_bound - t0)
     scale = atol + np.abs(y0) * rtol
-    d0, d1 = _rms(y0, scale), _rms(f0, scale)
+    d0, d1 = _rms(y0, scale, dim), _rms(f0, scale, dim)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, interval)
     f1 = np.empty(3)
-    _rhs(y0 + h0 * f0, alpha, omega0, f1)
-    d2 = _rms(f1 - f0, scale) / h0
+    _rhs(kind, t0 + h0, y0 + h0 * f0, params, f1)
+    d2 = _rms(f1 - f0, scale, dim) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
     else:
@@ -252,14 +297,18 @@ def dense_output(tau, t, t_old, h, y_old, F, out):
 
 
 @cached_njit(nogil=True)
-def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_min, capacity):
-    """Integrate (θ, θ̇, Q) from ``y0`` at reversed time ``t0`` [s] towards ``t_bound`` until
-    the event (module docstring) with DOP853 at ``rtol``, ``atol``; α [s⁻¹], ω0 [rad s⁻¹].
+def integrate(kind, params, event, event_params, y0, t0, t_bound, rtol, atol, dim, capacity):
+    """Integrate problem ``kind`` (REVERSED, FLOW or ALONG_THETA; ``params`` = (α [s⁻¹],
+    ω0 [rad s⁻¹], τ [rad s⁻²], ε [rad s⁻²])) from ``y0`` (3 components; the first ``dim``
+    enter the error norm, as a ``dim``-component problem in scipy) at ``t0`` towards
+    ``t_bound`` with DOP853 at ``rtol`` and per-component ``atol`` (3,), until the terminal
+    ``event`` (ENERGY … NONE, with ``event_params``) or t_bound: scipy's
+    ``solve_ivp(method="DOP853")`` step for step (module docstring).
 
     Returns (status, n steps, t (n + 1) step ends — the last one the event —, y (n + 1, 3)
     there, and per step t_old, h, y_old (n, 3) and F (n, 7, 3): step i's dense output is
     y_old[i] + the polynomial of F[i] in x = (τ − t_old[i])/h[i], F[i, 0] the lowest term).
-    At most ``capacity`` steps."""
+    At most ``capacity`` steps; integration runs forward (t_bound > t0)."""
     ts = np.empty(capacity + 1)
     ys = np.empty((capacity + 1, 3))
     t_olds, hs = np.empty(capacity), np.empty(capacity)
@@ -268,9 +317,9 @@ def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_mi
     y = y0.copy()
     t = t0
     f = np.empty(3)
-    _rhs(y, alpha, omega0, f)
-    h_abs = _initial_step(t0, y, f, t_bound, rtol, atol, alpha, omega0)
-    g = _event(y, omega0, e_stop, theta_min)
+    _rhs(kind, t, y, params, f)
+    h_abs = _initial_step(kind, t0, y, f, t_bound, rtol, atol, params, dim)
+    g = _event(event, y, params, event_params)
     ts[0] = t
     ys[0] = y
     n = 0
@@ -290,13 +339,13 @@ def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_mi
             K[0] = f
             for s in range(1, _STAGES):
                 _combine(K, _A[s], s, h, y, stage)
-                _rhs(stage, alpha, omega0, K[s])
+                _rhs(kind, t + _C[s] * h, stage, params, K[s])
             _combine(K, _B, _STAGES, h, y, y_new)
-            _rhs(y_new, alpha, omega0, f_new)
+            _rhs(kind, t + h, y_new, params, f_new)
             K[_STAGES] = f_new
             err5, err3 = 0.0, 0.0
-            for i in range(3):
-                scale = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+            for i in range(dim):
+                scale = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
                 e5, e3 = 0.0, 0.0
                 for j in range(_STAGES + 1):
                     e5 += K[j, i] * _E5[j]
@@ -306,7 +355,7 @@ def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_mi
             if err5 == 0.0 and err3 == 0.0:
                 norm = 0.0
             else:
-                norm = h_abs * err5 / math.sqrt((err5 + 0.01 * err3) * 3.0)
+                norm = h_abs * err5 / math.sqrt((err5 + 0.01 * err3) * float(dim))
             if norm < 1.0:
                 factor = _MAX_FACTOR if norm == 0.0 else min(_MAX_FACTOR,
                                                             _SAFETY * norm**_EXPONENT)
@@ -319,7 +368,7 @@ def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_mi
         # dense output of the accepted step: three more stages (dop853.f's CONTD8)
         for s in range(_STAGES + 1, 16):
             _combine(K, _A[s], s, h, y, stage)
-            _rhs(stage, alpha, omega0, K[s])
+            _rhs(kind, t + _C[s] * h, stage, params, K[s])
         F = Fs[n]
         for i in range(3):
             delta = y_new[i] - y[i]
@@ -332,13 +381,13 @@ def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_mi
                     acc += _D[r, j] * K[j, i]
                 F[3 + r, i] = h * acc
         t_olds[n], hs[n], y_olds[n] = t, h, y
-        g_new = _event(y_new, omega0, e_stop, theta_min)
+        g_new = _event(event, y_new, params, event_params)
         n += 1
         if g <= 0.0 <= g_new:  # the event, crossed upwards: bisect on the dense output
             lo, hi = t, t_new
             while hi - lo > 4.0 * _EPS * max(abs(lo), abs(hi), 1.0):
                 mid = 0.5 * (lo + hi)
-                if _event(_dense(mid, t, h, y, F), omega0, e_stop, theta_min) >= 0.0:
+                if _event(event, _dense(mid, t, h, y, F), params, event_params) >= 0.0:
                     hi = mid
                 else:
                     lo = mid
@@ -352,3 +401,58 @@ def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_mi
         ys[n] = y
         if t == t_bound:
             return FINISHED, n, ts, ys, t_olds, hs, y_olds, Fs
+
+
+@cached_njit(nogil=True)
+def stable_manifold(y0, t0, t_bound, rtol, atol, alpha, omega0, e_stop, theta_min, capacity):
+    """Integrate (θ, θ̇, Q) from ``y0`` at reversed time ``t0`` [s] towards ``t_bound`` until
+    the event min(E − e_stop, θ_min − θ) crosses 0 (the untilted manifold, τ = 0) with DOP853
+    at ``rtol``, ``atol``; α [s⁻¹], ω0 [rad s⁻¹]: :func:`integrate` of REVERSED with event
+    ENERGY, all three components in the error norm. Returns as :func:`integrate`."""
+    params = np.array([alpha, omega0, 0.0, 0.0])
+    return integrate(REVERSED, params, ENERGY, np.array([e_stop, theta_min]), y0, t0, t_bound,
+                     rtol, np.full(3, atol), 3, capacity)
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What :func:`solve` returns: ``status`` (FINISHED, EVENT or STEP_TOO_SMALL), the step
+    ends ``t`` (n + 1) and states ``y`` (n + 1, 3) there, and each step's dense output
+    (``t_old``, ``h`` (n), ``y_old`` (n, 3), ``F`` (n, 7, 3), lowest power first)."""
+
+    status: int
+    t: np.ndarray
+    y: np.ndarray
+    t_old: np.ndarray
+    h: np.ndarray
+    y_old: np.ndarray
+    F: np.ndarray
+
+    def at(self, x) -> np.ndarray:
+        """The dense output at the points ``x`` (1-D, within [t[0], t[-1]]): (3, len(x))."""
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        out = np.empty((3, x.size))
+        dense_output(x, self.t, self.t_old, self.h, self.y_old,
+                     np.ascontiguousarray(self.F[:, ::-1]), out)
+        return out
+
+
+def solve(kind: int, params, event: int, event_params, y0, t_bound: float, rtol: float,
+          atol, dim: int, t0: float = 0.0, capacity: int = 1024) -> Solution:
+    """:func:`integrate` from Python: the arguments as sequences (``atol`` one per component
+    of y, y0 padded with zeros to 3), the output arrays grown ×4 until they hold every
+    step, and trimmed to them."""
+    y = np.zeros(3)
+    y[:len(y0)] = y0
+    tol = np.zeros(3)
+    tol[:len(atol)] = atol
+    tol[len(atol):] = tol[len(atol) - 1]
+    args = (int(kind), np.asarray(params, np.float64), int(event),
+            np.append(np.asarray(event_params, np.float64), [0.0, 0.0])[:2], y, float(t0),
+            float(t_bound), float(rtol), tol, int(dim))
+    while True:
+        status, n, t, ys, t_old, h, y_old, F = integrate(*args, capacity)
+        if status != FULL:
+            return Solution(int(status), t[:n + 1].copy(), ys[:n + 1].copy(), t_old[:n].copy(),
+                            h[:n].copy(), y_old[:n].copy(), F[:n].copy())
+        capacity *= 4

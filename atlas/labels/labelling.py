@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -25,9 +26,22 @@ from atlas.labels.trap import CHECK_EVERY, energy_cap, n_checks_for, trap_margin
 from atlas.limits import MAX_STEPS, MAX_TRAP_MARGIN, MAX_WELL, check_reach
 from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import Pendulum, rk4_stable
-from atlas.status import ATTRACTOR_FILL, RUNNING, TRAPPED
+from atlas.status import ATTRACTOR_FILL, NONFINITE, RUNNING, TRAPPED, UNRESOLVED
 
-__all__ = ["LabelResult", "label", "check_integration", "check_torque_reach", "check_running"]
+__all__ = ["LabelResult", "LABEL_STATUS_MEANINGS", "label", "check_integration",
+           "check_torque_reach", "check_running"]
+
+
+#: What each ``status`` of a :class:`LabelResult` means, by name: the labels of the *RK4 map*,
+#: not checked against the exact equation. The codes are :mod:`atlas.status`'s, but in an
+#: atlas file 0 (``trapped``) and 4 (``running``) mean more, certified for the exact equation
+#: (:data:`atlas.status.IN_FILE`); the names here say the difference.
+LABEL_STATUS_MEANINGS = {
+    TRAPPED: "trapped_rk4_map",    # in the energy trap of well k of the RK4 map at step dt
+    UNRESOLVED: "unresolved",      # no certificate held before t_max
+    NONFINITE: "nonfinite",        # a NaN or inf state was met
+    RUNNING: "running_rk4_map",    # in the running barrier of the RK4 map (τ ≠ 0)
+}
 
 
 @dataclass(frozen=True)
@@ -36,10 +50,12 @@ class LabelResult:
 
     attractor: int16, k of the attractor (the rest state (θ* + 2πk, 0), θ* = 0 when τ = 0);
                ``ATTRACTOR_FILL`` where not trapped.
-    status:    int8 (:mod:`atlas.status`), 0 trapped (certified for the RK4 map: not yet
-               for the exact equation, see :func:`label`), 1 unresolved (t_max reached),
-               2 nonfinite, 4 running (certified, for the RK4 map, to converge to the running
-               limit cycle; τ ≠ 0 only).
+    status:    int8 (:mod:`atlas.status`; names in :attr:`status_meanings`),
+               0 ``trapped_rk4_map`` (certified for the RK4 map: not yet for the exact
+               equation, see :func:`label`), 1 ``unresolved`` (t_max reached),
+               2 ``nonfinite``, 4 ``running_rk4_map`` (certified, for the RK4 map, to converge
+               to the running limit cycle; τ ≠ 0 only). The file's 3 and 5 (near a basin
+               boundary) never occur here: :func:`label` does not measure that distance.
     t_trap:    float32 [s], the time at which the trap, or the running certificate, was first
                seen (NaN if never).
     direction: int8, the direction of rotation where running (+1, −1: sign(τ)), 0 elsewhere.
@@ -50,11 +66,24 @@ class LabelResult:
     status: np.ndarray
     t_trap: np.ndarray
     direction: np.ndarray | None = None
+    #: ``status`` code → name (:data:`LABEL_STATUS_MEANINGS`): what a code means *here*.
+    status_meanings: ClassVar[dict[int, str]] = LABEL_STATUS_MEANINGS
 
     def __post_init__(self) -> None:
         if self.direction is None:
             object.__setattr__(self, "direction",
                                np.zeros(np.shape(self.status), dtype=np.int8))
+
+    def status_names(self) -> np.ndarray:
+        """``status`` as names (:attr:`status_meanings`), an array of str of its shape;
+        ValueError for a code that :func:`label` never sets."""
+        codes = np.array(sorted(self.status_meanings))
+        status = np.asarray(self.status)
+        index = np.minimum(np.searchsorted(codes, status), codes.size - 1)
+        if not np.array_equal(codes[index], status):
+            unknown = sorted(set(np.unique(status).tolist()) - set(codes.tolist()))
+            raise ValueError(f"status {unknown} is not a code of atlas.label's results")
+        return np.array([self.status_meanings[code] for code in codes])[index]
 
 
 def check_integration(alpha: float, omega0: float, dt: float, t_max: float,
@@ -158,8 +187,8 @@ def label(
     Integrates eq. (1) with fixed-step RK4 (step ``dt`` [s], at most ``t_max`` [s] rounded up
     to a whole number of trap tests) and stops each orbit once certified by the energy trap.
 
-    What ``status = 0`` (TRAPPED) means here: the orbit of the *RK4 map* at step ``dt`` is
-    trapped in well k, and so converges to its rest state; a certificate for the RK4 map,
+    What ``status = 0`` (``trapped_rk4_map``) means here: the orbit of the *RK4 map* at step
+    ``dt`` is trapped in well k, and so converges to its rest state; a certificate for the RK4 map,
     not for the exact equation, whose basin boundary may lie on the other side of an initial
     condition close to it. In an atlas *file* ``status = 0`` means more: certified for the
     exact equation, because the sweep turns every label closer than ``d_cert`` to an exact

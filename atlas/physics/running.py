@@ -4,7 +4,8 @@ For θ̈ = τ − ω0² sin θ − 2αθ̇ (α > 0) a rotating limit cycle exist
 homoclinic torque (:func:`homoclinic_threshold`; ≈ 8αω0/π for small α, Strogatz, *Nonlinear
 Dynamics and Chaos*, §8.5) and is unique (Levi, Hoppensteadt & Miranker, Q. Appl. Math. 36,
 167–198, 1978). :func:`limit_cycle` finds it as the fixed point of the Poincaré map θ̇(θs) ↦
-θ̇(θs + 2π) by Brent's method on scipy's DOP853 (about 1e-11 relative). :func:`running_barrier`
+θ̇(θs + 2π) by Brent's method on DOP853 (compiled, :mod:`atlas.kernels.dop853`; about 1e-11
+relative). :func:`running_barrier`
 builds a band around it that is forward-invariant for the exact flow and for the RK4 step
 (margins: :func:`rk4_allowance`, measured), holds the cycle and no rest state, so every orbit
 entering it converges to the cycle; :func:`check_barrier` verifies such a band from its stored
@@ -44,6 +45,52 @@ _CENTRE_START = 1e-3
 _START_FRACTIONS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
 
 
+def _brentq(f, a: float, b: float, *, xtol: float = 2e-12, rtol: float = 8.881784197001252e-16,
+            maxiter: int = 100) -> float:
+    """A root of ``f`` in [a, b] (f(a), f(b) of opposite signs) to |x − root| ≤ xtol +
+    rtol·|x|: Brent's method (Brent, *Algorithms for Minimization without Derivatives*, 1973,
+    ch. 4), transcribed from scipy's ``brentq`` (``zeros/brentq.c``: the same steps, the same
+    doubles; tests/physics/test_brentq.py), so that the run path needs no scipy."""
+    xpre, xcur = float(a), float(b)
+    fpre, fcur = f(xpre), f(xcur)
+    if fpre == 0.0:
+        return xpre
+    if fcur == 0.0:
+        return xcur
+    if (fpre > 0.0) == (fcur > 0.0):
+        raise ValueError("f(a) and f(b) must have different signs")
+    xblk = fblk = spre = scur = 0.0
+    for _ in range(maxiter):
+        if fpre != 0.0 and fcur != 0.0 and (math.copysign(1.0, fpre)
+                                            != math.copysign(1.0, fcur)):
+            xblk, fblk = xpre, fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre, xcur, xblk = xcur, xblk, xcur
+            fpre, fcur, fblk = fcur, fblk, fcur
+        delta = (xtol + rtol * abs(xcur)) / 2.0
+        sbis = (xblk - xcur) / 2.0
+        if fcur == 0.0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:  # interpolate
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)
+            else:  # extrapolate
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2.0 * abs(stry) < min(abs(spre), 3.0 * abs(sbis) - delta):
+                spre, scur = scur, stry  # a good short step
+            else:
+                spre = scur = sbis  # bisect
+        else:
+            spre = scur = sbis
+        xpre, fpre = xcur, fcur
+        xcur += scur if abs(scur) > delta else (delta if sbis > 0 else -delta)
+        fcur = f(xcur)
+    raise RuntimeError(f"Brent's method did not converge in {maxiter} iterations")
+
+
 def _check(alpha: float, omega0: float) -> None:
     if not (math.isfinite(alpha) and alpha > 0.0):
         raise ValueError(f"alpha must be a finite number > 0, got {alpha!r}")
@@ -68,29 +115,23 @@ class _Turn:
     """One turn of the flow (canonical frame, τ ≥ 0) by DOP853 at tolerance ``rtol``."""
 
     def __init__(self, alpha: float, omega0: float, torque: float, rtol: float):
-        self.alpha, self.w2, self.torque, self.rtol = alpha, omega0**2, torque, rtol
-        self.rhs = Pendulum(alpha, omega0, torque).rhs
+        self.alpha, self.omega0, self.torque, self.rtol = alpha, omega0, torque, rtol
+        self.w2 = omega0**2
         self.scale = _ceiling(alpha, omega0, torque)
         self.t_max = 1e4 * (1.0 / alpha + 1.0 / omega0)
 
-    def run(self, theta, theta_dot, theta_end, dense=False):
+    def run(self, theta, theta_dot, theta_end):
         """Integrate from (θ, θ̇) until θ = theta_end (→ reached) or θ̇ falls to 0 (→ turned
-        back): (reached, θ, θ̇, t) at the end, and the solution if ``dense``."""
-        from scipy.integrate import solve_ivp
+        back): (reached, θ, θ̇, t) at the end (compiled DOP853,
+        :func:`atlas.kernels.dop853.integrate`, scipy's method step for step)."""
+        from atlas.kernels.dop853 import EVENT, FLOW, TURN, solve
 
-        def arrive(_, y):
-            return y[0] - theta_end
-
-        def stop(_, y):
-            return y[1]
-
-        arrive.terminal = stop.terminal = True
-        arrive.direction, stop.direction = 1, -1
-        sol = solve_ivp(self.rhs, (0.0, self.t_max), [theta, theta_dot], method="DOP853",
-                        rtol=self.rtol, atol=self.rtol * np.array([2 * math.pi, self.scale]),
-                        events=(arrive, stop), dense_output=dense)
-        reached = sol.status == 1 and sol.t_events[0].size > 0
-        return reached, sol.y[0, -1], sol.y[1, -1], sol.t[-1], sol
+        sol = solve(FLOW, (self.alpha, self.omega0, self.torque, 0.0), TURN, (theta_end,),
+                    (theta, theta_dot), self.t_max, self.rtol,
+                    (self.rtol * 2 * math.pi, self.rtol * self.scale), dim=2)
+        theta, theta_dot = sol.y[-1, 0], sol.y[-1, 1]
+        reached = sol.status == EVENT and theta - theta_end >= -theta_dot
+        return reached, theta, theta_dot, sol.t[-1]
 
     def escape(self, omega0: float) -> float:
         """Signed outcome of the orbit that leaves (θs, 0) in +θ, one turn later: its speed
@@ -112,7 +153,7 @@ class _Turn:
         else:
             start = (theta_s, 0.0)
         end = theta_s + 2.0 * math.pi
-        reached, theta, theta_dot, _, _ = self.run(*start, end)
+        reached, theta, theta_dot, _ = self.run(*start, end)
         return theta_dot if reached else -omega0 * (end - theta)
 
 
@@ -148,8 +189,6 @@ class LimitCycle:
 
 def _fixed_point(turn: _Turn, omega0: float):
     """(θs, v, T): the fixed point v of P and the period (canonical frame), or None."""
-    from scipy.optimize import brentq
-
     p0 = turn.escape(omega0)
     if not p0 > 0.0:
         return None
@@ -159,11 +198,11 @@ def _fixed_point(turn: _Turn, omega0: float):
     def excess(v):  # P(v) − v; orbits that turn back (or stall) count as P = 0
         if v == 0.0:
             return p0
-        reached, _, theta_dot, _, _ = turn.run(theta_s, v, end)
+        reached, _, theta_dot, _ = turn.run(theta_s, v, end)
         return (theta_dot if reached else 0.0) - v
 
-    v = brentq(excess, 0.0, turn.scale, xtol=1e-15 * turn.scale, rtol=1e-15)
-    reached, _, _, period, _ = turn.run(theta_s, v, end)
+    v = _brentq(excess, 0.0, turn.scale, xtol=1e-15 * turn.scale, rtol=1e-15)
+    reached, _, _, period = turn.run(theta_s, v, end)
     if not reached:  # cannot happen: P(v) = v > 0 means the orbit got round
         raise RuntimeError("the limit cycle's orbit did not complete a turn")
     return theta_s, float(v), float(period)
@@ -182,9 +221,7 @@ def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-
     """
     _check(alpha, omega0)
     if torque == 0.0:
-        return None  # before scipy's import: an untilted run never pays it
-    from scipy.integrate import solve_ivp
-
+        return None
     direction = 1 if torque > 0 else -1
     found = [_fixed_point(_Turn(alpha, omega0, abs(torque), r), omega0)
              for r in (rtol, 10.0 * rtol)]
@@ -194,16 +231,11 @@ def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-
     error = float(max(abs(v - v_check) / v, abs(period - period_check) / period))
 
     tau = abs(torque)
-    theta_ddot = Pendulum(alpha, omega0, tau).theta_ddot
-
-    def along_theta(theta, y):
-        return [theta_ddot(theta, y[0]) / y[0], 1.0 / y[0]]
-
     theta = theta_s + np.linspace(0.0, 2.0 * math.pi, samples + 1)
-    sol = solve_ivp(along_theta, (theta[0], theta[-1]), [v, 0.0], method="DOP853", rtol=rtol,
-                    atol=rtol * np.array([_ceiling(alpha, omega0, tau), period]), t_eval=theta)
+    y = _along_theta(alpha, omega0, tau, 0.0, theta, (v, 0.0), rtol,
+                     (rtol * _ceiling(alpha, omega0, tau), rtol * period))
     return LimitCycle(theta0=direction * theta_s, theta=direction * theta,
-                      theta_dot=direction * sol.y[0], time=sol.y[1], period=period,
+                      theta_dot=direction * y[0], time=y[1], period=period,
                       direction=direction, error=error)
 
 
@@ -238,8 +270,6 @@ def homoclinic_threshold(alpha: float, omega0: float, *, rtol: float = 1e-12) ->
     lost, 2α∮θ̇ dθ = 2α·8ω0, so τ_c ≈ 8αω0/π as α → 0. Scaling t → ω0t shows
     τ_c(α, ω0) = ω0²·τ_c(α/ω0, 1).
     """
-    from scipy.optimize import brentq
-
     _check(alpha, omega0)
 
     def outcome(torque):
@@ -247,7 +277,7 @@ def homoclinic_threshold(alpha: float, omega0: float, *, rtol: float = 1e-12) ->
 
     if not outcome(omega0**2) > 0.0:
         return omega0**2
-    return brentq(outcome, 0.0, omega0**2, xtol=1e-15 * omega0**2, rtol=1e-13)
+    return _brentq(outcome, 0.0, omega0**2, xtol=1e-15 * omega0**2, rtol=1e-13)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -386,32 +416,37 @@ def check_barrier(alpha: float, omega0: float, torque: float, barrier, *,
     return BarrierCheck(True, "", margin)
 
 
+def _along_theta(alpha, omega0, tau, epsilon, theta, y0, rtol, atol, low=None):
+    """(θ̇, t) at the angles ``theta`` (increasing) of the curve dθ̇/dθ = (θ̈(θ, θ̇) − ε)/θ̇,
+    dt/dθ = 1/θ̇ from (θ̇, t) = ``y0`` at theta[0] (an orbit for ε = 0), by DOP853 at
+    ``rtol``, ``atol`` (one per component given; compiled, scipy's method step for step, the
+    samples from its dense output as scipy's ``t_eval``), or None where θ̇ falls to ``low``
+    first."""
+    from atlas.kernels.dop853 import ALONG_THETA, BELOW, EVENT, NONE, solve
+
+    event, level = (NONE, 0.0) if low is None else (BELOW, low)
+    sol = solve(ALONG_THETA, (alpha, omega0, tau, epsilon), event, (level,), y0, theta[-1],
+                rtol, atol, dim=len(y0), t0=theta[0])
+    if sol.status == EVENT:
+        return None
+    if sol.t[-1] != theta[-1]:
+        raise RuntimeError(f"DOP853 along theta stopped early (status {sol.status})")
+    return sol.at(theta)[:len(y0)]
+
+
 def _lower_curve(alpha, omega0, tau, theta_a, v0, epsilon, m, rtol=1e-10):
     """g on θa + 2πi/m (i = 0…m) from dg/dθ = (θ̈(θ, g) − ε)/g, g(θa) = v0 (DOP853), or
     None where g falls below v0/1000."""
-    from scipy.integrate import solve_ivp
-
-    theta_ddot = Pendulum(alpha, omega0, tau).theta_ddot
-
-    def rhs(theta, y):
-        return [(theta_ddot(theta, y[0]) - epsilon) / y[0]]
-
-    def low(_, y):
-        return y[0] - 1e-3 * v0
-
-    low.terminal = True
     theta = theta_a + np.linspace(0.0, 2.0 * math.pi, m + 1)
-    sol = solve_ivp(rhs, (theta[0], theta[-1]), [v0], method="DOP853", rtol=rtol,
-                    atol=rtol * v0, t_eval=theta, events=low)
-    return sol.y[0] if sol.status == 0 else None
+    g = _along_theta(alpha, omega0, tau, epsilon, theta, (v0,), rtol, (rtol * v0,),
+                     low=1e-3 * v0)
+    return None if g is None else g[0]
 
 
 def _margin_for(alpha, omega0, tau, theta_a, v0):
     """3/4 of the largest ε [rad s⁻²] for which the lower curve from v0 still returns to at
     least v0 after one turn (Brent's method, 1e-3 relative), or None where even ε = 0 (an
     orbit) does not gain speed over the turn: v0 lies outside the running basin."""
-    from scipy.optimize import brentq
-
     def gain(epsilon):
         g = _lower_curve(alpha, omega0, tau, theta_a, v0, epsilon, 1)
         return -v0 if g is None else g[-1] - v0
@@ -422,7 +457,7 @@ def _margin_for(alpha, omega0, tau, theta_a, v0):
     hi = gain0 * v0 / (2.0 * math.pi)  # ε·(time of a turn) ≈ lost speed; grown until lost
     while gain(hi) > 0.0:
         hi *= 4.0
-    return 0.75 * brentq(gain, 0.0, hi, rtol=1e-3)
+    return 0.75 * _brentq(gain, 0.0, hi, rtol=1e-3)
 
 
 def running_barrier(alpha: float, omega0: float, torque: float, cycle: LimitCycle | None = None,

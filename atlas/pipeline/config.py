@@ -3,20 +3,27 @@
 A config names the pendulum (α, ω0, τ — a list for any makes a parameter atlas), the
 (θ0, θ̇0) grid, the integrator, the separatrix tracing, the execution backend and the output
 path. Numbers may be written as π expressions: ``3pi``, ``-pi/2``, ``2*pi``, ``0.5pi``.
-Any problem is raised as :class:`atlas.errors.ConfigError` with one line naming the key.
+Any problem is raised as :class:`atlas.errors.ConfigError` with one line naming the key (an
+unknown key first, with the schema's nearest key: "did you mean num?"). What is valid but
+likely a mistake (a θ0 window in degrees) or adjusted (a separatrix tol finer than double
+precision resolves) is said in warnings (:attr:`Config.warnings`, logged by
+:func:`load_config`); ``check_radians: false`` silences the one about degrees.
 """
 
 from __future__ import annotations
 
 import ast
+import difflib
 import hashlib
 import itertools
 import json
+import logging
 import math
 import operator
 import re
+from fractions import Fraction
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Literal, get_args
 
 import yaml
 from pydantic import (
@@ -24,6 +31,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    PrivateAttr,
     ValidationError,
     field_validator,
     model_validator,
@@ -34,6 +42,8 @@ from atlas.defaults import BACKEND_WORDS, METHODS
 from atlas.errors import ConfigError
 from atlas.layout import PARAMETERS
 from atlas.limits import MAX_RATE, MIN_RATE
+
+log = logging.getLogger(__name__)
 
 __all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash"]
 
@@ -96,7 +106,35 @@ def _number(value):
     raise ValueError(f"expected a number or π expression, got {type(value).__name__}")
 
 
+#: The most values a range {start, stop, num} of a pendulum parameter may hold.
+MAX_RANGE_NUM = 1 << 20
+
+
+def _parameter_range(value: dict) -> list[float]:
+    """A range ``{start, stop, num}`` of a pendulum parameter: ``num`` values evenly spaced
+    from ``start`` to ``stop`` inclusive (numpy's linspace: both ends exact), num ≥ 2 and
+    start < stop."""
+    unknown = sorted(set(value) - {"start", "stop", "num"})
+    if unknown:
+        raise ValueError(f"a range has the keys start, stop and num; unknown key {unknown[0]!r}")
+    missing = [key for key in ("start", "stop", "num") if key not in value]
+    if missing:
+        raise ValueError(f"a range needs start, stop and num; {missing[0]} is missing")
+    start, stop, num = _number(value["start"]), _number(value["stop"]), value["num"]
+    if isinstance(num, bool) or not isinstance(num, int):
+        raise ValueError(f"range num must be an integer, got {num!r}")
+    if not 2 <= num <= MAX_RANGE_NUM:
+        raise ValueError(f"range num must be between 2 and {MAX_RANGE_NUM}, got {num}")
+    if not start < stop:
+        raise ValueError(f"range start ({start:g}) must be less than stop ({stop:g})")
+    import numpy as np
+
+    return [float(v) for v in np.linspace(start, stop, num)]
+
+
 def _number_or_list(value):
+    if isinstance(value, dict):
+        return _parameter_range(value)
     if isinstance(value, list):
         numbers = []
         for i, item in enumerate(value):
@@ -109,7 +147,7 @@ def _number_or_list(value):
 
 
 Number = Annotated[float, BeforeValidator(_number)]
-#: A number, or a list of numbers for a parameter atlas.
+#: A number, or a list of numbers (or a range {start, stop, num}) for a parameter atlas.
 Numbers = Annotated[float | list[float], BeforeValidator(_number_or_list)]
 
 
@@ -257,7 +295,9 @@ class IntegratorConfig(_Strict):
 
 class SeparatricesConfig(_Strict):
     """Stable manifolds of the saddles, located by bisection to ``tol`` with vertices at most
-    ``max_spacing`` apart in the phase plane."""
+    ``max_spacing`` apart in the phase plane. A ``tol`` finer than double precision resolves
+    in the window (:func:`atlas.limits.finest_tol`: 1.2e-13 for |θ| ≤ 3π, 1.9e-12 for
+    |θ| ≤ 180) is raised to that finest one, with a warning (:attr:`Config.warnings`)."""
 
     enabled: bool = True
     tol: Number = Field(default=defaults.SEPARATRIX_TOL, gt=0, lt=1e-3)
@@ -274,8 +314,30 @@ class ExecutionConfig(_Strict):
     scheduler: str | None = None
 
 
+class StabilityConfig(_Strict):
+    """``atlas stability`` only (a grid run ignores it): the Gaussian perturbation's standard
+    deviations ``sigma_theta`` [rad] and ``sigma_theta_dot`` [rad s⁻¹] around each rest state
+    (both or neither; none: no Gaussian stability), and whether a 1-D study stores the
+    ``tipping`` probabilities between consecutive points."""
+
+    sigma_theta: Number | None = Field(default=None, gt=0)
+    sigma_theta_dot: Number | None = Field(default=None, gt=0)
+    tipping: bool = False
+
+    @model_validator(mode="after")
+    def _both_sigmas(self):
+        if (self.sigma_theta is None) != (self.sigma_theta_dot is None):
+            raise ValueError("give both sigma_theta and sigma_theta_dot, or neither")
+        return self
+
+
 class Config(_Strict):
-    """A whole sweep (see ``configs/default.yaml`` for a commented example)."""
+    """A whole sweep (see ``configs/default.yaml`` for a commented example).
+
+    ``check_radians`` (default true): warn when the θ0 window looks like degrees or spans
+    more than :data:`RADIANS_WARNING_TURNS` turns (:func:`radians_warnings`); ``false``
+    silences that warning (it changes no result).
+    """
 
     name: str = "default"
     pendulum: PendulumConfig = PendulumConfig()
@@ -284,10 +346,23 @@ class Config(_Strict):
     separatrices: SeparatricesConfig = SeparatricesConfig()
     execution: ExecutionConfig = ExecutionConfig()
     output: Path = Path(defaults.OUTPUT)
+    stability: StabilityConfig | None = None
+    check_radians: bool = True
+    #: What validation changed, one line each (a tol raised to what the window resolves).
+    _adjusted: tuple[str, ...] = PrivateAttr(default=())
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What a user should hear about this valid config, one line each (:func:`load_config`
+        logs them): a ``separatrices.tol`` raised to what double precision resolves in the
+        window, and a θ0 window that looks like degrees (:func:`radians_warnings`)."""
+        return (*self._adjusted, *radians_warnings(self))
 
     @model_validator(mode="after")
-    def _runnable(self):
-        """Checks across sections, so that a valid config never fails after work began."""
+    def _runnable(self, info):
+        """Checks across sections, so that a valid config never fails after work began. A
+        study (validation context ``{"study": True}``) integrates no grid: it skips the grid
+        run's checks of the integrator and the window's reach, and takes the saddle-node."""
         from atlas.labels.backends import lookup as lookup_backend
         from atlas.labels.labelling import check_integration, check_torque_reach
         from atlas.labels.methods import lookup as lookup_method
@@ -304,6 +379,8 @@ class Config(_Strict):
             raise ValueError(f"integrator.method: {self.integrator.method!r} is for the "
                              "pendulum without torque (the running certificate is established "
                              "for 'rk4' only); use method: rk4 with a torque")
+        if (info.context or {}).get("study"):
+            return self
         g = self.grid
         theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))
         speed_abs = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))
@@ -331,6 +408,7 @@ class Config(_Strict):
         except ValueError as exc:
             raise ValueError(f"grid: {exc}") from None
         if self.separatrices.enabled:
+            self._resolve_tol()
             try:
                 check_separatrix_settings((g.theta0.start, g.theta0.stop),
                                           (g.theta_dot0.start, g.theta_dot0.stop),
@@ -339,9 +417,31 @@ class Config(_Strict):
                 raise ValueError(f"separatrices.{exc}") from None
         return self
 
+    def _resolve_tol(self) -> None:
+        """Raise ``separatrices.tol`` to the finest the window resolves where it asks for a
+        finer one (:func:`atlas.limits.finest_tol`), noting it: a window far out (±180, say)
+        then runs at 1.9e-12 instead of being refused over a setting its user never chose.
+        (The model is frozen; this runs inside its own validation, before anyone sees it.)"""
+        from atlas.limits import finest_tol
+
+        g, sep = self.grid, self.separatrices
+        ends = (g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop)
+        finest = finest_tol(*ends)
+        if sep.tol < finest:
+            object.__setattr__(self, "separatrices", sep.model_copy(update={"tol": finest}))
+            scale = max(abs(x) for pair in ends for x in pair)
+            self._adjusted = (f"separatrices.tol = {sep.tol:g} is finer than double precision "
+                              f"resolves where |θ0| or |θ̇0| reaches {scale:.3g}; using the "
+                              f"finest it resolves there, tol = {finest:.2g}",)
+
     def to_json(self) -> str:
-        """The validated config as canonical JSON (stored in every output file)."""
-        return json.dumps(self.model_dump(mode="json"), sort_keys=True)
+        """The validated config as canonical JSON (stored in every output file); keys at their
+        default that change no result (``stability`` unset, ``check_radians`` true) are left
+        out, so files keep the config JSON they had before the keys existed."""
+        exclude = {"stability"} if self.stability is None else set()
+        if self.check_radians:
+            exclude.add("check_radians")
+        return json.dumps(self.model_dump(mode="json", exclude=exclude), sort_keys=True)
 
 
 def integrator_json(integrator: IntegratorConfig) -> dict:
@@ -358,19 +458,63 @@ def config_hash(cfg: Config) -> str:
     """Digest of the config apart from its name, output and execution settings, recorded in the
     file as provenance. (Whether a partial run may be continued is decided by the stricter
     :func:`atlas.pipeline.identity.run_identity`.)"""
-    data = cfg.model_dump(mode="json", exclude={"output", "execution", "name"})
+    data = cfg.model_dump(mode="json", exclude={"output", "execution", "name", "stability",
+                                                "check_radians"})
     data["integrator"] = integrator_json(cfg.integrator)
     return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 
+def _key_path(loc: tuple) -> list:
+    """The config keys of a pydantic error location, without the tags pydantic inserts for
+    unions and validators (``function-before[...]``, ``list[float]``); the last part is
+    always kept: it may be a user's unknown key (``theta-dot0``)."""
+    keys = [p for p in loc[:-1] if not (isinstance(p, str) and ("[" in p or "-" in p))]
+    return keys + list(loc[-1:])
+
+
+def _section_model(annotation):
+    """The config section (a pydantic model) an annotation holds, e.g. ``X | None`` → X."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    return next((m for m in map(_section_model, get_args(annotation)) if m is not None), None)
+
+
+def _schema_keys(section: list) -> list[str]:
+    """The keys the config schema allows in ``section`` (its keys from the top; [] for the
+    top level): the field names of its model, [] where ``section`` is no section."""
+    model = Config
+    for key in section:
+        field = model.model_fields.get(key) if isinstance(key, str) else None
+        model = None if field is None else _section_model(field.annotation)
+        if model is None:
+            return []
+    return list(model.model_fields)
+
+
+def _did_you_mean(loc: list, errors: list[dict]) -> str:
+    """`` (did you mean KEY?)`` for the unknown key at ``loc``: the required key missing
+    beside it that it most resembles (``n`` for ``num``), else the nearest key the schema
+    allows there (difflib, as Python's own suggestions); "" where none is close."""
+    section, key = loc[:-1], str(loc[-1])
+    missing = [str(e["loc"][-1]) for e in errors
+               if e["type"] == "missing" and _key_path(e["loc"])[:-1] == section]
+    match = (difflib.get_close_matches(key, missing, n=1, cutoff=0.4)
+             or difflib.get_close_matches(key, _schema_keys(section), n=1, cutoff=0.6))
+    return f" (did you mean {match[0]}?)" if match else ""
+
+
 def _first_error(exc: ValidationError) -> str:
-    """One line from pydantic's first error: ``<key>: <problem> (got <value>)``."""
-    err = exc.errors()[0]
-    loc = [p for p in err["loc"] if not (isinstance(p, str) and ("[" in p or "-" in p))]
+    """One line from pydantic's errors: ``<key>: <problem> (got <value>)``. An unknown key
+    comes first, with the key it most likely meant: a misspelt key is what makes the right
+    one missing (``n:`` for ``num:`` says "grid.theta0.n: unknown key (did you mean num?)",
+    not "grid.theta0.num: missing")."""
+    errors = exc.errors()
+    err = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
+    loc = _key_path(err["loc"])
     kind = err["type"]
     msg = err["msg"].removeprefix("Value error, ").replace("Input should be", "must be")
     if kind == "extra_forbidden":
-        msg = "unknown key"
+        msg = "unknown key" + _did_you_mean(loc, errors)
     elif kind == "missing":
         msg = "missing"
     elif kind != "value_error":
@@ -418,21 +562,24 @@ def _parse_yaml(text: str):
     return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 (a SafeLoader subclass)
 
 
-def load_config(path: str | Path, *, output: str | Path | None = None) -> Config:
-    """Read and validate a YAML config; ``output`` overrides its ``output`` key.
+def load_config(path: str | Path, *, output: str | Path | None = None,
+                study: bool = False) -> Config:
+    """Read and validate a YAML config; ``output`` overrides its ``output`` key; ``study``:
+    validate it for ``atlas stability`` (:class:`Config`'s ``_runnable``).
 
     Raises :class:`ConfigError` with one line ``<file>: <key>: <problem>``.
     """
     path = Path(path)
     try:
         if path.stat().st_size > MAX_CONFIG_BYTES:
-            raise ConfigError(f"{path}: {path.stat().st_size:,} bytes is too large for a "
-                              f"config (at most {MAX_CONFIG_BYTES:,})")
+            raise ConfigError(_not_a_config(path) or f"{path}: {path.stat().st_size:,} bytes "
+                              f"is too large for a config (at most {MAX_CONFIG_BYTES:,})")
         text = path.read_text()
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such config file") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{path}: cannot read config file ({exc.__class__.__name__})") from None
+        raise ConfigError(_not_a_config(path) or f"{path}: cannot read config file "
+                          f"({exc.__class__.__name__})") from None
     try:
         data = _parse_yaml(text)
     except ConfigError as exc:
@@ -449,6 +596,62 @@ def load_config(path: str | Path, *, output: str | Path | None = None) -> Config
     if output is not None:
         data = {**data, "output": str(output)}
     try:
-        return Config.model_validate(data)
+        cfg = Config.model_validate(data, context={"study": study})
     except ValidationError as exc:
         raise ConfigError(f"{path}: {_first_error(exc)}") from None
+    for line in cfg.warnings:
+        log.warning("warning: %s: %s", path, line)
+    return cfg
+
+
+def _not_a_config(path: Path) -> str | None:
+    """The hint for an atlas file given where a config is expected (``atlas run OUT.h5``),
+    or None where ``path`` is no atlas file: asked only once the file failed to read as a
+    config, so a config is read without importing the store."""
+    from atlas.store.reader import is_atlas_file
+
+    if not is_atlas_file(path):
+        return None
+    return (f"{path}: an atlas file, not a config; look at it with `atlas info {path}` "
+            "(`atlas run` reads a YAML config such as configs/default.yaml)")
+
+
+# ---------------------------------------------------------------------------- units
+
+#: A θ0 window [rad] wider than this many turns (2π rad each) gets a warning that θ0 is in
+#: radians: the default window spans 3 turns, an essay figure at most 2.
+RADIANS_WARNING_TURNS = 8
+#: Window ends [rad] that look like degrees: a quarter, a half, three quarters, one and two
+#: turns in degrees.
+DEGREE_LIKE_ENDS = (90.0, 180.0, 270.0, 360.0, 720.0)
+
+
+def _in_pi(degrees: float) -> str:
+    """``degrees`` (a whole number) in radians as a π expression where it is a simple
+    fraction of π (90 → "pi/2", -180 → "-pi", 360 → "2pi"), else as a number [rad]."""
+    ratio = Fraction(round(degrees), 180)
+    if ratio.denominator > 12:
+        return f"{math.radians(degrees):.6g}"
+    if ratio == 0:
+        return "0"
+    factor = {1: "", -1: "-"}.get(ratio.numerator, str(ratio.numerator))
+    return f"{factor}pi" + (f"/{ratio.denominator}" if ratio.denominator > 1 else "")
+
+
+def radians_warnings(cfg: Config) -> list[str]:
+    """The warning, if any, that ``cfg``'s θ0 window may have been written in degrees: it
+    spans more than :data:`RADIANS_WARNING_TURNS` turns, or an end is one of
+    :data:`DEGREE_LIKE_ENDS` (±90, ±180, …); with the window in radians as a hint ("did you
+    mean -pi/2 … pi/2?") where both ends are whole numbers. None where ``check_radians``
+    is false. A warning, not an error: such a window is valid, only unlikely."""
+    start, stop = cfg.grid.theta0.start, cfg.grid.theta0.stop
+    turns = (stop - start) / (2 * math.pi)
+    looks_like_degrees = any(abs(end) in DEGREE_LIKE_ENDS for end in (start, stop))
+    if not cfg.check_radians or (turns <= RADIANS_WARNING_TURNS and not looks_like_degrees):
+        return []
+    hint = ""
+    if float(start).is_integer() and float(stop).is_integer():
+        hint = f"; did you mean {_in_pi(start)} … {_in_pi(stop)}?"
+    return [f"grid.theta0: θ0 is in radians: the window {start:g} … {stop:g} spans "
+            f"{turns:.1f} turns (a turn is 2pi = 6.283 rad){hint} (`check_radians: false` "
+            "silences this warning)"]

@@ -7,7 +7,7 @@ folder) it refuses, with one line each: the config file being run as the output,
 (:func:`check_output_target`; an atlas file may be written over: that is how a changed config
 is run again); a directory where the format writes a file; a folder that is not a directory
 or not writable; a disk without room for the labels (:func:`check_output_path`, an estimate
-from the grid's size, :data:`BYTES_PER_ORBIT`).
+from the grid's size, :func:`label_bytes`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ from atlas.store.formats import format_for
 from atlas.store.reader import is_atlas_file
 from atlas.store.schema import MAP_VARIABLES
 
-__all__ = ["check_output_target", "check_output_path", "BYTES_PER_ORBIT"]
+__all__ = ["check_output_target", "check_output_path", "label_bytes", "human_size",
+           "BYTES_PER_ORBIT"]
 
 #: Bytes one orbit takes on disk at most: every per-orbit variable of the file uncompressed,
 #: from their stored dtypes (attractor int16 + status int8 + t_trap float32 +
@@ -75,14 +76,21 @@ def check_output_path(output: Path, layout: Layout) -> None:
         raise AtlasError(f"{output}: the output folder {existing} is not a directory")
     if not os.access(existing, os.W_OK):
         raise AtlasError(f"{output}: the output folder {existing} is not writable")
-    need = layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
+    need = label_bytes(layout)
     free = shutil.disk_usage(existing).free
     if need > free:
-        raise AtlasError(f"{output}: the output may need up to {_size(need)} but only "
-                         f"{_size(free)} is free on that disk")
+        raise AtlasError(f"{output}: the output may need up to {human_size(need)} but only "
+                         f"{human_size(free)} is free on that disk")
 
 
-def _size(n_bytes: int) -> str:
+def label_bytes(layout: Layout) -> int:
+    """Bytes the labels of ``layout`` take on disk at most: its orbits (every parameter point)
+    × :data:`BYTES_PER_ORBIT`."""
+    return layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
+
+
+def human_size(n_bytes: float) -> str:
+    """A size in bytes for people: "4.4 GB" (decimal units)."""
     for unit in ("B", "KB", "MB", "GB"):
         if n_bytes < 1000:
             return f"{n_bytes:.3g} {unit}"

@@ -4,7 +4,9 @@ per-point groups of the file (``/critical_points``, ``/separatrices``, ``/limit_
 
 Nothing here depends on the grid's resolution, only on its window; every function takes the
 points in the layout's order (:mod:`atlas.layout`) and returns one entry per point (None
-where the point has none: no torque, no rest state, separatrices disabled).
+where the point has none: no torque, no rest state, separatrices disabled). The slow ones
+take ``track(items, total, desc)``, which yields ``items`` and may show their progress
+(:func:`atlas.pipeline.progress.tracked`; by default nothing is shown).
 """
 
 from __future__ import annotations
@@ -20,6 +22,10 @@ from atlas.physics import running
 from atlas.physics.pendulum import Pendulum, critical_points
 from atlas.pipeline.config import Config
 from atlas.store.schema import with_barrier
+
+
+def _untracked(items, total: int, desc: str):
+    return items
 
 __all__ = ["pendulums", "window", "running_certificates", "exact_boundaries",
            "trace_separatrices", "certifiers", "groups", "per_point",
@@ -63,16 +69,24 @@ def window(cfg: Config) -> tuple[tuple[float, float], tuple[float, float]]:
     return (g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop)
 
 
-def exact_boundaries(cfg: Config, pendulums: list[Pendulum], cycles: list) -> list:
+def exact_boundaries(cfg: Config, pendulums: list[Pendulum], cycles: list,
+                     track=_untracked) -> list:
     """The exact basin boundaries of every parameter point over the window
     (:func:`atlas.boundaries.exact.exact_boundaries`, given its running limit cycle), built
     once for both the separatrices and the certifier."""
-    return [exact.exact_boundaries(p, window(cfg), cycle=cycle)
-            for p, cycle in zip(pendulums, cycles)]
+    from concurrent.futures import ThreadPoolExecutor
+
+    def one(point):  # independent points, two at a time (compiled DOP853, polygons: nogil)
+        p, cycle = point
+        return exact.exact_boundaries(p, window(cfg), cycle=cycle)
+
+    with ThreadPoolExecutor(min(2, max(1, len(pendulums)))) as pool:
+        return list(track(pool.map(one, zip(pendulums, cycles)), len(pendulums),
+                          "exact boundaries"))
 
 
 def trace_separatrices(cfg: Config, pendulums: list[Pendulum], boundaries: list,
-                        barriers: list) -> list[xr.Dataset | None]:
+                        barriers: list, track=_untracked) -> list[xr.Dataset | None]:
     """The traced separatrices of every parameter point (:func:`atlas.boundaries.trace.trace`
     on its exact boundaries and running barrier; None where it has no boundary, and each
     when disabled)."""
@@ -83,8 +97,15 @@ def trace_separatrices(cfg: Config, pendulums: list[Pendulum], boundaries: list,
     settings = {"tol": cfg.separatrices.tol, "max_spacing": cfg.separatrices.max_spacing,
                 "dt": cfg.integrator.dt, "t_max": cfg.integrator.t_max,
                 "method": cfg.integrator.method}
-    return [trace(p, *window(cfg), exact=b, barrier=barrier, **settings)
-            for p, b, barrier in zip(pendulums, boundaries, barriers)]
+    from concurrent.futures import ThreadPoolExecutor
+
+    def one(point):  # the points are independent: two at a time overlap their serial parts
+        p, b, barrier = point
+        return trace(p, *window(cfg), exact=b, barrier=barrier, **settings)
+
+    with ThreadPoolExecutor(min(2, max(1, len(pendulums)))) as pool:
+        return list(track(pool.map(one, zip(pendulums, boundaries, barriers)),
+                          len(pendulums), "separatrices"))
 
 
 def per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
@@ -102,13 +123,14 @@ def per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
 
 
 def certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, boundaries: list,
-                barriers: list) -> list[tuple]:
+                barriers: list, track=_untracked) -> list[tuple]:
     """(certifier, running barrier) of every parameter point: the certifier with the boundary
     shift its separatrices measured (NaN without them: then no label is certified for the
     exact equation; :func:`atlas.boundaries.certificate.certifier_for`), on the exact
     boundaries of :func:`exact_boundaries`, and the barrier of :func:`running_certificates`."""
     out = []
-    for p, sep, b, barrier in zip(pendulums, traced, boundaries, barriers):
+    for p, sep, b, barrier in track(zip(pendulums, traced, boundaries, barriers),
+                                    len(pendulums), "certificates"):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
         out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol, b),

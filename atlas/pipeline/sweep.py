@@ -14,15 +14,24 @@ A run continues the partial run at its output if that has the same identity
 (:func:`atlas.pipeline.identity.run_identity`: grid, physics, integrator, kernel check
 interval, atlas version, kernel class) and refuses one of another identity unless
 ``restart=True`` discards it.
+
+Before a big run starts, one line says how many orbits, about how long on this machine and
+how much disk (:mod:`atlas.pipeline.preflight`; a question on a terminal past a threshold);
+while it runs, bars show the per-point phases and the tiles, and a line says when Numba
+compiles (:mod:`atlas.pipeline.progress`). A traced separatrix farther from the DOP853 stable
+manifold than its bound is a warning on stderr (whatever ``quiet`` says) and, on the command
+line, exit status 4 after the file is written (:func:`accuracy_exit`).
 """
 
 from __future__ import annotations
 
+import functools
 import logging
+import math
 import os
 import re
-import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -30,10 +39,10 @@ import xarray as xr
 
 from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.boundaries.certificate import Certifier, add_tallies
-from atlas.errors import AtlasError, InputFileError, StorageError
+from atlas.errors import EXIT_INEXACT, AtlasError, InputFileError, StorageError
 from atlas.labels.trap import energy_cap, trap_margin
 from atlas.layout import PARAMETERS, Layout, point_label
-from atlas.pipeline import points
+from atlas.pipeline import points, preflight, progress
 from atlas.pipeline.config import Config
 from atlas.pipeline.identity import file_attrs, run_identity
 from atlas.pipeline.lock import output_lock
@@ -51,7 +60,7 @@ from atlas.store.partial import (
 from atlas.store.reader import open_atlas
 from atlas.store.schema import summary_dataset, summary_tree
 
-__all__ = ["run", "layout_of"]
+__all__ = ["run", "layout_of", "inexact_points", "accuracy_exit"]
 
 log = logging.getLogger(__name__)
 
@@ -102,13 +111,6 @@ def _make_output_folder(out: Path) -> None:
         raise AtlasError(f"{out}: cannot create the output folder ({exc.strerror})") from None
 
 
-def _progress(total: int, initial: int, quiet: bool):
-    from tqdm import tqdm
-
-    return tqdm(total=total, initial=initial, unit="orbit", unit_scale=True, smoothing=0.1,
-                disable=quiet or not sys.stderr.isatty(), desc="atlas", leave=False)
-
-
 def _refuse_another(partial: Path, identity: dict, opener=TileStore.open) -> TileStore:
     """The partial run at ``partial`` if it has ``identity``, else one clear InputFileError
     naming ``--restart``."""
@@ -147,11 +149,6 @@ def _open_tiles(cfg: Config, layout: Layout, identity: dict, restart: bool) -> T
     return tiles
 
 
-def _orbits(layout: Layout, tiles) -> int:
-    return sum((layout.tile(i)[1].stop - layout.tile(i)[1].start) for i in tiles) \
-        * layout.theta0.size
-
-
 def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], device: str,
                   scheduler: Scheduler, quiet: bool) -> None:
     """Label and certify the tiles still to do on ``device`` ("cpu", "cuda") and store each as
@@ -160,14 +157,15 @@ def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], de
     layout, todo = tiles.layout, tiles.todo()
     written_by_workers = scheduler.worker_writes(tiles)
     results = scheduler.results(cfg, tiles, certifiers, todo, device)
-    total = _orbits(layout, range(layout.n_tiles))
-    with _progress(total, total - _orbits(layout, todo), quiet) as bar:
+    total = preflight.orbits_of(layout, range(layout.n_tiles))
+    with progress.bar(total, "tiles", "orbit", quiet,
+                      initial=total - preflight.orbits_of(layout, todo)) as bar:
         for index, result in results:
             if written_by_workers:
                 tiles.record(index, result)
             else:
                 tiles.write(index, *result)
-            bar.update(_orbits(layout, [index]))
+            bar.update(preflight.orbits_of(layout, [index]))
             log.debug("tile %d of %d written", index + 1, layout.n_tiles)
 
 
@@ -201,10 +199,13 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
     Returns what was written beyond the basin map (:func:`atlas.store.schema.summary_tree`)."""
     pendulums = points.pendulums(tiles.layout)
     cycles, barriers = running_certificates
-    boundaries = points.exact_boundaries(cfg, pendulums, cycles)  # timed with the separatrices
-    traced = points.trace_separatrices(cfg, pendulums, boundaries, barriers)
+    track = functools.partial(progress.tracked, quiet=quiet)
+    boundaries = points.exact_boundaries(cfg, pendulums, cycles, track)  # timed with the
+    traced = points.trace_separatrices(cfg, pendulums, boundaries, barriers, track)  # trace
     phase.done("separatrices")
-    certifiers = points.certifiers(tiles.layout, pendulums, traced, boundaries, barriers)
+    _warn_inexact(tiles.layout, traced)
+    certifiers = points.certifiers(tiles.layout, pendulums, traced, boundaries, barriers,
+                                   track)
     groups = points.groups(tiles.layout, pendulums, traced, cycles, barriers)
     phase.done("exact boundaries and areas")
     for _ in range(3):
@@ -227,7 +228,8 @@ def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: flo
 
 def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
         backend: str | None = None, force: bool = False,
-        config_path: str | Path | None = None, open_result: bool = True) -> xr.DataTree:
+        config_path: str | Path | None = None, open_result: bool = True,
+        confirm: Callable[[preflight.Estimate], bool] | None = None) -> xr.DataTree:
     """Compute the atlas of ``cfg`` into ``cfg.output`` and return it as a DataTree.
 
     An interrupted run of the same identity at the output (``<output>.partial/``) is
@@ -241,6 +243,14 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
     ``open_result=False`` returns, instead of the file opened (and checked) again, what was
     written beyond the basin map, from memory (:func:`atlas.store.schema.summary_tree`: what
     ``atlas run`` prints).
+
+    Before anything is made, a big run's estimate (:mod:`atlas.pipeline.preflight`) is said
+    on stderr (not where ``quiet``); for a run big enough to ask, ``confirm(estimate)`` is
+    called instead (it says the line; :func:`atlas.pipeline.preflight.ask` on the command
+    line) and an answer other than True stops the run with an :class:`AtlasError`, nothing
+    written. ``quiet`` silences the progress bars and the compiling line, never a warning:
+    a traced separatrix farther from the DOP853 stable manifold than its bound is logged
+    (:func:`inexact_points`), and the file is written all the same.
     """
     check_output_target(cfg.output, config_path, force=force)
     backend = backend or cfg.execution.backend
@@ -258,7 +268,39 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
     if not restart:
         _check_partial(partial, identity)
     running_certificates = points.running_certificates(points.pendulums(layout), cfg.integrator.dt)
-    _make_output_folder(cfg.output)
+    with progress.compile_notice(quiet):
+        _preflight(cfg, layout, running_certificates[1], device.name, backend, quiet,
+                   confirm, None if restart else partial)
+        _make_output_folder(cfg.output)
+        return _locked_run(cfg, restart, quiet, backend, open_result, layout, identity,
+                           running_certificates)
+
+
+def _preflight(cfg: Config, layout: Layout, barriers: list, device: str, backend: str,
+               quiet: bool, confirm, partial: Path | None) -> None:
+    """Say a big run's estimate, or ask ``confirm`` for one big enough to ask (``partial``:
+    the partial run to be continued, whose finished tiles are not counted)."""
+    todo = range(layout.n_tiles)
+    if partial is not None and partial.exists():
+        try:
+            done = TileStore.read(partial)
+            layout, todo = done.layout, done.todo()
+        except PartialStoreError:
+            pass  # _open_tiles says what is wrong with it, under the lock
+    est = preflight.estimate(cfg, layout, barriers, preflight.orbits_of(layout, todo), device,
+                             backend)
+    if confirm is not None and est.asks:
+        if not confirm(est):
+            raise AtlasError(f"{cfg.output}: not started (the answer was not yes); nothing "
+                             "was written")
+    elif est.big and not quiet:
+        progress.say(est.line())
+
+
+def _locked_run(cfg: Config, restart: bool, quiet: bool, backend: str, open_result: bool,
+                layout: Layout, identity: dict, running_certificates) -> xr.DataTree:
+    """:func:`run` from the output's lock on: the partial run, the tiles, the file."""
+    partial = partial_path(cfg.output)
     start = time.perf_counter()
     age = _process_age()
     if age is not None:
@@ -280,6 +322,55 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
         phase.done("opening the result")
     log.info("wrote %s in %.2f s", cfg.output, time.perf_counter() - start)
     return written
+
+
+def _discrepancy(ds: xr.Dataset) -> tuple[float, float]:
+    """(the traced points' largest distance to the DOP853 stable manifold, its bound) of one
+    ``/separatrices`` node (NaN, NaN where it has none)."""
+    return (float(ds.attrs.get("discrepancy", math.nan)),
+            float(ds.attrs.get("discrepancy_bound", math.nan)))
+
+
+def _inexact_line(where: str, disc: float, bound: float) -> str:
+    return (f"{where}: check vs DOP853 stable manifold: max distance {disc:.1e} EXCEEDS bound "
+            f"{bound:.0e}: labels near the basin boundaries are less certain than the bound "
+            "assumes; lower separatrices.tol or integrator.dt")
+
+
+def _warn_inexact(layout: Layout, traced: list) -> None:
+    """Log (WARNING: on stderr even with ``--quiet``) each parameter point whose traced
+    separatrices exceed their bound against the DOP853 stable manifold."""
+    for p, sep in enumerate(traced):
+        if sep is not None:
+            disc, bound = _discrepancy(sep)
+            if disc > bound:
+                log.warning(_inexact_line(point_label(layout.point(p)), disc, bound))
+
+
+def inexact_points(tree: xr.DataTree) -> list[str]:
+    """The nodes of ``tree``'s ``/separatrices`` (a written atlas, or :func:`run`'s result)
+    whose check against the DOP853 stable manifold exceeds its bound: one line each, naming
+    the node (empty where every check is within its bound, or there are none)."""
+    if "separatrices" not in tree.children:
+        return []
+    return [_inexact_line(node.path, disc, bound)
+            for node in tree["separatrices"].subtree
+            for disc, bound in [_discrepancy(node)] if disc > bound]
+
+
+def accuracy_exit(tree: xr.DataTree, output: Path, accept_inexact: bool = False) -> int:
+    """The exit status of ``atlas run`` whose result is ``tree``, written at ``output``: 0, or
+    :data:`atlas.errors.EXIT_INEXACT` (4) where a check exceeds its bound
+    (:func:`inexact_points`, already warned of during the run), said in one line on stderr,
+    unless ``accept_inexact`` (``--accept-inexact``)."""
+    inexact = inexact_points(tree)
+    if not inexact or accept_inexact:
+        return 0
+    log.warning("%s is written, but its separatrix check exceeds its bound (%d of its "
+                "parameter points); exit status %d: lower separatrices.tol or integrator.dt, "
+                "or run with --accept-inexact to accept it", output, len(inexact),
+                EXIT_INEXACT)
+    return EXIT_INEXACT
 
 
 def _reason(exc: OSError) -> str:

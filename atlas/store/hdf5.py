@@ -37,7 +37,7 @@ from atlas.store.durable import fsync
 from atlas.store.format import Format, reason
 from atlas.store.schema import FILLS, LABEL_VARIABLES, MAP_VARIABLES, SCHEMA, chunks_of
 
-__all__ = ["HDF5", "StoredRows", "encode_chunk", "decode_chunk", "DEFLATE_LEVEL"]
+__all__ = ["HDF5", "StoredRows", "encode_chunk", "decode_chunk", "DEFLATE_LEVEL", "root_attrs"]
 
 #: zlib level of the map's chunks (HDF5's gzip filter, after its byte shuffle).
 DEFLATE_LEVEL = 4
@@ -91,14 +91,7 @@ class HDF5(Format):
     def attrs(self, path: Path) -> dict:
         if path.is_dir():
             raise InputFileError(f"{path}: is a directory, not an atlas file")
-        try:  # h5py, not h5netcdf: a half-made h5netcdf.File complains again when collected
-            with h5py.File(path, "r") as f:
-                attrs = {name: _plain_attr(value) for name, value in f.attrs.items()
-                         if not name.startswith("_")}
-                has_map = all(isinstance(f.get(name), h5py.Dataset)
-                              for name in LABEL_VARIABLES)
-        except Exception as exc:  # OSError for most damage; h5py raises others too
-            raise InputFileError(f"{path}: not a readable HDF5 file ({reason(exc)})") from None
+        attrs, has_map = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA or not has_map:
             raise InputFileError(f"{path}: an HDF5 file, but not an atlas (no atlas basin map "
                                  "in it)")
@@ -112,6 +105,19 @@ class HDF5(Format):
 
 
 # ------------------------------------------------------------------- the chunk encoding
+
+def root_attrs(path: Path) -> tuple[dict, bool]:
+    """(the root attributes of the HDF5 file at ``path``, whether it holds an atlas basin
+    map); InputFileError in one line if it is not a readable HDF5 file."""
+    try:  # h5py, not h5netcdf: a half-made h5netcdf.File complains again when collected
+        with h5py.File(path, "r") as f:
+            attrs = {name: _plain_attr(value) for name, value in f.attrs.items()
+                     if not name.startswith("_")}
+            has_map = all(isinstance(f.get(name), h5py.Dataset) for name in LABEL_VARIABLES)
+    except Exception as exc:  # OSError for most damage; h5py raises others too
+        raise InputFileError(f"{path}: not a readable HDF5 file ({reason(exc)})") from None
+    return attrs, has_map
+
 
 def encode_chunk(values: np.ndarray, chunk_rows: int, fill) -> bytes:
     """One HDF5 chunk of ``values`` (rows × columns) exactly as HDF5's shuffle + deflate filter

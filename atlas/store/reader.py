@@ -20,16 +20,19 @@ import xarray as xr
 from atlas.errors import InputFileError
 from atlas.layout import at_point, point_group
 from atlas.store.format import reason
-from atlas.store.formats import format_for
-from atlas.store.partial import MANIFEST, PartialStoreError, TileStore
+from atlas.store.formats import FORMATS, format_for
+from atlas.store.partial import MANIFEST, PartialStoreError, TileStore, partial_path
 from atlas.store.schema import CERTIFICATE_FORMAT, SCHEMA
 from atlas.store.validate import check_tree, format_version, parse_config
 
-__all__ = ["open_atlas", "describe", "is_atlas_file", "stored_rows", "stores_certificate",
+__all__ = ["open_atlas", "describe", "is_atlas_file", "interrupted_run", "stored_rows",
+           "stores_certificate",
            "require_certificate", "stored_certificate", "StoredBarrier", "StoredCertificate"]
 
 _PARTIAL = ("a partial atlas (an interrupted run); finish it by running `atlas run CONFIG` "
             "again first")
+#: Names of config files: given where an atlas file is expected, they get a hint.
+CONFIG_SUFFIXES = (".yaml", ".yml")
 
 
 def open_atlas(path: str | Path, *, chunks=None) -> xr.DataTree:
@@ -64,12 +67,32 @@ def _complete(attrs: dict) -> bool:
     return flag.size == 1 and flag.dtype.kind in "iub" and bool(flag.reshape(()))
 
 
+def interrupted_run(path: str | Path) -> Path | None:
+    """The partial run (``<path>.partial``) of an atlas not written yet because its run was
+    interrupted, or None where there is none."""
+    partial = partial_path(Path(path))
+    return partial if (partial / MANIFEST).is_file() else None
+
+
 def _attrs(path: Path) -> dict:
-    """Attributes of an atlas file, or one clear InputFileError about what is wrong."""
+    """Attributes of an atlas file, or one clear InputFileError about what is wrong, with a
+    hint where the mistake is a common one: the output of an interrupted run (only its
+    ``.partial`` is there) or a config given for an atlas file."""
     if not path.exists():
+        partial = interrupted_run(path)
+        if partial is not None:
+            raise InputFileError(f"{path}: not written yet: its run was interrupted and keeps "
+                                 f"its finished tiles in {partial}; run the same config again "
+                                 "(`atlas run CONFIG`) to finish it")
         raise InputFileError(f"{path}: no such file")
     if path.is_dir() and (path / MANIFEST).exists():
         raise InputFileError(f"{path}: {_PARTIAL}")
+    if path.is_file() and not any(fmt.recognises(path) for fmt in FORMATS.values()):
+        if path.suffix.lower() in CONFIG_SUFFIXES:
+            raise InputFileError(f"{path}: a config, not an atlas file; run it with "
+                                 f"`atlas run {path}`, then give the file it writes")
+        raise InputFileError(f"{path}: not an atlas file (an atlas file is the HDF5 file or "
+                             "Zarr store that `atlas run` writes)")
     return format_for(path).attrs(path)
 
 
@@ -120,7 +143,7 @@ class StoredBarrier:
     (format 4; the contract of :class:`atlas.physics.barrier.RunningBarrier`): in the frame
     of positive rotation (u = direction·θ, w = direction·θ̇) a state is certified running
     when ĝ(u) ≤ w ≤ ``top``, ĝ the linear interpolation of ``g`` [rad s-1] on the uniform
-    grid u ∈ [``theta0``, ``theta0`` + 2π] [rad], u reduced mod 2π."""
+    grid u ∈ [``theta0``, ``theta0`` + 2π] (rad), u reduced mod 2π."""
 
     theta0: float
     g: np.ndarray

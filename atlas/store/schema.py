@@ -70,12 +70,14 @@ MAP_VARIABLES = {
     "status": MapVariable(np.int8, None, np.int8(0), {
         "long_name": "labelling status", "units": "1", **STATUS_FLAGS}),
     "t_trap": MapVariable(np.float32, np.float32(np.nan), np.float32(np.nan), {
-        "long_name": "time at which the orbit was certified trapped", "units": "s"}),
+        "long_name": "time at which the orbit's label was certified", "units": "s",
+        "comment": "status trapped or near_boundary: trapped in its well; running or "
+                   "running_near_boundary: in the running barrier; NaN where no label"}),
     "boundary_distance": MapVariable(np.float32, np.float32(np.nan), np.float32(np.nan), {
         "long_name": "Euclidean distance in the (theta, theta_dot) plane to the nearest basin "
                      "boundary",
-        "units": "1", "comment": "rad and rad s-1 taken as one unit; boundaries are the stable "
-        "manifolds of the saddles integrated by DOP853 (rtol 1e-13)"}),
+        "units": "1", "comment": "rad (theta) and rad s-1 (theta_dot) as one Euclidean unit; "
+        "boundaries are the stable manifolds of the saddles integrated by DOP853 (rtol 1e-13)"}),
 }
 #: The map variables every atlas file has (files before boundary_distance lack only it).
 LABEL_VARIABLES = ("attractor", "status", "t_trap")

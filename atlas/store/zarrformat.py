@@ -31,7 +31,7 @@ from atlas.layout import Layout
 from atlas.store.format import Format
 from atlas.store.schema import MAP_VARIABLES, SCHEMA, chunks_of
 
-__all__ = ["Zarr", "DATA"]
+__all__ = ["Zarr", "DATA", "root_attrs"]
 
 #: The Zarr store's folder name inside the partial folder.
 DATA = "atlas.zarr"
@@ -119,18 +119,24 @@ class Zarr(Format):
     def attrs(self, path: Path) -> dict:
         if path.is_dir() and not (path / "zarr.json").exists():
             raise InputFileError(f"{path}: is a directory, not an atlas file")
-        zarr = _zarr()
-        try:
-            attrs = dict(zarr.open_group(path, mode="r").attrs)
-        except Exception as exc:  # zarr raises several kinds for what is not a store
-            raise InputFileError(f"{path}: not a readable Zarr store "
-                                 f"({exc.__class__.__name__})") from None
+        attrs = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA:
             raise InputFileError(f"{path}: a Zarr store, but not an atlas")
         return attrs
 
     def open(self, path: Path, chunks=None) -> xr.DataTree:
         return xr.open_datatree(path, engine="zarr", mask_and_scale=False, chunks=chunks)
+
+
+def root_attrs(path: Path) -> dict:
+    """The root attributes of the Zarr store at ``path``; InputFileError in one line if it is
+    not a readable store."""
+    zarr = _zarr()
+    try:
+        return dict(zarr.open_group(path, mode="r").attrs)
+    except Exception as exc:  # zarr raises several kinds for what is not a store
+        raise InputFileError(f"{path}: not a readable Zarr store "
+                             f"({exc.__class__.__name__})") from None
 
 
 def _vlen_strings(ds: xr.Dataset) -> xr.Dataset:

@@ -1,9 +1,25 @@
 """Figures against a swept parameter, read from the file and drawn (no computing).
 
-* :func:`fraction_curves`: exact basin fractions of each k (lines), with the grid counts and
-  their error bounds (markers with error bars);
+* :func:`fraction_curves`: the exact basin fraction of each k (lines), the grid counts
+  (markers) and, in a panel below, their *measured* error (grid count − exact fraction);
 * :func:`basin_stability`: the share of the window that settles at a rest state and the
-  running basin's share, against the torque.
+  running basin's share against the torque, drawn the same way.
+
+What the curves mean, drawn so that they say it:
+
+* the grid error bound (``basin_fraction_grid_error_bound``, a proven bound, first order in
+  the cell size) is drawn as error bars only where it is informative, below
+  INFORMATIVE_BOUND, and clipped to [0, 1] (a fraction never leaves it): at 64² it reaches
+  0.36, while the measured error is 10⁻³, shown in the panel below;
+* where the window is symmetric about (0, 0) and there is no torque, the point reflection
+  (θ, θ̇) → (−θ, −θ̇) maps the basin of k onto that of −k, so their fractions are equal:
+  k and −k are merged into one curve "k = ±j" (their sum), as the legend says;
+* the ``max_curves`` largest basins get a curve each; the others are thin grey lines, one
+  each (never one sum that outgrows the curves it stands for);
+* the bifurcations are marked and named on the axis: α = ω0 (critical damping), τ = ω0²
+  (the saddle-node beyond which no rest state exists) and, where known, the homoclinic
+  torque τ_c above which the running cycle exists (a study file's ``homoclinic_torque``,
+  or the value the command layer passes in: views compute no dynamics).
 
 Reader (``_*_scene``) and drawer (``_draw_*``) apart, as in :mod:`atlas.views.maps`.
 """
@@ -14,17 +30,23 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from atlas.layout import PARAMETERS, point_label
-from atlas.views.style import CURVE_SIZE, axes
+from atlas.layout import PARAMETERS, point_label, point_nodes
+from atlas.views.style import CURVE_SIZE, axes, basin_colours
 
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["fraction_curves", "basin_stability", "PARAMETER_AXES", "CURVE_FIGURES"]
+__all__ = ["fraction_curves", "basin_stability", "PARAMETER_AXES", "CURVE_FIGURES",
+           "INFORMATIVE_BOUND", "bifurcation_marks"]
 
 #: Axis labels of the parameters.
 PARAMETER_AXES = {"alpha": "damping α [1/s]", "omega0": "natural frequency ω0 [rad/s]",
                   "torque": "torque τ [rad/s²]"}
+#: The grid error bound is drawn (as error bars) only where it is below this: a bar longer
+#: than a tenth of the [0, 1] axis says less than the measured error in the panel below.
+INFORMATIVE_BOUND = 0.1
+#: The colour of the basins beyond the ``max_curves`` largest (thin lines, one each).
+_OTHERS_COLOR = "0.65"
 
 
 def _held(full: xr.Dataset, ds: xr.Dataset, dim: str) -> str:
@@ -33,94 +55,264 @@ def _held(full: xr.Dataset, ds: xr.Dataset, dim: str) -> str:
     return f"\nat {point_label(held)}" if held else ""
 
 
-def _fraction_scene(tree: xr.DataTree, dim: str = "alpha", max_curves: int = 7) -> dict:
-    """What :func:`fraction_curves` draws: the swept values, the curves (exact fractions,
-    grid counts, their bounds, label, colour), α = ω0 where α is swept, and the labels."""
+def _symmetric(ds: xr.Dataset) -> bool:
+    """Whether the basin of −k is the point reflection of that of k in ``ds``'s window: no
+    torque at any point drawn, and a window symmetric about (0, 0) (to 1e-12 relative)."""
+    def centred(c: np.ndarray) -> bool:
+        return bool(np.isclose(c[0], -c[-1], rtol=1e-12, atol=1e-12 * np.abs(c).max()))
+
+    return (not np.any(ds["torque"].values) and centred(ds["theta0"].values)
+            and centred(ds["theta_dot0"].values))
+
+
+def _cycle_onset(tree: xr.DataTree, ds: xr.Dataset, dim: str) -> tuple[float, float] | None:
+    """Where an atlas file's torque sweep first stores a running limit cycle (its
+    ``/limit_cycle`` group has a node per point that has one): (the last torque without,
+    the first with), which bracket the homoclinic torque; None if the sweep does not cross
+    it or is not over τ."""
+    if dim != "torque" or "limit_cycle" not in tree.children:
+        return None
+    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and ds[n].ndim == 0}
+    with_cycle = {float(node.attrs["torque"]) for node in point_nodes(tree, "limit_cycle")
+                  if "torque" in node.attrs and all(
+                      float(node.attrs.get(n, np.nan)) == v for n, v in held.items())}
+    x = np.sort(np.abs(ds[dim].values))
+    has = np.array([v in with_cycle or -v in with_cycle for v in x])
+    if not has.any() or has.all() or not np.all(has[np.argmax(has):]):
+        return None
+    first = int(np.argmax(has))
+    return float(x[first - 1]), float(x[first])
+
+
+def bifurcation_marks(ds: xr.Dataset, dim: str, homoclinic_torque: float | None = None
+                      ) -> list[tuple[float, str]]:
+    """The bifurcations along ``dim`` that need no dynamics to place: α = ω0 (critical
+    damping: the rest states turn from foci into nodes) when α is swept, τ = ω0² (the
+    saddle-node: no rest state beyond) when τ is swept, and the homoclinic torque τ_c (the
+    running cycle is born; read from the file as ``homoclinic_torque``, else
+    ``homoclinic_torque`` as given) — those inside the swept range, as (value, label).
+    (An atlas file without τ_c brackets it instead: :func:`_cycle_onset`.)"""
+    x = ds[dim].values
+    marks = []
+    if dim == "alpha" and ds["omega0"].ndim == 0:
+        marks.append((float(ds["omega0"]), "α = ω0: critical damping"))
+    if dim == "torque" and ds["omega0"].ndim == 0:
+        marks.append((float(ds["omega0"]) ** 2, "τ = ω0²: saddle-node, no rest state beyond"))
+        if "homoclinic_torque" in ds and ds["homoclinic_torque"].ndim == 0:
+            homoclinic_torque = float(ds["homoclinic_torque"])
+        if homoclinic_torque is not None:
+            marks.append((homoclinic_torque, f"τ_c = {homoclinic_torque:.4g}: homoclinic, "
+                          "running cycle born"))
+    return [(v, text) for v, text in marks if x.min() <= v <= x.max()]
+
+
+def _fraction_scene(tree: xr.DataTree, dim: str = "alpha", max_curves: int = 7,
+                    homoclinic_torque: float | None = None) -> dict:
+    """What :func:`fraction_curves` draws: the swept values; per curve (a well k, or ±k
+    merged) the exact fractions, the grid counts, the grid error bound, its label and
+    colour; the thin curves of the smaller basins; the bifurcation marks; the labels."""
     full = tree.to_dataset(inherit=False)
     ds = full.isel({d: 0 for d in full["basin_fraction_exact"].dims if d not in (dim, "k")})
+    ks = ds["k"].values.astype(int)
     exact = ds["basin_fraction_exact"].transpose(dim, "k").values
     grid = ds["basin_fraction"].transpose(dim, "k").values
     bound = ds["basin_fraction_grid_error_bound"].transpose(dim, "k").values
-    shown = np.sort(np.argsort(exact.max(axis=0))[::-1][:max_curves])
-    rest = np.setdiff1d(np.arange(exact.shape[1]), shown)
-    curves = [(exact[:, j], grid[:, j], bound[:, j], f"k = {int(ds['k'].values[j]):+d}", None)
-              for j in shown]
-    if rest.size:
-        curves.append((exact[:, rest].sum(axis=1), grid[:, rest].sum(axis=1),
-                       bound[:, rest].sum(axis=1), f"other k ({rest.size})", "0.5"))
-    return {"x": ds[dim].values, "curves": curves,
-            "critical": float(ds["omega0"]) if dim == "alpha" and ds["omega0"].ndim == 0
-            else None, "xlabel": PARAMETER_AXES[dim],
-            "title": "Basin fractions: exact areas (lines), grid counts with error bounds "
-                     "(dots)" + _held(full, ds, dim)}
+    merged = _symmetric(ds) and set(ks) == set(-ks)
+    groups = sorted({abs(k) for k in ks}) if merged else list(ks)
+
+    def sum_of(values, g):
+        return values[:, np.abs(ks) == g].sum(axis=1) if merged else values[:, ks == g][:, 0]
+
+    curves = [(g, sum_of(exact, g), sum_of(grid, g), sum_of(bound, g)) for g in groups]
+    size = [np.nanmax(np.where(np.isfinite(e), e, gr)) for _, e, gr, _ in curves]
+    shown = set(np.argsort(size)[::-1][:max_curves])
+    colours = basin_colours([g for i, (g, *_) in enumerate(curves) if i in shown], lines=True)
+
+    def label(g):
+        return f"k = ±{g}" if merged and g else f"k = {g:+d}".replace("+0", "0").replace(
+            "-", "−")
+
+    return {"x": ds[dim].values,
+            "curves": [(e, gr, b, label(g), colours[g])
+                       for i, (g, e, gr, b) in enumerate(curves) if i in shown],
+            "others": [np.where(np.isfinite(e), e, gr)
+                       for i, (g, e, gr, b) in enumerate(curves) if i not in shown],
+            "marks": bifurcation_marks(ds, dim, homoclinic_torque),
+            "onset": None if homoclinic_torque is not None or "homoclinic_torque" in ds
+            else _cycle_onset(tree, ds, dim),
+            "xlabel": PARAMETER_AXES[dim],
+            "title": "Basin fractions of the window"
+                     + (" (±k merged: the window is symmetric about (0, 0),\nso k and −k "
+                        "have equal basins; each curve is their sum)" if merged else "")
+                     + _held(full, ds, dim)}
 
 
-def _draw_fractions(ax, x, curves, critical, xlabel: str, title: str):
-    """Draw :func:`_fraction_scene` (as :func:`fraction_curves`)."""
-    for e, g, b, label, color in curves:
-        line, = ax.plot(x, e, "-", color=color, label=label)
-        ax.errorbar(x, g, yerr=b, fmt="o", ms=3, capsize=2, color=line.get_color())
-    if critical is not None:
-        ax.axvline(critical, color="0.3", ls=":", lw=1, label="α = ω0 (critical)")
+def _error_bars(ax, x, grid, bound, color):
+    """The grid error bound as error bars about the grid counts, where it is below
+    INFORMATIVE_BOUND, clipped to [0, 1]; returns whether any bar was drawn."""
+    shown = np.isfinite(bound) & (bound < INFORMATIVE_BOUND) & np.isfinite(grid)
+    if not shown.any():
+        return False
+    g, b = grid[shown], bound[shown]
+    lower, upper = np.clip(g - b, 0.0, 1.0), np.clip(g + b, 0.0, 1.0)
+    ax.errorbar(x[shown], g, yerr=[g - lower, upper - g], fmt="none", capsize=2, lw=0.8,
+                color=color)
+    return True
+
+
+def _residual_axes(ax, errors: list[np.ndarray]):
+    """A panel under ``ax`` sharing its x axis, for the measured errors (grid count − exact
+    fraction, one array per curve), and the power of ten p its axis counts in (its label
+    says "[10^p]")."""
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
+
+    below = make_axes_locatable(ax).append_axes("bottom", size="32%", pad=0.12, sharex=ax)
+    ax.tick_params(labelbottom=False)
+    below.axhline(0.0, color="0.5", lw=0.6)
+    finite = np.abs(np.concatenate([e[np.isfinite(e)] for e in errors] + [np.zeros(1)]))
+    power = int(np.floor(np.log10(finite.max()))) if finite.max() > 0 else 0
+    power = power if power < -1 else 0
+    below.set_ylabel("measured error\ngrid − exact" + (
+        f" [10{str(power).translate(_SUPERSCRIPT)}]" if power else ""))
+    return below, 10.0 ** power
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _draw_marks(axs, marks, onset=None) -> None:
+    """Vertical dotted lines at the bifurcations, each named by text along it (top panel);
+    ``onset``: the torques that bracket the homoclinic torque, shaded and named."""
+    if onset is not None:
+        for a in axs:
+            a.axvspan(*onset, color="0.88", lw=0, zorder=0)
+        axs[0].annotate(f"τ_c in ({onset[0]:g}, {onset[1]:g}):\nrunning cycle born",
+                        xy=(onset[1], 0.98), xycoords=("data", "axes fraction"),
+                        xytext=(3, 0), textcoords="offset points", rotation=90, va="top",
+                        ha="left", fontsize=7, color="0.25")
+    for value, text in marks:
+        for a in axs:
+            a.axvline(value, color="0.25", ls=":", lw=1.0, zorder=1)
+        axs[0].annotate(text, xy=(value, 0.98), xycoords=("data", "axes fraction"),
+                        xytext=(-2, 0), textcoords="offset points", rotation=90, va="top",
+                        ha="right", fontsize=7, color="0.25")
+
+
+def _finish(ax, below, x, xlabel, title, bars: bool, generic: bool = True) -> None:
+    """Scales, labels, title and legend of a curve figure (``bars``: whether error bars
+    were drawn, which the legend then explains; ``generic``: add what a line and a dot
+    mean)."""
+    from matplotlib.lines import Line2D
+
     ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
-    ax.set_xlabel(xlabel)
+    ax.set_ylim(-0.02, 1.02)
+    below.set_xlabel(xlabel)
+    ax.set_title(title, fontsize=10)
+    handles, labels = ax.get_legend_handles_labels()
+    if generic:
+        handles += [Line2D([], [], color="0.3", label="exact area (line)"),
+                    Line2D([], [], color="0.3", marker="o", ls="none", ms=4,
+                           label="grid count (dot)")]
+    if bars:
+        handles.append(Line2D([], [], color="0.3", marker="|", ls="none", ms=8,
+                              label=f"grid error bound\n(where < {INFORMATIVE_BOUND:g}; "
+                                    "clipped to [0, 1])"))
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              borderaxespad=0)
+
+
+def _draw_fractions(ax, x, curves, others, marks, xlabel: str, title: str, onset=None):
+    """Draw :func:`_fraction_scene` (as :func:`fraction_curves`)."""
+    below, unit = _residual_axes(ax, [g - e for e, g, *_ in curves])
+    bars = False
+    for values in others:
+        ax.plot(x, values, "-", color=_OTHERS_COLOR, lw=0.6, zorder=1)
+    if others:
+        ax.plot([], [], "-", color=_OTHERS_COLOR, lw=0.6,
+                label=f"{len(others)} smaller basins\n(one thin line each)")
+    for e, g, b, label, color in curves:
+        ax.plot(x, e, "-", color=color, label=label, zorder=3)
+        ax.plot(x, g, "o", ms=3.5, color=color, zorder=4)
+        bars |= _error_bars(ax, x, g, b, color)
+        below.plot(x, (g - e) / unit, "o-", ms=3, lw=0.6, color=color)
+    _draw_marks((ax, below), marks, onset)
     ax.set_ylabel("basin fraction of the window")
-    ax.set_title(title)
-    ax.legend(ncol=2)
+    _finish(ax, below, x, xlabel, title, bars)
+    top = max([np.nanmax(np.r_[e, g, 0.0]) for e, g, *_ in curves] + [0.0])
+    ax.set_ylim(-0.02 * max(top, 0.1), min(1.02, 1.1 * max(top, 0.1)))
     return ax
 
 
-def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7):
-    """Exact basin fraction of each k against the swept parameter ``dim`` (lines), with the
-    grid counts and their error bounds (markers with error bars); any other swept parameter
-    is held at its first value (named in the title).
+def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7,
+                    homoclinic_torque: float | None = None):
+    """Exact basin fraction of each k against the swept parameter ``dim`` (lines), the grid
+    counts (dots; error bars: the grid error bound where below INFORMATIVE_BOUND, clipped to
+    [0, 1]) and, in a panel below, the measured error (grid count − exact fraction); any
+    other swept parameter is held at its first value (named in the title).
 
-    The ``max_curves`` largest basins get a curve each; the rest are summed into one
-    "other k" curve. A dashed line marks critical damping α = ω0 when α is swept.
+    The ``max_curves`` largest basins get a curve each (k and −k merged where the window is
+    symmetric, as the title says); the rest are thin grey lines. Bifurcations in the range
+    are marked (:func:`bifurcation_marks`). Returns the upper panel's Axes.
     """
-    return _draw_fractions(axes(ax, CURVE_SIZE), **_fraction_scene(tree, dim, max_curves))
+    return _draw_fractions(axes(ax, CURVE_SIZE),
+                           **_fraction_scene(tree, dim, max_curves, homoclinic_torque))
 
 
-def _stability_scene(tree: xr.DataTree, dim: str = "torque") -> dict:
+def _stability_scene(tree: xr.DataTree, dim: str = "torque",
+                     homoclinic_torque: float | None = None) -> dict:
     """What :func:`basin_stability` draws: the swept values, the rest states' and the running
-    basin's shares (exact and grid counts), the grid error bound, and the labels."""
+    basin's shares (exact and grid counts, with the grid error bound), the colours, the
+    bifurcation marks and the labels."""
     full = tree.to_dataset(inherit=False)
     ds = full.isel({d: 0 for d in PARAMETERS if d in full.dims and d != dim})
+    colours = basin_colours([0], running=True, lines=True)
     return {"x": ds[dim].values,
             "exact": ds["basin_fraction_exact"].sum("k", skipna=False).values,
             "grid": ds["basin_fraction"].sum("k").values,
             "bound": ds["basin_fraction_grid_error_bound"].sum("k", skipna=False).values,
             "running": ds["running_fraction"].values,
             "running_exact": ds["running_fraction_exact"].values,
+            "running_bound": ds["running_fraction_grid_error_bound"].values
+            if "running_fraction_grid_error_bound" in ds else None,
+            "colours": (colours[0], colours["running"]),
+            "marks": bifurcation_marks(ds, dim, homoclinic_torque),
+            "onset": None if homoclinic_torque is not None or "homoclinic_torque" in ds
+            else _cycle_onset(tree, ds, dim),
             "xlabel": PARAMETER_AXES[dim],
             "title": "Basin stability of the rest states and of the running cycle"
                      + _held(full, ds, dim)}
 
 
-def _draw_stability(ax, x, exact, grid, bound, running, running_exact, xlabel: str,
-                    title: str):
+def _draw_stability(ax, x, exact, grid, bound, running, running_exact, running_bound,
+                    colours, marks, xlabel: str, title: str, onset=None):
     """Draw :func:`_stability_scene` (as :func:`basin_stability`)."""
-    shown = np.isfinite(exact)
-    if shown.any():
-        ax.plot(x[shown], exact[shown], "-", color="C0", label="rest states, exact area")
-        ax.plot(x[shown], running_exact[shown], "-", color="0.4", label="running, exact area")
-    ax.errorbar(x, grid, yerr=np.where(np.isfinite(bound), bound, 0.0), fmt="o", ms=3,
-                capsize=2, color="C0", label="rest states, grid count")
-    ax.plot(x, running, "s", ms=3, color="0.4", label="running, grid count")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("basin stability (fraction of the window)")
-    ax.set_ylim(-0.02, 1.02)
-    ax.set_title(title)
-    ax.legend()
+    below, unit = _residual_axes(ax, [grid - exact, running - running_exact])
+    bars = False
+    nothing = np.full_like(np.asarray(grid, float), np.nan)
+    for e, g, b, color, name in ((exact, grid, bound, colours[0], "rest states"),
+                                 (running_exact, running,
+                                  nothing if running_bound is None else running_bound,
+                                  colours[1], "running")):
+        ax.plot(x, e, "-", color=color, label=f"{name}, exact area")
+        ax.plot(x, g, "o", ms=3.5, color=color, label=f"{name}, grid count")
+        bars |= _error_bars(ax, x, g, b, color)
+        below.plot(x, (g - e) / unit, "o-", ms=3, lw=0.6, color=color)
+    _draw_marks((ax, below), marks, onset)
+    ax.set_ylabel("basin stability\n(fraction of the window)")
+    _finish(ax, below, x, xlabel, title, bars, generic=False)
     return ax
 
 
-def basin_stability(tree: xr.DataTree, ax=None, dim: str = "torque"):
+def basin_stability(tree: xr.DataTree, ax=None, dim: str = "torque",
+                    homoclinic_torque: float | None = None):
     """Basin stability against the swept parameter ``dim``: the share of the window that
     settles at a rest state (all wells together) and the running basin's share, as exact
-    areas (lines, where computed) and grid counts (markers; error bars: the grid error bound,
-    where computed). Any other swept parameter is held at its first value."""
-    return _draw_stability(axes(ax, CURVE_SIZE), **_stability_scene(tree, dim))
+    areas (lines, where computed), grid counts (dots; error bars as :func:`fraction_curves`)
+    and, below, the measured error (grid count − exact area). Any other swept parameter is
+    held at its first value; bifurcations in the range are marked. Returns the upper
+    panel's Axes."""
+    return _draw_stability(axes(ax, CURVE_SIZE),
+                           **_stability_scene(tree, dim, homoclinic_torque))
 
 
 #: The curve figures: name → (reader, drawer), as :data:`atlas.views.maps.MAP_FIGURES`; the

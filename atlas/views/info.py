@@ -8,14 +8,19 @@ from pathlib import Path
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (lazy_dask installs itself)
+from atlas.errors import AtlasError
 from atlas.layout import at_point, point_group, point_label, points
 from atlas.store import reader as store
+from atlas.views.info_table import table_lines
+from atlas.views.selectors import choose_points
 
 
-def summary_lines(tree: xr.DataTree) -> list[str]:
+def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None) -> list[str]:
     """Grid, then for every parameter point its parameters, exact basin fractions, grid
     fractions with their error, d_cert and the certified share, and its separatrices'
-    summary; then the unresolved count and the run time."""
+    summary; then the unresolved count and the run time. A parameter atlas: one table of
+    all its points instead (:func:`atlas.views.info_table.table_lines`), or the detail of
+    the points ``chosen`` (:func:`atlas.views.selectors.choose_points`)."""
     ds = tree.to_dataset(inherit=False)
     n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
     every = points(ds)
@@ -23,7 +28,10 @@ def summary_lines(tree: xr.DataTree) -> list[str]:
              f" = {n_orbits:,} orbits per parameter point, {len(every)} parameter point"
              f"{'s' if len(every) != 1 else ''} (alpha [1/s], omega0 [rad/s], "
              "torque [rad/s^2])"]
-    for point in every:
+    detail = chosen if chosen is not None else every if len(every) == 1 else []
+    if not detail:
+        lines += table_lines(tree)
+    for point in detail:
         lines.append(f"pendulum  {point_label(point)}")
         sep = point_group(tree, "separatrices", point)
         lines += ["  " + line for line in _basin_lines(at_point(ds, point),
@@ -168,21 +176,40 @@ def _basin_name(k) -> str:
     return "run" if int(k) == ATTRACTOR_FILL else str(int(k))
 
 
-def info_lines(path: str | Path) -> list[str]:
+def info_lines(path: str | Path, selectors: dict | None = None) -> list[str]:
     """Completeness, then :func:`summary_lines` for a complete file (opened and checked by
-    :func:`atlas.store.reader.open_atlas`), then provenance. A file that fails the check raises
-    :class:`~atlas.errors.InputFileError`."""
+    :func:`atlas.store.reader.open_atlas`; ``selectors``, as
+    :func:`atlas.views.selectors.choose_points` takes them: the detail of those points),
+    then provenance. A file that fails the check raises
+    :class:`~atlas.errors.InputFileError`. For the output of an interrupted run, not written
+    yet, its partial run (``<path>.partial``) is described: how far it got, how to finish.
+    A stability study is described by :func:`atlas.views.study_info.study_info_lines`."""
     path = Path(path)
-    d = store.describe(path)
+    from atlas.store.study import is_study_file
+
+    if is_study_file(path):
+        from atlas.views.study_info import study_info_lines
+
+        if selectors and any(selectors.values()):
+            raise AtlasError(f"{path}: a stability study; --point, --alpha, --omega0 and "
+                             "--torque choose points of an atlas file")
+
+        return study_info_lines(path)
+    partial = None if path.exists() else store.interrupted_run(path)
+    d = store.describe(partial or path)
     attrs = d["attrs"]
     state = ("complete" if d["complete"] else
              f"partial: {d['tiles_done']} of {d['tiles']} tiles done (run the same config "
              "again to continue)")
-    lines = [f"{path}: atlas file, {state}"]
+    lines = [f"{path}: atlas file, {state}" if partial is None else
+             f"{path}: not written yet: its run was interrupted; {partial} holds "
+             f"{d['tiles_done']} of {d['tiles']} tiles (run the same config again, "
+             "`atlas run CONFIG`, to finish it)"]
     if d["complete"]:
         tree = store.open_atlas(path)
         try:
-            lines += ["  " + line for line in summary_lines(tree)]
+            chosen = choose_points(tree.to_dataset(inherit=False), **(selectors or {}))
+            lines += ["  " + line for line in summary_lines(tree, chosen)]
             attrs = tree.attrs
         finally:
             tree.close()

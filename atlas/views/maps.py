@@ -1,10 +1,14 @@
 """The basin-map figures of one parameter point, read from the file and drawn (no computing).
 
-* :func:`basin_map`: colour by attractor k (the running basin grey), separatrices in red,
-  saddles as open circles, attractors as filled dots, the running limit cycle dashed;
-* :func:`trap_time_map`: the certified trapping time on a log colour scale;
+* :func:`basin_map`: colour by attractor k (:func:`atlas.views.style.basin_colours`: the
+  running basin grey, no certified label white; past LABELLED_WELLS wells each band also
+  named "k = …"), separatrices as thin dark outlines, saddles as open circles, attractors
+  as filled dots, the running limit cycle dashed;
+* :func:`trap_time_map`: the time at which each label was certified, on a log colour scale,
+  the separatrices faint;
 * :func:`boundary_distance_map`: each state's distance to the nearest basin boundary (how far
-  it is from tipping into another well), white within d_cert (labels for the RK4 map only).
+  it is from tipping into another well) on a log scale spanning its 1st to 99th percentile,
+  white within d_cert (labels for the RK4 map only), the separatrices faint.
 
 Each figure is read, then drawn: a reader (``_*_scene``) takes what it shows out of the tree
 as plain arrays and strings (the map through :func:`atlas.views.coarsen.read_maps`), a drawer
@@ -22,11 +26,14 @@ from atlas.layout import first_point, point_group, point_of
 from atlas.views.coarsen import read_maps
 from atlas.views.style import (
     CYCLE_COLOR,
+    LABELLED_WELLS,
     MAP_SIZE,
-    RUNNING_COLOR,
+    SEPARATRIX_ALPHA,
     SEPARATRIX_COLOR,
-    WELL_COLORS,
+    SEPARATRIX_FAINT,
+    SEPARATRIX_WIDTH,
     axes,
+    basin_colours,
     critical_point_markers,
     point_title,
     window_ticks,
@@ -73,11 +80,17 @@ def _grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kw
     return image
 
 
-def _draw_separatrices(ax, separatrices: list) -> None:
-    """The separatrix branches (θ [rad], θ̇ [rad/s]), in red."""
+def _draw_separatrices(ax, separatrices: list, faint: bool = False) -> None:
+    """The separatrix branches (θ [rad], θ̇ [rad/s]): thin, near-black, translucent lines
+    (about one pixel of the saved map), so that a tongue of a basin a few pixels wide keeps
+    its colour between its two outlines; ``faint``: thinner, white and fainter still, over
+    the t_trap and distance maps, whose ridges and valleys lie along them."""
+    style = SEPARATRIX_FAINT if faint else {"color": SEPARATRIX_COLOR, "lw": SEPARATRIX_WIDTH,
+                                            "alpha": SEPARATRIX_ALPHA}
     for i, (theta, theta_dot) in enumerate(separatrices):
-        ax.plot(theta, theta_dot, color=SEPARATRIX_COLOR, lw=1.2,
-                label="separatrices" if i == 0 else None)
+        ax.plot(theta, theta_dot, **style, solid_capstyle="butt",
+                label=("separatrices (basin boundaries)" if not faint else
+                       "separatrices (faint)") if i == 0 else None)
 
 
 def draw_limit_cycle(ax, lo: float, hi: float, theta: np.ndarray, theta_dot: np.ndarray,
@@ -109,32 +122,83 @@ def _basin_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
         "title": f"Basins of attraction, {point_title(point)}"}
 
 
+def _run_depth(mask: np.ndarray) -> np.ndarray:
+    """Per pixel of ``mask`` (rows × columns), the number of pixels to the nearest pixel
+    outside it (or the image's edge) along the row and the column, the least of the four
+    directions; 0 outside. Its largest value sits in the widest part of a region."""
+    def from_start(m):  # pixels since the last one outside, along each row
+        idx = np.arange(m.shape[1])
+        last = np.maximum.accumulate(np.where(m, -1, idx), axis=1)
+        return np.where(m, idx - last, 0)
+
+    return np.minimum.reduce([from_start(mask), from_start(mask[:, ::-1])[:, ::-1],
+                              from_start(mask.T).T, from_start(mask.T[:, ::-1])[:, ::-1].T])
+
+
+#: A band is named only where it is at least this many pixels deep (a sliver has no room).
+_LABEL_DEPTH = 4
+
+
+def _well_name(k: int) -> str:
+    """"+3", "0", "−3": a well's name in keys and labels."""
+    return f"{k:+d}".replace("+0", "0").replace("-", "−")
+
+
+def _label_bands(ax, grid, image: np.ndarray, ks: list[int]) -> None:
+    """Name each well's band "k = …" at the pixel deepest inside it (:func:`_run_depth`;
+    of equally deep pixels, the one nearest the middle column): the basin map's key once its
+    colours alone are too many to tell apart. Bands nowhere _LABEL_DEPTH pixels deep stay
+    unnamed (the colour bar names them)."""
+    import matplotlib.patheffects as pe
+
+    th, v = grid
+    middle = 1.0 - np.abs(np.linspace(-1.0, 1.0, image.shape[1]))  # 1 in the middle, 0 at edges
+    for k in ks:
+        depth = _run_depth(image == k)
+        if depth.max() < _LABEL_DEPTH:
+            continue
+        r, c = np.unravel_index((depth + 0.5 * middle).argmax(), depth.shape)
+        ax.text(th[0] + (th[-1] - th[0]) * c / max(image.shape[1] - 1, 1),
+                v[0] + (v[-1] - v[0]) * r / max(image.shape[0] - 1, 1), f"k = {_well_name(k)}",
+                fontsize=6, ha="center", va="center", zorder=6,
+                path_effects=[pe.withStroke(linewidth=1.8, foreground="white")])
+
+
 def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
     """Draw :func:`_basin_scene` (as :func:`basin_map`)."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     k, kmin, kmax, running = image
-    colors = [WELL_COLORS[k % 10] for k in range(kmin, kmax + 1)]
-    ticks, names = list(range(kmin, kmax + 1)), [f"{k:+d}" for k in range(kmin, kmax + 1)]
+    wells = list(range(kmin, kmax + 1))
+    palette = basin_colours(wells, running=running)
+    colors = [palette[j] for j in wells]
+    names = [_well_name(j) for j in wells]
     if running:  # the running basin: one more colour after the wells
-        colors.append(RUNNING_COLOR)
-        ticks.append(kmax + 1)
+        colors.append(palette["running"])
         names.append("running")
-    cmap = ListedColormap(colors).with_extremes(bad="white")
+    unlabelled = bool(np.isnan(k).any())
+    if unlabelled:  # no certified label (NaN, drawn as "bad"): one more entry of the key
+        colors.append(palette["none"])
+        names.append("no label")
+    ticks = list(range(kmin, kmin + len(colors)))
+    cmap = ListedColormap(colors).with_extremes(bad=palette["none"])
     levels = np.arange(kmin, kmin + len(colors) + 1) - 0.5
     mesh = _grid_image(ax, grid, k, cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
-    cbar.ax.set_yticklabels(names)
-    cbar.set_label("attractor k: orbit settles at the rest state of well k" if not running
-                   else "attractor k: orbit settles at the rest state of well k;\n"
-                   "running: orbit rotates (the running limit cycle)")
+    cbar.ax.set_yticklabels(names, fontsize=8 if len(colors) <= 24 else 6)
+    cbar.set_label("attractor k: orbit settles at the rest state of well k"
+                   + (";\nrunning: orbit rotates (the running limit cycle)" if running else "")
+                   + (";\nno label: unresolved by t_max, or not finite" if unlabelled else ""))
+    if len(wells) > LABELLED_WELLS:
+        _label_bands(ax, grid, k, wells)
     _draw_separatrices(ax, separatrices)
     if cycle is not None:
         draw_limit_cycle(ax, grid[0][0], grid[0][-1], *cycle)
     if critical is not None:
-        critical_point_markers(ax, *critical)
+        critical_point_markers(ax, *critical, on_map=True)
     ax.set_title(title)
-    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)
     return ax
 
 
@@ -162,9 +226,11 @@ def _draw_trap_time(ax, grid, image, separatrices):
     cmap = colormaps["magma"].with_extremes(under="0.8", bad="white")
     # t_trap = 0 (already inside the trap) is drawn below the scale, in grey
     mesh = _grid_image(ax, grid, np.where(t > 0, t, lo / 2), cmap=cmap, norm=LogNorm(lo, hi))
-    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label("trapping time t_trap [s]")
-    _draw_separatrices(ax, separatrices)
-    ax.set_title("Time to certified trapping (grey: trapped at t = 0; white: never)")
+    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
+        "t_trap [s]: time at which the label was certified\n(trapped in a well, or running)")
+    _draw_separatrices(ax, separatrices, faint=True)
+    ax.set_title("Time to a certified label (grey: certified at t = 0;\n"
+                 "white: no label certified by t_max)")
     return ax
 
 
@@ -175,7 +241,8 @@ def trap_time_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index)
 
 
 def _boundary_distance_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
-    """What :func:`boundary_distance_map` draws: :func:`_map_scene`'s and d_cert [rad-ish]."""
+    """What :func:`boundary_distance_map` draws: :func:`_map_scene`'s and d_cert (rad and
+    rad/s as one Euclidean unit, as ``boundary_distance``)."""
     ds, scene = _map_scene(tree, "boundary_distance", maps, index)
     return scene | {"d_cert": float(ds["d_cert"])}
 
@@ -183,25 +250,43 @@ def _boundary_distance_scene(tree: xr.DataTree, maps: dict | None = None, **inde
 def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float):
     """Draw :func:`_boundary_distance_scene` (as :func:`boundary_distance_map`)."""
     from matplotlib import colormaps
-    from matplotlib.colors import LogNorm
+    from matplotlib.colors import ListedColormap, LogNorm
 
-    d, lo, hi = image
-    lo = max(lo if lo == lo else 1e-12, d_cert if d_cert > 0 else 0, 1e-12)
-    hi = max(hi if hi == hi else 1.0, lo * 10)
-    cmap = colormaps["viridis"].with_extremes(under="white", bad="0.5")
+    d = image[0]
+    measured = d_cert == d_cert
+    lo, hi = _spread(d[np.isfinite(d) & (d > (d_cert if measured else 0.0))])
+    cmap = colormaps["viridis"].with_extremes(bad="0.5")
     mesh = _grid_image(ax, grid, d, cmap=cmap, norm=LogNorm(lo, hi))
-    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
-        "distance to the nearest basin boundary (rad-ish)")
-    _draw_separatrices(ax, separatrices)
-    cert = f"d_cert = {d_cert:.1e}" if d_cert == d_cert else "d_cert not measured"
-    ax.set_title(f"Distance to tipping into another well (white: closer than {cert})")
+    ax.figure.colorbar(mesh, ax=ax, extend="both").set_label(
+        "distance to the nearest basin boundary\n[rad (θ) and rad/s (θ̇) as one Euclidean "
+        "unit];\ncolours span its 1st to 99th percentile")
+    near = measured and bool(np.any(d <= d_cert))
+    if near:  # closer than d_cert: white, over the map
+        ax.imshow(np.ma.masked_where(~(d <= d_cert), np.ones_like(d)), origin="lower",
+                  extent=ax.images[0].get_extent(), aspect="auto", interpolation="nearest",
+                  cmap=ListedColormap(["white"]), zorder=1)
+    _draw_separatrices(ax, separatrices, faint=True)
+    note = (f"white: closer than d_cert = {d_cert:.1e} (labels certified for the RK4 map "
+            "only)" if near else f"none closer than d_cert = {d_cert:.1e}: every label "
+            "certified for the exact equation" if measured else
+            "d_cert not measured: labels certified for the RK4 map only")
+    ax.set_title(f"Distance to tipping into another well\n({note})")
     return ax
 
 
+def _spread(values: np.ndarray) -> tuple[float, float]:
+    """Limits of a log colour scale that spreads ``values`` (positive): their 1st and 99th
+    percentiles (apart by a factor 10 at least); 1e-3, 1 if there are none."""
+    if not values.size:
+        return 1e-3, 1.0
+    lo, hi = np.percentile(values, [1.0, 99.0])
+    return float(lo), float(max(hi, 10 * lo))
+
+
 def boundary_distance_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
-    """Draw ``boundary_distance`` on a log colour scale, the separatrices, and in white the
-    states closer than d_cert (labels certified for the RK4 map only); ``maps`` as
-    :func:`basin_map`."""
+    """Draw ``boundary_distance`` on a log colour scale spanning its 1st to 99th percentile,
+    the separatrices faint, and in white the states closer than d_cert (labels certified for
+    the RK4 map only); ``maps`` as :func:`basin_map`."""
     return _draw_boundary_distance(axes(ax, MAP_SIZE),
                                    **_boundary_distance_scene(tree, maps, **index))
 

@@ -1,16 +1,26 @@
 """``atlas view``: one self-contained HTML page to look at an atlas and click orbits.
 
 The page (no server, no network: every script, style and image is inline) shows the basin map
-of each parameter point as a PNG at the grid's native resolution with its separatrices and
-critical points (and, with a torque τ, the running basin and the running limit cycle). A click
-integrates that orbit in the browser (``view_assets/view.js``): the RK4 step of θ̈ = −ω0² sin θ
-− 2αθ̇ + τ of the file's method, with the certificate the file's run used, read from the file
-(format 4: the trap's ``trap_energy_cap`` and ``trap_margin``, the running barrier of each
-``/limit_cycle`` node; nothing is rebuilt here), tested every ``check_every`` steps in the
-kernels' order; it draws the phase curve, animates the pendulum, and shows the stored label
-of the nearest grid point next to the orbit's own. A parameter atlas gets a slider. A file of
-format 3 stores no certificate and is refused with one line. How the arrays are packed (about
-1 MB for 512²; the barrier never rounded) and why file strings cannot run as markup:
+of each parameter point as a PNG at the grid's native resolution, in the basin palette of
+:func:`atlas.views.style.basin_colours` (every well of the point its own colour, named in a
+colour key; past LABELLED_WELLS wells each band is also named on the map), with its
+separatrices and critical points (and, with a torque τ, the running basin and the running
+limit cycle). The map fills the window's width (a 1920 px screen and a 400 px phone alike);
+it is drawn before the page's load event ends. A layer switch shows t_trap or the boundary
+distance instead (log colour scales between the 1st and 99th percentiles); a hover line reads
+the stored label, status, t_trap and distance of the grid point under the pointer. A click, or
+a point typed in exact coordinates, integrates that orbit in the browser
+(``view_assets/view.js``): the RK4 step of θ̈ = −ω0² sin θ − 2αθ̇ + τ of the file's method,
+with the certificate the file's run used, read from the file (format 4: the trap's
+``trap_energy_cap`` and ``trap_margin``, the running barrier of each ``/limit_cycle`` node;
+nothing is rebuilt here), tested every ``check_every`` steps in the kernels' order, then
+followed until it has settled (in its well, or on the running cycle). Orbits are kept until
+cleared, drawn modulo the window's whole turns (a piece that leaves the window is drawn a whole
+number of turns away, inside it); the pendulum is animated, and the readout shows the orbit's
+label and certificate (the energy against the trap's level to one precision) next to the
+stored label of the nearest grid point. A parameter atlas gets a slider. A file of format 3
+stores no certificate and is refused with one line. How the arrays are packed (about 1 MB for
+512²; the barrier never rounded) and why file strings cannot run as markup:
 ``docs/design/views.md``.
 """
 
@@ -44,18 +54,28 @@ from atlas.store.reader import open_atlas, require_certificate, stored_certifica
 from atlas.store.schema import LABEL_VARIABLES
 from atlas.store.separatrices import branches
 from atlas.store.validate import file_method
-from atlas.views.style import RUNNING_COLOR, WELL_COLORS
+from atlas.views.style import (
+    LABELLED_WELLS,
+    NO_LABEL_COLOR,
+    RUNNING_COLOR_HEX,
+    SEPARATRIX_ALPHA,
+    SEPARATRIX_COLOR,
+    SEPARATRIX_FAINT,
+    basin_colours,
+)
 
 __all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json",
-           "DIST_STEPS"]
+           "well_colours", "DIST_STEPS"]
 
 #: Steps per octave of the log2-quantised boundary distance.
 DIST_STEPS = 256
 _DIST_OFFSET = 128  # log2 d from -128 to +128 fits uint16 at 256 steps per octave
 _T_NAN = np.iinfo(np.uint32).max
-#: The name of each status code (as the file's CF flag_meanings say).
-#: The running basin's colour as RGB (:data:`atlas.views.style.RUNNING_COLOR`, a grey).
-RUNNING_RGB = (round(255 * float(RUNNING_COLOR)),) * 3
+
+
+def _rgb(colour: str) -> list[int]:
+    """"#rrggbb" as [r, g, b]."""
+    return [int(colour[i:i + 2], 16) for i in (1, 3, 5)]
 
 
 def pack_distance(d: np.ndarray) -> np.ndarray:
@@ -80,38 +100,96 @@ def _blob(array: np.ndarray) -> str:
 
 
 def _uniform(values: np.ndarray, name: str, path) -> list[float]:
-    """[first, last, n] of a uniformly spaced axis (the page maps pixels linearly)."""
+    """[first, last, n] of a uniformly spaced axis (the page maps pixels linearly). The
+    spacing is compared to 1e-9 of the step, and to the rounding of the stored values
+    (16 ulp of the largest: a zoom's step can be 1e-9 of its position)."""
     values = np.asarray(values, float)
-    if values.size < 2 or not np.allclose(np.diff(values), values[1] - values[0],
-                                           rtol=1e-9, atol=0):
+    if values.size < 2 or not np.allclose(
+            np.diff(values), values[1] - values[0], rtol=1e-9,
+            atol=16 * np.finfo(float).eps * float(np.abs(values).max())):
         raise InputFileError(f"{path}: {name} is not a uniformly spaced axis")
     return [float(values[0]), float(values[-1]), int(values.size)]
 
 
-def _map_png(attractor: np.ndarray, status: np.ndarray) -> str:
-    """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward: well k
-    in WELL_COLORS[k mod 10], running in grey, no certified label white."""
+def well_colours(wells) -> list[str]:
+    """The colour of each well k in ``wells`` (the page's key and its PNG alike), as
+    "#rrggbb": :func:`atlas.views.style.basin_colours` of the point's wells, every one
+    distinct (the one place the page picks a basin colour)."""
+    colours = basin_colours(wells)
+    return [colours[int(k)] for k in wells]
+
+
+def _labelled_wells(attractor: np.ndarray, status: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(where a well label is certified, the wells k that occur there, ascending)."""
+    labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
+    return labelled, np.unique(attractor[labelled]).astype(int)
+
+
+def _map_png(attractor: np.ndarray, status: np.ndarray, wells: np.ndarray) -> str:
+    """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward: the i-th
+    well of ``wells`` in palette entry i (:func:`well_colours`), no certified label white,
+    running in the running basin's grey. At most 254 wells fit a palette; the rest (never
+    met in practice) share the last well's entry."""
     from PIL import Image
 
-    labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
-    index = np.where(labelled, np.mod(attractor.astype(np.int64), 10), 10).astype(np.uint8)
-    index[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = 11
+    labelled, _ = _labelled_wells(attractor, status)
+    wells = wells[:254]
+    where = np.clip(np.searchsorted(wells, attractor), 0, max(len(wells) - 1, 0))
+    index = np.where(labelled, where, len(wells)).astype(np.uint8)
+    index[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = len(wells) + 1
     image = Image.fromarray(index[::-1], mode="P")
-    palette = ([int(c[i:i + 2], 16) for c in WELL_COLORS for i in (1, 3, 5)] + [255, 255, 255]
-               + list(RUNNING_RGB))
+    palette = ([v for c in well_colours(wells) for v in _rgb(c)] + _rgb(NO_LABEL_COLOR)
+               + _rgb(RUNNING_COLOR_HEX))
     image.putpalette(palette)
     buffer = io.BytesIO()
     image.save(buffer, format="PNG", optimize=True)
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode()
 
 
-def _curves(tree: xr.DataTree, point: dict[str, float]) -> list[list[list[float]]]:
-    """Separatrix polylines of one parameter point as [[θ…], [θ̇…]], rounded to 1e-4."""
+def _band_labels(attractor, labelled, wells, distance, theta0, theta_dot0) -> list:
+    """Where the page writes "k" on the map when it has more than LABELLED_WELLS wells (past
+    that, the palette's lightness steps are too fine to name a band by colour alone): for
+    each well k, [k, θ0 [rad], θ̇0 [rad s⁻¹]] of its grid point farthest from every basin
+    boundary (the stored ``boundary_distance``; with none stored, its middle point)."""
+    if len(wells) <= LABELLED_WELLS:
+        return []
+    depth = np.where(np.isfinite(distance), distance, -1.0)
+    labels = []
+    for k in wells:
+        j, i = np.nonzero(labelled & (attractor == k))
+        best = int(np.argmax(depth[j, i])) if (depth[j, i] > 0).any() else j.size // 2
+        labels.append([int(k), float(theta0[i[best]]), float(theta_dot0[j[best]])])
+    return labels
+
+
+#: The finest the page draws: 1/CURVE_RESOLUTION of the window's width and height (a few
+#: times finer than the pixels of the widest screen).
+CURVE_RESOLUTION = 8192
+
+
+def _decimals(span: float) -> int:
+    """Decimal places that resolve 1/CURVE_RESOLUTION of ``span`` (at most 15)."""
+    step = abs(span) / CURVE_RESOLUTION
+    return int(min(15, max(0, math.ceil(-math.log10(step))))) if step > 0 else 15
+
+
+def _curves(tree: xr.DataTree, point: dict[str, float], theta0: np.ndarray,
+            theta_dot0: np.ndarray) -> list[list[list[float]]]:
+    """Separatrix polylines of one parameter point as [[θ…], [θ̇…]] [rad, rad s⁻¹], rounded
+    to the decimals that resolve 1/CURVE_RESOLUTION of the window's width and height (so a
+    zoom keeps its digits and a wide window drops the ones no screen shows), vertices that
+    round onto their predecessor dropped."""
     sep = point_group(tree, "separatrices", point)
     if sep is None or sep.sizes.get("point", 0) == 0:
         return []
-    return [[np.round(theta, 4).tolist(), np.round(theta_dot, 4).tolist()]
-            for _, _, theta, theta_dot in branches(sep) if len(theta) > 1]
+    dt_, dv_ = _decimals(np.ptp(theta0)), _decimals(np.ptp(theta_dot0))
+    curves = []
+    for _, _, theta, theta_dot in branches(sep):
+        theta, theta_dot = np.round(theta, dt_), np.round(theta_dot, dv_)
+        kept = np.r_[True, (np.diff(theta) != 0) | (np.diff(theta_dot) != 0)]
+        if kept.sum() > 1:
+            curves.append([theta[kept].tolist(), theta_dot[kept].tolist()])
+    return curves
 
 
 def _critical(tree: xr.DataTree, point: dict[str, float]) -> dict[str, list[float]]:
@@ -192,13 +270,21 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         certificate = stored_certificate(tree, params)
         distance = (point["boundary_distance"].values if "boundary_distance" in point
                     else np.full(attractor.shape, np.nan))
+        labelled, wells = _labelled_wells(attractor, status)
+        running = np.isin(status, (RUNNING, RUNNING_NEAR_BOUNDARY))
         points.append({
             "alpha": alpha, "omega0": omega0, "margin": float(point["trap_margin"]),
             "d_cert": d_cert if math.isfinite(d_cert) else None,
-            "png": _map_png(attractor, status),
+            "png": _map_png(attractor, status, wells),
+            "band_labels": _band_labels(attractor, labelled, wells, distance,
+                                        point["theta0"].values, point["theta_dot0"].values),
+            "key": {"wells": wells.tolist(), "colors": well_colours(wells),
+                    "running": bool(running.any()),
+                    "unlabelled": bool((~labelled & ~running).any())},
             "attractor": _blob(attractor), "status": _blob(status),
             "t_trap": _blob(n_check), "distance": _blob(pack_distance(distance)),
-            "curves": _curves(tree, params), **_critical(tree, params),
+            "curves": _curves(tree, params, ds["theta0"].values, ds["theta_dot0"].values),
+            **_critical(tree, params),
             **_tilt(params, certificate.trap_energy_cap),
             **_running(tree, params, certificate.barrier),
         })
@@ -212,7 +298,11 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
         "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
         "status_names": {str(k): v for k, v in STATUS_MEANINGS.items()},
-        "colors": list(WELL_COLORS), "points": points,
+        "running_color": RUNNING_COLOR_HEX, "no_label_color": NO_LABEL_COLOR,
+        "separatrix": {"color": SEPARATRIX_COLOR, "alpha": SEPARATRIX_ALPHA},
+        "separatrix_faint": {"color": SEPARATRIX_FAINT["color"],
+                             "alpha": SEPARATRIX_FAINT["alpha"]},
+        "points": points,
     }
 
 
@@ -285,25 +375,43 @@ style-src 'unsafe-inline'; script-src 'sha256-/*HASH*/'">
   <input id="point" type="range" min="0" max="0" step="1" value="0">
   <span id="point-label"></span>
 </div>
+<div id="toolbar">
+  <fieldset id="layers"><legend>show</legend>
+    <label><input type="radio" name="layer" value="basins" checked> basins</label>
+    <label><input type="radio" name="layer" value="t_trap"> time to trap</label>
+    <label><input type="radio" name="layer" value="distance"> distance to a boundary</label>
+  </fieldset>
+  <form id="goto" autocomplete="off">
+    <label>θ0 [rad] <input id="in-theta0" size="9" placeholder="e.g. 0 or -pi/2"></label>
+    <label>θ̇0 [rad/s] <input id="in-theta-dot0" size="9" placeholder="e.g. -3.1"></label>
+    <button type="submit">run orbit</button>
+    <span id="goto-error" role="alert"></span>
+  </form>
+  <button id="clear" type="button" disabled>clear orbits</button>
+</div>
 <main>
-  <div id="stage">
-    <canvas id="map"></canvas>
-    <canvas id="overlay" title="click to integrate the orbit from here"></canvas>
+  <div id="figure">
+    <div id="stage">
+      <canvas id="map"></canvas>
+      <canvas id="overlay" title="click to integrate the orbit from here"></canvas>
+    </div>
+    <p id="hover" aria-live="polite">Move the pointer over the map to read the stored label;
+    click to follow an orbit.</p>
+    <div id="key"></div>
   </div>
   <aside>
+    <div id="readout" data-ready="0">
+      <p class="hint">Click anywhere on the map, or type a point above: the orbit from that
+      initial condition is integrated here in the browser (RK4 with the file's α, ω0, τ, dt
+      and method, the energy trap and the running certificate of atlas) and drawn in black;
+      earlier orbits are kept until you clear them.</p>
+    </div>
     <canvas id="pendulum" width="220" height="220"></canvas>
     <p id="clock"></p>
-    <div id="readout" data-ready="0">
-      <p class="hint">Click anywhere on the map: the orbit from that initial condition is
-      integrated here in the browser (RK4 with the file's α, ω0, τ, dt and method, the energy trap
-      and the running certificate of atlas) and drawn in black.</p>
-    </div>
   </aside>
 </main>
 <footer>
-  <p><span id="legend">θ̈ = −ω0² sin θ − 2αθ̇. Colour: the well k (rest state (2πk, 0)) each
-  initial condition reaches; white: no certified label. Red: the separatrices (basin
-  boundaries); open circles: saddles; dots: attractors.</span> <span id="provenance"></span></p>
+  <p><span id="legend"></span> <span id="provenance"></span></p>
 </footer>
 <script type="application/json" id="atlas-data">/*DATA*/</script>
 <script>/*SCRIPT*/</script>

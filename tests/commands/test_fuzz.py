@@ -43,11 +43,13 @@ BASE = {"name": "fuzz", "pendulum": {"alpha": 0.1, "omega0": 1.0},
         "integrator": {"dt": 0.05, "t_max": 20},
         "separatrices": {"enabled": False}, "execution": {"tile_orbits": 8}}
 #: Every key of the config schema, as paths (and the sections themselves).
-KEYS = [("name",), ("output",), ("pendulum",), ("pendulum", "alpha"), ("pendulum", "omega0"),
+KEYS = [("name",), ("output",), ("check_radians",), ("pendulum",), ("pendulum", "alpha"),
+        ("pendulum", "omega0"), ("pendulum", "torque"),
         ("grid",), ("grid", "theta0"), ("grid", "theta_dot0"),
         *[("grid", axis, key) for axis in ("theta0", "theta_dot0")
           for key in ("start", "stop", "num")],
-        ("integrator",), ("integrator", "dt"), ("integrator", "t_max"), ("separatrices",),
+        ("integrator",), ("integrator", "dt"), ("integrator", "t_max"),
+        ("integrator", "method"), ("separatrices",),
         ("separatrices", "enabled"), ("separatrices", "tol"), ("separatrices", "max_spacing"),
         ("execution",), ("execution", "backend"), ("execution", "tile_orbits"),
         ("execution", "workers"), ("execution", "scheduler")]
@@ -59,7 +61,8 @@ scalars = st.one_of(
     st.sampled_from([math.nan, math.inf, -math.inf, 1e300, -1e300, 5e-324, 1e-7, 1e7]),
     st.text(max_size=8),
     st.sampled_from(["3pi", "-pi/2", "2*pi", "pi/0", "1e309", "nan", "-inf", "3pie", "~",
-                     "</script>", "cpu", "cuda", "dask", "tpu", "/", "..", "\x00"]))
+                     "</script>", "cpu", "cuda", "dask", "tpu", "/", "..", "\x00", "rk4",
+                     "rk4-trigfree", "rk5"]))
 values = st.recursive(scalars, lambda inner: st.lists(inner, max_size=3)
                       | st.dictionaries(st.text(max_size=6), inner, max_size=3), max_leaves=6)
 #: Text that YAML or the loader must refuse, spliced into a config.
@@ -110,12 +113,34 @@ def _cheap_enough(text: str, folder: Path) -> bool:
         return True
     finally:
         cfg_path.unlink()
-    orbits = cfg.grid.theta0.num * cfg.grid.theta_dot0.num * len(cfg.pendulum.alphas) \
-        * len(cfg.pendulum.omega0s)
+    orbits = cfg.grid.theta0.num * cfg.grid.theta_dot0.num * len(cfg.pendulum.points)
     steps = cfg.integrator.t_max / cfg.integrator.dt
     return (orbits * steps <= 2e5 and orbits <= 4096 and cfg.execution.backend == "cpu"
             and not cfg.separatrices.enabled
             and (cfg.execution.tile_orbits or defaults.TILE_ORBITS) >= 4)
+
+
+#: Torques a config must refuse (one line naming pendulum.torque, exit 2): not numbers, not
+#: finite, beyond ±MAX_RATE² (1e12 rad/s²), a bad item of a list, and |τ| = ω0² (the
+#: saddle-node, where no basin is certified; ω0 = 1 here).
+BAD_TORQUES = [".nan", ".inf", "-.inf", "1.0e+13", "-1.0e+13", "fast", "true", "[0, .nan]",
+               "[0.5, 1.0e+13]", "[0.1, fast]", "1", "-1", "[0, 1]", "[]", "{x: 1}"]
+
+
+@pytest.mark.parametrize("torque", BAD_TORQUES)
+def test_bad_torques_are_refused_in_one_line(tmp_path, torque):
+    """The torque key is in :data:`KEYS`; these values of it are refused outright (the
+    random configs may never draw them)."""
+    rest = yaml.safe_dump({k: v for k, v in BASE.items() if k != "pendulum"})
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(rest + f"pendulum: {{alpha: 0.1, omega0: 1.0, torque: {torque}}}\n")
+    out = tmp_path / "out.h5"
+    out.write_bytes(b"an earlier result")
+    before = _snapshot(tmp_path)
+    code, err = cli("run", cfg, "-o", out, "--quiet")
+    _one_line(code, err)
+    assert "pendulum.torque" in err, err
+    assert _snapshot(tmp_path) == before
 
 
 def _run_config(text: str, good: Path) -> None:

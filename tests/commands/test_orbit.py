@@ -71,6 +71,18 @@ def test_orbit_on_a_file_agrees_with_the_stored_label(atlas_file, tmp_path, caps
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_orbit_outside_the_window_warns_first(atlas_file, tmp_path, capsys):
+    """A start outside the atlas window is said on the first line, before the label, with
+    the window's bounds; a start inside gets no such line."""
+    path, _ = atlas_file
+    assert main(["orbit", str(path), "0.5", "5.5", "-o", str(tmp_path / "o.png")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("warning") and "outside the atlas window" in lines[0]
+    assert "[-4, 4] rad/s" in lines[0]
+    assert main(["orbit", str(path), "0.5", "1.5", "-o", str(tmp_path / "i.png")]) == 0
+    assert "outside the atlas window" not in capsys.readouterr().out
+
+
 def test_orbit_on_a_trigfree_file_steps_with_its_method(tmp_path, capsys):
     """A file computed with method "rk4-trigfree": atlas orbit integrates with that method
     (and says so), so its label and t_trap are the stored ones at a grid point."""

@@ -9,11 +9,17 @@ from atlas import ConfigError, load_config
 from atlas.pipeline.config import Config, parse_pi_expression
 
 CONFIGS = sorted(Path(__file__).resolve().parents[2].glob("configs/*.yaml"))
+#: The shipped configs of ``atlas stability`` (validated as studies: no grid run's checks).
+STUDIES = ("swing_stability.yaml",)
+
+
+def _load_shipped(path: Path) -> Config:
+    return load_config(path, study=path.name in STUDIES)
 
 
 @pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.name)
 def test_shipped_configs_load(path):
-    cfg = load_config(path)
+    cfg = _load_shipped(path)
     assert isinstance(cfg, Config)
 
 
@@ -47,8 +53,12 @@ def test_bad_pi_expressions(text):
 
 
 BAD = [
-    ("pendulum: {alpha: 0.1, omga0: 1}", "pendulum.omga0: unknown key"),
-    ("pendulumm: {alpha: 0.1}", "pendulumm: unknown key"),
+    ("pendulum: {alpha: 0.1, omga0: 1}", "pendulum.omga0: unknown key (did you mean omega0?)"),
+    ("pendulumm: {alpha: 0.1}", "pendulumm: unknown key (did you mean pendulum?)"),
+    ("grid: {theta0: {start: 0, stop: 1, n: 8}}", "grid.theta0.n: unknown key (did you mean num?)"),
+    ("grid: {theta-dot0: {start: 0, stop: 1, num: 8}}",
+     "grid.theta-dot0: unknown key (did you mean theta_dot0?)"),
+    ("integrator: {dt: -1, tmax: 5}", "integrator.tmax: unknown key (did you mean t_max?)"),
     ("pendulum: {alpha: fast}", "pendulum.alpha"),
     ("pendulum: {alpha: .nan}", "pendulum.alpha"),
     ("pendulum: {alpha: .inf}", "pendulum.alpha"),
@@ -75,7 +85,6 @@ BAD = [
     ("grid: {theta0: {start: 0, stop: 1}}", "grid.theta0.num: missing"),
     ("grid: {theta0: {start: 0, stop: 1, num: 2.5}}", "grid.theta0.num"),
     ("separatrices: {tol: 0}", "separatrices.tol"),
-    ("separatrices: {tol: 1.0e-14}", "separatrices.tol = 1e-14 is below what double precision"),
     ("separatrices: {max_spacing: 1.0e-6}", "separatrices.max_spacing = 1e-06 is below 0.0001"),
     ("execution: {backend: gpu}", "execution.backend"),
     ("integrator: {method: rk5}", "integrator.method: must be 'rk4' or 'rk4-trigfree'"),
@@ -177,3 +186,89 @@ def test_a_value_listed_twice_is_refused(tmp_path, key):
     path.write_text(f"pendulum: {{{key}: [0.5, 0.25, 0.5]}}")
     with pytest.raises(ConfigError, match=f"pendulum.{key}: the value 0.5 is listed twice"):
         load_config(path)
+
+
+def test_an_unknown_key_with_no_near_one_gets_no_guess(tmp_path):
+    path = tmp_path / "c.yaml"
+    path.write_text("pendulum: {colour: red}")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value).endswith("pendulum.colour: unknown key")
+
+
+def _warnings(caplog) -> list[str]:
+    return [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+
+
+@pytest.mark.parametrize("start,stop,hint", [
+    ("-90", "90", "did you mean -pi/2 … pi/2?"),
+    ("-180", "180", "did you mean -pi … pi?"),
+    ("0", "360", "did you mean 0 … 2pi?"),
+    ("-45", "135", "did you mean -pi/4 … 3pi/4?"),
+    ("-10pi", "10pi", None),  # ten turns: wide, not degrees
+])
+def test_a_window_that_looks_like_degrees_warns(tmp_path, caplog, start, stop, hint):
+    """θ0 is in radians: a window with ends like ±90 or ±180, or wider than 8 turns, loads
+    (it is valid) with one warning; where both ends are whole numbers, the hint reads them
+    as degrees (90° = π/2)."""
+    path = tmp_path / "deg.yaml"
+    path.write_text(f"grid: {{theta0: {{start: {start}, stop: {stop}, num: 8}}}}\n")
+    cfg = load_config(path)
+    turns = (cfg.grid.theta0.stop - cfg.grid.theta0.start) / (2 * math.pi)
+    units = [w for w in _warnings(caplog) if "radians" in w]
+    assert len(units) == 1
+    assert units[0].startswith(f"warning: {path}: grid.theta0: θ0 is in radians")
+    assert f"spans {turns:.1f} turns" in units[0] and "check_radians: false" in units[0]
+    assert (hint in units[0]) if hint else ("did you mean" not in units[0])
+    caplog.clear()
+    path.write_text(path.read_text() + "check_radians: false\n")
+    silenced = load_config(path)
+    assert not [w for w in _warnings(caplog) if "radians" in w]
+    assert silenced.check_radians is False
+
+
+def test_the_units_key_changes_no_result(tmp_path):
+    """``check_radians`` silences a warning; it is not part of the run's identity, its hash,
+    or (at its default) the config stored in a file."""
+    from atlas.pipeline.config import config_hash
+    from atlas.pipeline.identity import run_identity
+
+    loud, quiet = Config(), Config(check_radians=False)
+    assert run_identity(loud, "cpu") == run_identity(quiet, "cpu")
+    assert config_hash(loud) == config_hash(quiet)
+    assert "check_radians" not in loud.to_json() and '"check_radians": false' in quiet.to_json()
+
+
+@pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.name)
+def test_shipped_configs_load_without_warnings(path, caplog):
+    _load_shipped(path)
+    assert _warnings(caplog) == []
+
+
+@pytest.mark.parametrize("window,tol", [("{start: -3pi, stop: 3pi, num: 8}", 1e-14),
+                                        ("{start: -180, stop: 180, num: 8}", 1e-12)])
+def test_a_tol_finer_than_doubles_resolve_is_raised_with_a_warning(tmp_path, caplog, window,
+                                                                    tol):
+    """A bisection bracket narrower than 64 spacings of doubles at the window's largest |θ0|
+    cannot be resolved: the finest that can (rounded up to two digits) is used, and said.
+    (±180 was refused over this, a setting its user never chose.)"""
+    import numpy as np
+
+    path = tmp_path / "c.yaml"
+    path.write_text(f"grid: {{theta0: {window}}}\nseparatrices: {{tol: {tol!r}}}\n")
+    cfg = load_config(path)
+    need = 64 * np.spacing(max(abs(cfg.grid.theta0.start), abs(cfg.grid.theta0.stop)))
+    step = 10.0 ** (math.floor(math.log10(need)) - 1)  # one unit of the second digit
+    used = cfg.separatrices.tol
+    assert need <= used < need + step and float(f"{used:.1e}") == used  # two digits, up
+    line = next(w for w in _warnings(caplog) if "separatrices.tol" in w)
+    assert f"separatrices.tol = {tol:g} is finer than double precision resolves" in line
+    assert f"tol = {cfg.separatrices.tol:.2g}" in line
+
+
+def test_a_tol_the_window_resolves_is_kept(tmp_path, caplog):
+    path = tmp_path / "c.yaml"
+    path.write_text("grid: {theta0: {start: -180, stop: 180, num: 8}}\n"
+                    "separatrices: {tol: 1.0e-11}\n")
+    assert load_config(path).separatrices.tol == 1e-11
+    assert not [w for w in _warnings(caplog) if "separatrices.tol" in w]

@@ -70,3 +70,16 @@ def test_where_a_run_cannot_write(tmp_path):
         check_output_path(blocker / "out.h5", layout)
     with pytest.raises(AtlasError, match="may need up to"):
         check_output_path(tmp_path / "huge.h5", _layout(10**5, alphas=1000))  # 110 PB
+
+
+def test_the_disk_check_counts_every_per_orbit_variable_a_file_stores(small_atlas_file):
+    """BYTES_PER_ORBIT against a written file, read with h5py (not with atlas's schema): every
+    dataset shaped like the grid (theta_dot0 rows × theta0 columns), at its stored dtype."""
+    from atlas.pipeline.output import BYTES_PER_ORBIT, label_bytes
+
+    with h5py.File(small_atlas_file, "r") as f:
+        grid = (f["theta_dot0"].size, f["theta0"].size)
+        stored = sum(f[name].dtype.itemsize for name in f
+                     if isinstance(f[name], h5py.Dataset) and f[name].shape == grid)
+    assert stored == BYTES_PER_ORBIT
+    assert label_bytes(_layout(5, alphas=3)) == 3 * 5 * 5 * stored

@@ -48,13 +48,15 @@ def test_identity_decides_what_a_run_continues(cfg):
     other = cfg.model_copy(update={"integrator": cfg.integrator.model_copy(
         update={"method": "rk4-trigfree"})})
     assert run_identity(other, "cpu") != same and config_hash(other) != config_hash(cfg)
-    # with the default method, identity and hash are those of the versions before the key
+    # with the default method, identity and hash are those of the versions before the keys
+    # (method; and check_radians and stability, which change no grid result)
     # (so their partial runs continue and their files' hashes stay comparable)
     assert "method" not in same["integrator"] and cfg.integrator.method == "rk4"
     import hashlib
     import json
 
-    before = cfg.model_dump(mode="json", exclude={"output", "execution", "name"})
+    before = cfg.model_dump(mode="json", exclude={"output", "execution", "name", "stability",
+                                                  "check_radians"})
     del before["integrator"]["method"]
     assert config_hash(cfg) == hashlib.sha256(
         json.dumps(before, sort_keys=True).encode()).hexdigest()[:16]
@@ -151,4 +153,4 @@ def test_an_interrupted_removal_never_leaves_half_a_partial_run(cfg, monkeypatch
     assert not partial_path(cfg.output).exists()
     atlas.run(cfg, quiet=True)
     assert sorted(p.name for p in cfg.output.parent.iterdir() if "small.h5" in p.name) == [
-        "small.h5", "small.h5.lock"]
+        "small.h5"]

@@ -16,6 +16,7 @@ from matplotlib.colors import LogNorm  # noqa: E402
 
 import atlas  # noqa: E402
 from atlas.views.plotting import basin_map, fraction_curves, plot_atlas, trap_time_map  # noqa: E402
+from atlas.views.style import SEPARATRIX_COLOR  # noqa: E402
 from tests.helpers import run_cli, write_config  # noqa: E402
 
 
@@ -178,7 +179,9 @@ def test_a_big_map_is_drawn_from_bands_never_read_whole(sweep_tree, monkeypatch,
     tree, whole = atlas.open(path), atlas.open(path)
     try:
         plotting.plot_atlas(tree, tmp_path / "lazy.h5")
-        assert max(sizes) == band_rows * 30 and len(sizes) == 4 * -(-20 // band_rows)
+        # read: attractor and status of all 6 points (the small multiples), t_trap and
+        # boundary_distance of the first
+        assert max(sizes) == band_rows * 30 and len(sizes) == 14 * -(-20 // band_rows)
         assert inflated  # the stored chunks, inflated here
         assert not tree["attractor"].variable._in_memory
         whole = whole.load().to_dataset(inherit=False)
@@ -227,19 +230,26 @@ def test_a_damaged_chunk_of_a_coarsened_map_is_one_line(sweep_tree, monkeypatch,
     plt.close("all")
 
 
-def test_fraction_curves_one_per_basin_with_error_bars(sweep_tree):
+def test_fraction_curves_one_per_basin_with_grid_counts(sweep_tree):
+    """The largest basins get a curve each (±k merged: the window is symmetric, no torque),
+    the exact fractions as lines and the grid counts as dots of the same colour; the other
+    basins are thin grey lines, one each."""
     tree, _ = sweep_tree
     ax = fraction_curves(tree, max_curves=3)
-    bars = [c for c in ax.containers if c.has_yerr]
-    assert len(bars) == 4  # three largest basins + "other k": grid counts with bounds
     curves = {line.get_label(): line for line in ax.lines
-              if line.get_label().startswith(("k =", "other k"))}
-    assert len(curves) == 4  # and the exact fractions as lines
-    point = tree.to_dataset(inherit=False).sel(k=0).isel(omega0=0)
-    np.testing.assert_array_equal(curves["k = +0"].get_ydata(), point["basin_fraction_exact"])
-    np.testing.assert_array_equal(curves["k = +0"].get_xdata(), [0.1, 0.5, 2.0])
-    grid = next(c for c in bars if c.lines[0].get_color() == curves["k = +0"].get_color())
-    np.testing.assert_array_equal(grid.lines[0].get_ydata(), point["basin_fraction"])
+              if line.get_label().startswith("k =")}
+    assert len(curves) == 3 and "k = 0" in curves and "±k merged" in ax.get_title()
+    point = tree.to_dataset(inherit=False).isel(omega0=0)
+    np.testing.assert_array_equal(curves["k = 0"].get_ydata(),
+                                  point["basin_fraction_exact"].sel(k=0))
+    np.testing.assert_array_equal(curves["k = 0"].get_xdata(), [0.1, 0.5, 2.0])
+    dots = next(ln for ln in ax.lines if ln.get_marker() == "o" and ln.get_color()
+                == curves["k = 0"].get_color())
+    np.testing.assert_array_equal(dots.get_ydata(), point["basin_fraction"].sel(k=0))
+    groups = {abs(int(k)) for k in point["k"].values}
+    thin = [ln for ln in ax.lines if ln.get_linewidth() < 1 and ln.get_linestyle() == "-"
+            and len(ln.get_xdata())]
+    assert len(thin) == len(groups) - 3
     plt.close("all")
 
 
@@ -248,7 +258,7 @@ def test_fraction_curves_along_each_swept_parameter_hold_the_others(sweep_tree):
     read from the same variables as the single-point views."""
     tree, _ = sweep_tree
     ax = fraction_curves(tree, dim="omega0")
-    k0 = next(line for line in ax.lines if line.get_label() == "k = +0")
+    k0 = next(line for line in ax.lines if line.get_label() == "k = 0")
     np.testing.assert_array_equal(k0.get_xdata(), [1.0, 1.5])
     np.testing.assert_array_equal(
         k0.get_ydata(), tree["basin_fraction_exact"].sel(k=0).isel(alpha=0).values)
@@ -277,7 +287,8 @@ output: {tmp_path / 'c.h5'}
     assert run_cli("run", cfg, "--quiet").returncode == 0
     tree = atlas.open(tmp_path / "c.h5")
     ax = basin_map(tree)
-    red = [ln for ln in ax.lines if ln.get_color() == "red" and len(ln.get_xdata()) > 2]
+    red = [ln for ln in ax.lines if ln.get_color() == SEPARATRIX_COLOR
+           and len(ln.get_xdata()) > 2]
     sep = tree["separatrices"]
     n_branches = len({(int(n), str(b)) for n, b in zip(sep["saddle_n"].values,
                                                         sep["branch"].values)})

@@ -1,9 +1,11 @@
 """``atlas view``: the page is self-contained, small and safe, and — in a real headless
 browser — the orbits it integrates end in the wells atlas labelled.
 
-The browser tests need a Chromium-family browser (Debian's ``chromium``, or $ATLAS_BROWSER);
-without one they are skipped with the reason. ``ATLAS_UPDATE_SCREENSHOT`` makes the
-screenshot test write ``docs/images/view.png`` (see :func:`test_screenshot`).
+The browser tests drive a Chromium-family browser already on the machine (Debian's
+``chromium``, or $ATLAS_BROWSER) with Playwright (``tests/browser.py``; no browser download);
+without one, or without the playwright package, they are skipped with the reason.
+``ATLAS_UPDATE_SCREENSHOT`` makes the screenshot test write ``docs/images/view.png`` (see
+:func:`test_screenshot`).
 """
 
 from __future__ import annotations
@@ -16,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from browser import Browser, find_browser
 
 import atlas
 from atlas.cli import main
 from atlas.views.page import pack_distance, safe_json, unpack_distance, write_view
+from tests.browser import find_browser, headless_page, playwright_missing
 from tests.helpers import SWING
 
 pytestmark = pytest.mark.slow  # two atlas runs for the page, a browser
@@ -28,11 +30,14 @@ pytestmark = pytest.mark.slow  # two atlas runs for the page, a browser
 REPO = Path(__file__).resolve().parents[2]
 XSS = "</script><script>alert(1)</script>"
 BROWSER = find_browser()
+NO_PLAYWRIGHT = playwright_missing()
 # CI (.ci/run) installs a browser and sets ATLAS_REQUIRE_BROWSER: there a missing one fails.
 needs_browser = pytest.mark.skipif(
-    BROWSER is None and not os.environ.get("ATLAS_REQUIRE_BROWSER"),
-    reason="no Chromium-family browser found (install Debian's chromium: apt-get install "
-    "chromium, or set ATLAS_BROWSER); the page itself is still tested without one")
+    (BROWSER is None or NO_PLAYWRIGHT is not None)
+    and not os.environ.get("ATLAS_REQUIRE_BROWSER"),
+    reason=NO_PLAYWRIGHT or "no Chromium-family browser found (install Debian's chromium: "
+    "apt-get install chromium, or set ATLAS_BROWSER); the page itself is still tested "
+    "without one")
 
 
 def _run(tmp, name, alpha=0.1, num=(160, 96), sep=True, t_max=200.0, method="rk4"):
@@ -106,7 +111,7 @@ def test_view_cli(files, tmp_path, capsys):
     assert main(["view", str(files["single"]), "-o", str(out)]) == 0
     assert out.stat().st_size > 0 and f"wrote {out}" in capsys.readouterr().out
     for args, fragment in ((["view", str(tmp_path / "missing.h5")], "missing.h5: no such file"),
-                           (["view", str(out)], "not a readable HDF5 file"),
+                           (["view", str(out)], "not an atlas file"),
                            (["view", str(files["single"]), "-o", str(tmp_path)], "directory"),
                            (["view", str(files["single"]), "-o", str(tmp_path / "x" / "p.html")],
                             "not a directory")):
@@ -121,9 +126,10 @@ def test_view_cli(files, tmp_path, capsys):
 def browser():
     if BROWSER is None:
         pytest.fail("ATLAS_REQUIRE_BROWSER is set but no Chromium-family browser was found")
-    b = Browser(BROWSER, width=1180, height=660)
-    yield b
-    b.close()
+    if NO_PLAYWRIGHT is not None:
+        pytest.fail(f"ATLAS_REQUIRE_BROWSER is set but {NO_PLAYWRIGHT}")
+    with headless_page(BROWSER, width=1180, height=660) as page:
+        yield page
 
 
 def _open(browser, page: Path) -> None:
@@ -165,7 +171,7 @@ def test_clicked_orbits_end_where_atlas_says(files, browser):
         assert float(r["gridDistance"]) == pytest.approx(
             float(ds["boundary_distance"].values[j, i]), rel=2e-3)
     assert int(_readout(browser)["clicks"]) == len(rows)
-    assert browser.dialogs() == [] and browser.console_errors() == []
+    assert browser.dialogs == [] and browser.errors == []
 
 
 @needs_browser
@@ -236,14 +242,14 @@ def test_a_trigfree_page_integrates_with_the_files_method(tmp_path, browser):
 def test_a_malicious_name_is_shown_as_text_and_never_runs(files, browser):
     # the detector works: a page that does open a dialog is seen
     browser.goto("data:text/html,<script>alert(1)</script>")
-    assert len(browser.dialogs()) == 1
+    assert len(browser.dialogs) == 1
     _open(browser, files["pages"]["xss"])
     time.sleep(0.2)
-    assert browser.dialogs() == []
+    assert browser.dialogs == []
     assert browser.evaluate("document.getElementById('name').textContent") == XSS
     assert browser.evaluate("document.title").startswith(XSS)
     assert browser.evaluate("document.scripts.length") == 2
-    assert browser.console_errors() == []
+    assert browser.errors == []
 
 
 @needs_browser
@@ -281,14 +287,13 @@ def test_screenshot(files, browser, tmp_path):
     page = files["pages"]["single"]
     if update.endswith(".h5"):
         page = write_view(update, tmp_path / "shown.html")
-    browser.call("Emulation.setDeviceMetricsOverride",
-                 {"width": 1180, "height": 720, "deviceScaleFactor": 1, "mobile": False})
+    browser.page.set_viewport_size({"width": 1180, "height": 720})
     _open(browser, page)
     xy = browser.evaluate("atlasView.clientXY(-1.0, 2.5)")
     browser.click(xy["x"], xy["y"])
     assert _readout(browser)["orbitStatus"] == "trapped"
     time.sleep(1.2)  # let the pendulum swing a little
-    png = browser.screenshot()
+    png = browser.page.screenshot()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
     target = REPO / "docs" / "images" / "view.png" if update else tmp_path / "view.png"
     target.write_bytes(png)
@@ -324,7 +329,7 @@ def test_torque_page_carries_the_sweeps_certificates(swing):
     cycle = atlas.open(path)["limit_cycle"].to_dataset()
     assert p["cycle"]["theta"][0] == round(float(cycle["theta"][0]), 4)
     assert p["cycle"]["theta"][-1] == round(float(cycle["theta"][-1]), 4)
-    assert len(p["cycle"]["theta"]) < 300 and page.stat().st_size < 100_000
+    assert len(p["cycle"]["theta"]) < 300 and page.stat().st_size < 120_000  # 20 kB: script
     assert "running" in _data(page)["status_names"].values()
 
 
@@ -461,4 +466,4 @@ def test_torque_page_clicks_agree_with_the_file(swing, browser):
         i = ref.trap_index
         assert abs(ref.theta[i] - g["theta_trap"]) + abs(ref.theta_dot[i] - g["theta_dot_trap"]) \
             < 1e-9
-    assert browser.dialogs() == [] and browser.console_errors() == []
+    assert browser.dialogs == [] and browser.errors == []

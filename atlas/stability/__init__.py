@@ -1,0 +1,1 @@
+"""Basin stability across parameters, exactly: ``atlas stability`` (a study without a grid)."""

@@ -1,0 +1,39 @@
+"""The minimal fatal shock of each rest state: the smallest kick (Δθ, Δθ̇) that leaves its
+basin (Halekotte & Feudel, "Minimal fatal shocks in multistable complex networks", Sci. Rep.
+10, 11783, 2020, doi:10.1038/s41598-020-68805-6; Attractors.jl ``minimal_fatal_shock``).
+
+It is the Euclidean (θ, θ̇) distance from the rest state (θ* + 2πk, 0) to the nearest point of
+its basin boundary (the metric of ``boundary_distance``, θ and θ̇ as one unit), and that
+point: :meth:`atlas.boundaries.exact.ExactBoundaries.nearest_point` of the rest state, exact
+to the boundaries' ``reference_error`` (without torque ≈ 1e-13, Newton's method on the DOP853
+dense output; with torque the polylines' chord error, ≤ 1e-8). The shock is not limited to the
+window. By the 2π-periodicity of θ it is the same for every k, its point translated by 2πk.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+__all__ = ["FatalShock", "minimal_fatal_shock"]
+
+
+class FatalShock(NamedTuple):
+    """distance [rad-ish]; theta [rad], theta_dot [rad s⁻¹]: the nearest boundary point of
+    well 0's rest state; error [rad-ish]."""
+
+    distance: float
+    theta: float
+    theta_dot: float
+    error: float
+
+
+def minimal_fatal_shock(boundaries) -> FatalShock:
+    """The minimal fatal shock of well 0's rest state (θ*, 0) (module docstring); NaN where
+    the pendulum has no rest state."""
+    p = boundaries.pendulum
+    if not p.has_rest_states:
+        return FatalShock(math.nan, math.nan, math.nan, math.nan)
+    distance, theta, theta_dot = boundaries.nearest_point(p.rest_angle, 0.0)
+    return FatalShock(float(distance), float(theta), float(theta_dot),
+                      float(boundaries.reference_error))

@@ -1,0 +1,208 @@
+"""``atlas plot`` of a stability study: its figures, read from the file and drawn (no
+computing).
+
+1-D study: the basin stability of the rest states (all wells together, and well 0 alone) and
+of the running cycle against the swept parameter, with the Gaussian stability if stored, and
+every bifurcation inside the range drawn as a labelled vertical line (NAME_stability.png);
+the minimal fatal shock against the parameter, with the same lines (NAME_fatal_shock.png).
+2-D study: the rest states' basin stability over the two parameters, with the bifurcation
+curves drawn on it (NAME_stability_map.png). Points whose numbers are NaN (the saddle-node,
+failures) are marked.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from atlas.views.style import CURVE_SIZE, MAP_SIZE, PNG_OPTIONS, STYLE, basin_colours
+
+__all__ = ["plot_study"]
+
+_LABELS = {"alpha": "damping α [1/s]", "omega0": "natural frequency ω0 [rad/s]",
+           "torque": "torque τ [rad/s²]"}
+_LINES = {"homoclinic_torque": ("torque", "homoclinic τ_c", "#b2182b", "--"),
+          "saddle_node_torque": ("torque", "saddle-node τ = ω0²", "#2166ac", ":"),
+          "focus_node_damping": ("alpha", "focus → node", "#5e3c99", "-."),
+          "homoclinic_damping": ("alpha", "homoclinic α_c", "#b2182b", "--")}
+
+
+def _figure(out: Path, size, draw, dpi) -> Path:
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=size, dpi=dpi or STYLE["savefig.dpi"])
+        FigureCanvasAgg(fig)
+        draw(fig.add_subplot())
+        fig.tight_layout()
+        options = {"pil_kwargs": PNG_OPTIONS} if out.suffix == ".png" else {}
+        fig.savefig(out, **options)
+    return out
+
+
+def _bifurcation_lines(ax, ds: xr.Dataset, axis: str) -> None:
+    """Every bifurcation of ``axis`` inside the plotted range: a labelled vertical line."""
+    lo, hi = float(ds[axis][0]), float(ds[axis][-1])
+    for name, (along, label, colour, style) in _LINES.items():
+        if along != axis or name not in ds:
+            continue
+        for value in np.unique(np.atleast_1d(ds[name].values)):
+            if np.isfinite(value) and lo <= value <= hi:
+                ax.axvline(value, color=colour, ls=style, lw=1.0)
+                right = value > lo + 0.7 * (hi - lo)  # above the axes, over nothing drawn
+                ax.annotate(f"{label} = {value:.10g}", (value, 1.0),
+                            xycoords=("data", "axes fraction"), xytext=(0, 2),
+                            textcoords="offset points", va="bottom", fontsize=8,
+                            color=colour, ha="right" if right else "left",
+                            annotation_clip=False)
+
+
+def _nan_points(ax, ds: xr.Dataset, axis: str) -> None:
+    bad = np.atleast_1d(ds["point_status"].values) != 0
+    for x in np.atleast_1d(ds[axis].values)[bad]:
+        ax.plot([x], [0.0], marker="x", color="black", ms=6, clip_on=False, ls="none",
+                label="no exact value (saddle-node / failed)")
+
+
+_SYMBOLS = {"alpha": "α", "omega0": "ω0", "torque": "τ"}
+
+
+def _curve(ds: xr.Dataset, axis: str, values) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) of a curve against ``axis``, broken (a NaN) between the two points on either
+    side of each bifurcation: a jump there is not drawn as a slope."""
+    x, y = np.asarray(ds[axis].values, float), np.asarray(values, float)
+    cuts = []
+    for name, (along, *_) in _LINES.items():
+        if along == axis and name in ds:
+            cuts += [v for v in np.atleast_1d(ds[name].values) if np.isfinite(v)]
+    at = sorted({int(i) for v in cuts if x[0] < v < x[-1]
+                 for i in [np.searchsorted(x, v)] if x[i] != v})
+    return np.insert(x, at, np.nan), np.insert(y, at, np.nan)
+
+
+def _parameter_title(ds: xr.Dataset, swept) -> str:
+    fixed = [f"{_SYMBOLS[n]} = {float(ds[n]):g}" for n in ("alpha", "omega0", "torque")
+             if n not in swept]
+    (a, b), (lo, hi) = ds.attrs["window_theta"], ds.attrs["window_theta_dot"]
+    return (f"{', '.join(fixed)}; window θ ∈ [{a:.3g}, {b:.3g}], θ̇ ∈ [{lo:g}, {hi:g}]")
+
+
+def _stability_curves(ds: xr.Dataset, axis: str):
+    colours = basin_colours([0], running=True)
+
+    marker = "." if ds.sizes[axis] <= 60 else None
+
+    def draw(ax):
+        x = ds[axis].values
+        ax.plot(*_curve(ds, axis, ds["basin_stability"].sum("k", skipna=False).values),
+                color="#1b7837", lw=1.6, marker=marker, label="rest states (all wells)")
+        if 0 in ds["k"].values:
+            ax.plot(*_curve(ds, axis, ds["basin_stability"].sel(k=0).values),
+                    color=colours[0], lw=1.0, ls="--", marker=marker,
+                    label="rest state k = 0")
+        ax.plot(*_curve(ds, axis, ds["running_stability"].values), color="#4d4d4d", lw=1.6,
+                marker=marker, label="running cycle")
+        if "gaussian_stability" in ds:
+            ax.plot(*_curve(ds, axis, ds["gaussian_stability"].values), color="#e08214",
+                    lw=1.2, marker=marker,
+                    label=f"rest state under a Gaussian kick σθ = "
+                    f"{ds.attrs['sigma_theta']:g}, σθ̇ = {ds.attrs['sigma_theta_dot']:g}")
+        _bifurcation_lines(ax, ds, axis)
+        _nan_points(ax, ds, axis)
+        ax.set_xlim(x[0], x[-1])
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_xlabel(_LABELS[axis])
+        ax.set_ylabel("basin stability (exact area fraction)")
+        ax.set_title(f"basin stability: {_parameter_title(ds, (axis,))}", fontsize=9,
+                     pad=14)
+        handles, labels = ax.get_legend_handles_labels()
+        unique = dict(zip(labels, handles))
+        ax.legend(unique.values(), unique.keys(), loc="best")
+
+    return draw
+
+
+def _shock_curve(ds: xr.Dataset, axis: str):
+    def draw(ax):
+        x = ds[axis].values
+        ax.plot(*_curve(ds, axis, ds["minimal_fatal_shock"].isel(k=0).values),
+                color="#1b7837", lw=1.6, marker="." if x.size <= 60 else None,
+                label="minimal fatal shock of the rest states")
+        _bifurcation_lines(ax, ds, axis)
+        _nan_points(ax, ds, axis)
+        ax.set_xlim(x[0], x[-1])
+        ax.set_ylim(bottom=0.0)
+        ax.set_xlabel(_LABELS[axis])
+        ax.set_ylabel("minimal fatal shock √(Δθ² + Δθ̇²)")
+        ax.set_title(f"minimal fatal shock: {_parameter_title(ds, (axis,))}", fontsize=9,
+                     pad=14)
+        ax.legend(loc="lower left")
+
+    return draw
+
+
+def _stability_map(ds: xr.Dataset, x: str, y: str):
+    def draw(ax):
+        total = ds["basin_stability"].sum("k", skipna=False).transpose(y, x)
+        mesh = ax.pcolormesh(ds[x].values, ds[y].values, total.values, shading="nearest",
+                             cmap="viridis", vmin=0.0, vmax=1.0)
+        ax.figure.colorbar(mesh, ax=ax, label="basin stability of the rest states")
+        for name, (value_axis, label, colour, style) in _LINES.items():
+            # a bifurcation value along one axis of the map, over the other one
+            if name not in ds or value_axis not in (x, y):
+                continue
+            other = y if value_axis == x else x
+            values = ds[name]
+            if values.dims == (other,):
+                along, at = ds[other].values, values.values
+            elif values.dims == ():
+                along, at = ds[other].values[[0, -1]], np.full(2, float(values))
+            else:
+                continue
+            pair = (at, along) if value_axis == x else (along, at)
+            ax.plot(*pair, color="white", lw=2.4)
+            ax.plot(*pair, color=colour, ls=style, lw=1.3, label=label)
+        ax.set_xlim(ds[x].values[0], ds[x].values[-1])
+        ax.set_ylim(ds[y].values[0], ds[y].values[-1])
+        ax.set_xlabel(_LABELS[x])
+        ax.set_ylabel(_LABELS[y])
+        ax.set_title(f"basin stability of the rest states: {_parameter_title(ds, (x, y))}",
+                     fontsize=9)
+        if np.isnan(total.values).any():
+            from matplotlib.patches import Patch
+
+            ax.add_artist(ax.legend(handles=[Patch(fc="white", ec="0.3", label="no exact "
+                                                   "value (saddle-node / failed)")],
+                                    loc="lower right", frameon=True))
+        ax.legend(loc="upper right", frameon=True)
+
+    return draw
+
+
+def plot_study(path: str | Path, outdir=None, fmt: str = "png", dpi=None) -> list[Path]:
+    """The figures of the study file at ``path`` (module docstring), written into ``outdir``
+    (default: next to the file) as NAME_<figure>.<fmt>."""
+    from atlas.store.study import open_study, swept_dims
+
+    path = Path(path)
+    ds = open_study(path)
+    folder = Path(outdir) if outdir is not None else path.parent
+    folder.mkdir(parents=True, exist_ok=True)
+    stem = path.name.removesuffix(path.suffix)
+    swept = swept_dims(ds)
+    written = []
+    if len(swept) == 1:
+        axis = swept[0]
+        written.append(_figure(folder / f"{stem}_stability.{fmt}", CURVE_SIZE,
+                               _stability_curves(ds, axis), dpi))
+        written.append(_figure(folder / f"{stem}_fatal_shock.{fmt}", CURVE_SIZE,
+                               _shock_curve(ds, axis), dpi))
+    elif len(swept) == 2:
+        y, x = swept  # alpha before torque: torque across, alpha up
+        written.append(_figure(folder / f"{stem}_stability_map.{fmt}", MAP_SIZE,
+                               _stability_map(ds, x, y), dpi))
+    return written

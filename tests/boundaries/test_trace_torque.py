@@ -1,0 +1,92 @@
+"""The traced separatrices with torque (atlas.boundaries.trace_tilted, through trace) and
+the certificate built on them, checked directly: the RK4 labels differ across every located
+point at ±tol, and labels certified between d_cert and 10·d_cert of the exact boundaries are
+the exact equation's (scipy's DOP853 at rtol 1e-12, classified by the same certificates)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from atlas.boundaries.bisection import NO_LABEL, Labeller, field_normal, linger
+from atlas.boundaries.certificate import Certifier
+from atlas.boundaries.exact import RUNNING_SIDE, exact_boundaries
+from atlas.boundaries.trace import trace
+from atlas.kernels import RUNNING, TRAPPED
+from atlas.physics.pendulum import Pendulum
+from atlas.physics.running import running_certificate
+from tests.pipeline.test_swing import _dop853_label
+
+DT, T_MAX, TOL = 0.01, 400.0, 1e-12
+
+
+@pytest.fixture(scope="module", params=[(0.05, 1.0, 0.5), (0.1, 1.0, -0.2)],
+                ids=["bistable", "monostable"])
+def traced(request):
+    """(pendulum, barrier, exact boundaries, separatrices) over a window around the saddle
+    of well 0 (bistable: a tongue and the running basin; monostable: two wells)."""
+    p = Pendulum(*request.param)
+    saddle = p.saddle_angle
+    window = ((saddle - 1.2, saddle + 1.0), (-1.5, 1.5))
+    _, barrier = running_certificate(p, DT)
+    exact = exact_boundaries(p, window)
+    sep = trace(p, *window, tol=TOL, dt=DT, t_max=T_MAX, exact=exact, barrier=barrier)
+    return p, barrier, exact, sep
+
+
+@pytest.mark.slow
+def test_labels_differ_across_every_located_point(traced):
+    """At every located point ± tol along the normal of the vector field: two certified RK4
+    labels, different; the located points lie within the measured shift of the exact
+    boundaries, which is the RK4 map's O(dt⁴) shift."""
+    p, barrier, exact, sep = traced
+    theta, theta_dot = sep["theta"].values, sep["theta_dot"].values
+    assert theta.size >= 20 and not sep.attrs["warnings"]
+    assert np.all(sep["bracket_width"].values < TOL)
+    labels = Labeller(p, DT, T_MAX + linger(p, TOL), barrier=barrier)
+    n_theta, n_speed = field_normal(p, theta, theta_dot)
+    below = labels(theta - TOL * n_theta, theta_dot - TOL * n_speed)
+    above = labels(theta + TOL * n_theta, theta_dot + TOL * n_speed)
+    assert np.all(below != NO_LABEL) and np.all(above != NO_LABEL)
+    assert np.all(below != above)
+    dist, _ = exact.distance(theta, theta_dot)
+    assert dist.max() == pytest.approx(float(sep.attrs["discrepancy"]), rel=1e-12)
+    assert 0.0 < dist.max() < 1e-7  # the RK4 map's boundary shift at dt = 0.01: ≈ 1e-9
+
+
+@pytest.mark.slow
+def test_certified_between_d_cert_and_ten_d_cert_is_the_exact_equations(traced):
+    """Points placed at 1.5, 3 and 7 d_cert on either side of the exact boundaries (off
+    exact vertices, along the normal): every label the certificate passes (trapped or
+    running) is DOP853's fate; and most are passed, so the check is not vacuous."""
+    p, barrier, exact, sep = traced
+    (t0, t1), (v0, v1) = exact.window
+    cert = Certifier(p, np.linspace(t0, t1, 33), np.linspace(v0, v1, 25),
+                     float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]), exact)
+    base = []
+    for j, _, x, v in exact.tilted.curves(clip=True):
+        far = np.hypot(x - exact.tilted.saddle_theta(j), v) > 0.1  # the normal is defined
+        base += list(zip(x[far][::400], v[far][::400]))
+    base = np.array(base)[:12]
+    n = np.column_stack(field_normal(p, base[:, 0], base[:, 1]))
+    factors = np.array([1.5, 3.0, 7.0, -1.5, -3.0, -7.0])
+    points = (base[:, None, :] + cert.d_cert * factors[None, :, None] * n[:, None, :])
+    theta, theta_dot = points[..., 0].ravel(), points[..., 1].ravel()
+    import atlas
+
+    res = atlas.label(theta, theta_dot, alpha=p.alpha, omega0=p.omega0, torque=p.torque,
+                      dt=DT, t_max=T_MAX, running=barrier)
+    status, dist, side, _ = cert.certify(theta, theta_dot, res.attractor, res.status)
+    np.testing.assert_allclose(dist, cert.d_cert * np.abs(np.tile(factors, base.shape[0])),
+                               rtol=0.02)
+    certified = np.flatnonzero((status == TRAPPED) | (status == RUNNING))
+    assert certified.size >= 0.8 * theta.size
+    assert np.unique(side[certified]).size >= 2  # both sides of the boundaries
+    for i in certified:
+        fate = _dop853_label(p, float(theta[i]), float(theta_dot[i]), barrier, T_MAX)
+        stored = "running" if status[i] == RUNNING else int(res.attractor[i])
+        assert fate == stored, (theta[i], theta_dot[i], fate, stored)
+    assert RUNNING_SIDE not in side[certified] or exact.running_possible
+    assert math.isfinite(cert.d_cert)

@@ -1,0 +1,158 @@
+"""The pre-flight estimate of a big run (atlas.pipeline.preflight): what it measures, what it
+says, when it asks, and that a run declined writes nothing."""
+
+from __future__ import annotations
+
+import io
+import logging
+
+import numpy as np
+import pytest
+
+import atlas
+from atlas.errors import AtlasError
+from atlas.pipeline import preflight, sweep
+from atlas.pipeline.output import BYTES_PER_ORBIT
+from tests.helpers import SMALL, write_config
+
+
+class _Terminal(io.StringIO):
+    """A stdin that is a terminal holding the user's typed answer."""
+
+    def isatty(self):
+        return True
+
+
+class _Pipe(io.StringIO):
+    def isatty(self):
+        return False
+
+
+def _small(tmp_path, sep=False):
+    return atlas.load_config(write_config(tmp_path / "c.yaml", SMALL.format(
+        sep=str(sep).lower(), output=tmp_path / "small.h5")))
+
+
+def _estimate(**kw):
+    base = dict(orbits=400_000_000, points=1, seconds=3600.0, sample=4096,
+                disk_bytes=4_400_000_000)
+    return preflight.Estimate(**{**base, **kw})
+
+
+def test_the_rate_is_the_per_orbit_cost_without_a_calls_fixed_cost(tmp_path, monkeypatch):
+    """A machine whose every label call costs a fixed 50 ms plus 20 µs an orbit (a fake clock
+    advanced by a fake kernel): the calibration must find 50 000 orbits/s, the fixed cost
+    taken off, from stretches of the run's own grid rows."""
+    import atlas.labels.labelling as labelling
+
+    cfg = _small(tmp_path)
+    layout = sweep.layout_of(cfg)
+    clock, calls = [0.0], []
+
+    def fake_label(theta0, theta_dot0, *, t_max, **kw):
+        calls.append((theta0, theta_dot0, t_max))
+        clock[0] += 0.05 + (0.0 if t_max == cfg.integrator.dt else 20e-6 * theta0.size)
+
+    monkeypatch.setattr(labelling, "label", fake_label)
+    monkeypatch.setattr(preflight.time, "perf_counter", lambda: clock[0])
+    rate, timed = preflight.measure_rate(cfg, layout, [None])
+    assert rate == pytest.approx(50_000, rel=1e-9)
+    assert timed >= preflight.FIRST_SAMPLE
+    width = min(preflight.STRETCH, layout.theta0.size)
+    for theta0, theta_dot0, _ in calls:
+        rows, cols = theta0.reshape(-1, width), theta_dot0.reshape(-1, width)
+        for th, v in zip(rows, cols):  # consecutive θ0 of one grid row, as in a tile
+            start = int(np.flatnonzero(layout.theta0 == th[0])[0])
+            np.testing.assert_array_equal(th, layout.theta0[start:start + width])
+            assert np.all(v == v[0]) and v[0] in layout.theta_dot0
+
+
+def test_the_time_is_measured_only_where_the_run_may_be_big(tmp_path, monkeypatch):
+    cfg = _small(tmp_path)
+    layout = sweep.layout_of(cfg)
+    measured = []
+    monkeypatch.setattr(preflight, "measure_rate",
+                        lambda *a, **k: measured.append(1) or (1000.0, 64))
+    small = preflight.estimate(cfg, layout, [None], 384, "cpu", "cpu")
+    assert small.seconds is None and not measured and not small.big and not small.asks
+    big = preflight.estimate(cfg, layout, [None], preflight.PREFLIGHT_ORBITS, "cpu", "cpu")
+    assert measured and big.seconds == preflight.PREFLIGHT_ORBITS / 1000.0 and big.big
+    gpu = preflight.estimate(cfg, layout, [None], preflight.PREFLIGHT_ORBITS, "cuda", "cuda")
+    assert gpu.seconds is None and "time not estimated" in gpu.line()
+
+
+def test_the_line_says_orbits_time_and_disk():
+    line = _estimate(points=3).line()
+    assert line.startswith("atlas: 400 M orbits at 3 parameter points")
+    assert "about 60 min on this machine" in line and "measured on 4096" in line
+    assert "about 10 h" in _estimate(seconds=36000.0).line()
+    assert "up to 4.4 GB on disk" in line
+
+
+def test_when_a_run_asks():
+    assert _estimate().asks
+    assert not _estimate(seconds=60.0, disk_bytes=10**6).asks
+    assert _estimate(seconds=1.0, disk_bytes=preflight.CONFIRM_BYTES).asks
+    assert _estimate(orbits=10**6, seconds=preflight.LINE_S, disk_bytes=1).big
+    assert not _estimate(orbits=10**6, seconds=1.0, disk_bytes=1).big
+
+
+@pytest.mark.parametrize(("answer", "start"), [("y\n", True), ("yes\n", True), ("n\n", False),
+                                                ("\n", False), ("", False)])
+def test_the_question_on_a_terminal(answer, start, capsys):
+    assert preflight.ask(stdin=_Terminal(answer))(_estimate()) is start
+    err = capsys.readouterr().err
+    assert "400 M orbits" in err and "Start? [y/N]" in err
+
+
+def test_no_question_with_yes_or_off_a_terminal(capsys):
+    never = _Terminal()
+    never.readline = None  # reading the answer would fail
+    assert preflight.ask(yes=True, stdin=never)(_estimate())
+    assert "400 M orbits" in capsys.readouterr().err
+    assert preflight.ask(stdin=_Pipe())(_estimate())
+    assert "stdin is not a terminal: starting without asking" in capsys.readouterr().err
+    assert preflight.ask(quiet=True, stdin=_Pipe())(_estimate())
+    assert capsys.readouterr().err == ""
+
+
+def test_a_run_declined_writes_nothing(tmp_path, monkeypatch, capsys):
+    cfg = _small(tmp_path)
+    monkeypatch.setattr(preflight, "CONFIRM_BYTES", 1)
+    asked = []
+    with pytest.raises(AtlasError, match="not started"):
+        sweep.run(cfg, confirm=lambda est: asked.append(est) or False)
+    assert asked[0].orbits == 24 * 16
+    assert asked[0].disk_bytes == 24 * 16 * BYTES_PER_ORBIT  # checked against a file elsewhere
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
+
+
+def test_a_big_run_says_its_estimate_unless_quiet(tmp_path, monkeypatch, capsys):
+    cfg = _small(tmp_path)
+    monkeypatch.setattr(preflight, "PREFLIGHT_ORBITS", 100)
+    monkeypatch.setattr(preflight, "measure_rate", lambda *a, **k: (1000.0, 64))
+    logging.getLogger("atlas").setLevel(logging.WARNING)
+    sweep.run(cfg, quiet=True, open_result=False)
+    assert capsys.readouterr().err == ""
+    sweep.run(cfg, open_result=False)
+    err = capsys.readouterr().err
+    assert "384 orbits, labelling about 0.38 s on this machine (measured on 64" in err
+
+
+def test_a_resumed_run_counts_only_the_orbits_still_to_do(tmp_path, monkeypatch):
+    from atlas.store.reader import describe
+    from tests.helpers import crash_on_tile
+
+    cfg = _small(tmp_path)  # 24 × 16 orbits in tiles of 4 rows (96 orbits)
+    crash_on_tile(monkeypatch, 3, RuntimeError("simulated crash"))
+    with pytest.raises(RuntimeError):
+        sweep.run(cfg, quiet=True)
+    monkeypatch.undo()
+    done = describe(tmp_path / "small.h5.partial")["tiles_done"]
+    assert 0 < done < 4
+    monkeypatch.setattr(preflight, "CONFIRM_BYTES", 1)
+    asked = []
+    with pytest.raises(AtlasError, match="not started"):
+        sweep.run(cfg, quiet=True, confirm=lambda est: asked.append(est) or False)
+    assert asked[0].orbits == (4 - done) * 4 * 24
+    assert describe(tmp_path / "small.h5.partial")["tiles_done"] == done  # kept as it was

@@ -1,0 +1,82 @@
+"""Bad input to ``atlas stability`` refused before any work, with one line on stderr (exit
+status 2, nothing written): ranges with num < 2 or start >= stop, a parameter given twice, more
+than a million points without --force, an output that is not a study; and ranges in grid
+configs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from atlas.cli import main
+from tests.helpers import write_config
+
+BODY = """\
+name: study
+pendulum: {{alpha: 0.2, omega0: 1.0, torque: {torque}}}
+grid:
+  theta0: {{start: -pi, stop: pi, num: 2}}
+  theta_dot0: {{start: -3, stop: 3, num: 2}}
+output: {output}
+"""
+
+
+@pytest.mark.parametrize("torque, message", [
+    ("{start: 0, stop: 1, num: 1}", "range num must be between 2"),
+    ("{start: 1, stop: 0, num: 5}", "must be less than stop"),
+    ("{start: 0, stop: 1}", "num is missing"),
+    ("{start: 0, stop: 1, num: 3, step: 1}", "unknown key 'step'"),
+    ("{start: 0, stop: 1, num: 2.5}", "integer"),
+])
+def test_bad_ranges_are_refused(tmp_path, capsys, torque, message):
+    out = tmp_path / "x.h5"
+    cfg = write_config(tmp_path / "x.yaml", BODY.format(torque=torque, output=out))
+    assert main(["stability", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "pendulum.torque" in err and message in err
+    assert not out.exists()
+
+
+def test_a_parameter_given_twice_is_refused(tmp_path, capsys):
+    """A 2-D study over torque given twice (as two keys) would be ambiguous: refused."""
+    out = tmp_path / "x.h5"
+    cfg = write_config(tmp_path / "x.yaml", (
+        "pendulum:\n  alpha: {start: 0.1, stop: 0.2, num: 3}\n"
+        "  torque: {start: 0, stop: 0.5, num: 3}\n  torque: [0.1, 0.2]\n"
+        f"output: {out}\n"))
+    assert main(["stability", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'torque' given twice" in err
+    assert not out.exists()
+
+
+def test_more_than_a_million_points_needs_force(tmp_path, capsys):
+    out = tmp_path / "x.h5"
+    cfg = write_config(tmp_path / "x.yaml", (
+        "pendulum:\n  alpha: {start: 0.1, stop: 0.2, num: 1001}\n"
+        "  torque: {start: 0, stop: 0.5, num: 1000}\n"
+        f"output: {out}\n"))
+    assert main(["stability", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "1,001,000 parameter points" in err and "--force" in err
+    assert not out.exists()
+
+
+def test_an_output_that_is_not_a_study_is_kept(tmp_path, capsys):
+    out = tmp_path / "x.h5"
+    out.write_text("precious")
+    cfg = write_config(tmp_path / "x.yaml", BODY.format(torque="[0.0, 1.5]", output=out))
+    assert main(["stability", str(cfg)]) == 2
+    assert "not a study file" in capsys.readouterr().err
+    assert out.read_text() == "precious"
+
+
+def test_ranges_work_in_grid_configs_too(tmp_path):
+    """A range is num values from start to stop inclusive, evenly spaced."""
+    import atlas
+
+    cfg = write_config(tmp_path / "g.yaml", BODY.format(
+        torque="{start: 0.1, stop: 0.4, num: 4}", output=tmp_path / "g.h5"))
+    values = np.array(atlas.load_config(cfg).pendulum.torques)
+    assert values.size == 4 and values[0] == 0.1 and values[-1] == 0.4
+    assert np.allclose(np.diff(values), 0.1, rtol=1e-14)

@@ -1,0 +1,189 @@
+"""The curves against a swept parameter mean what they show: no error bar leaves [0, 1], no
+two basins share a colour, the lower panel is the measured error (grid count − exact
+fraction), ±k are merged only where the window's symmetry makes their basins equal, and the
+bifurcations are marked where they lie."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import xarray as xr  # noqa: E402
+from matplotlib.colors import to_hex  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+import atlas  # noqa: E402
+from atlas.views.curves import (  # noqa: E402
+    INFORMATIVE_BOUND,
+    _draw_fractions,
+    basin_stability,
+    bifurcation_marks,
+    fraction_curves,
+)
+from tests.helpers import write_config  # noqa: E402
+
+
+def _ax():
+    return Figure(figsize=(9, 5.4)).add_subplot()
+
+
+def _bar_ends(ax) -> np.ndarray:
+    """The y of both ends of every error bar drawn on ``ax``."""
+    ends = [seg[:, 1] for c in ax.containers if c.has_yerr
+            for col in c.lines[2] for seg in col.get_segments()]
+    return np.concatenate(ends) if ends else np.empty(0)
+
+
+def test_error_bars_never_leave_the_unit_interval_and_only_say_something():
+    """Grid counts near 0 and 1 with bounds of 0.05 and 0.09: bars clipped to [0, 1]; a bound
+    of 0.5 (a 64² grid's, which once ran from −0.36 to 1.26) says nothing and gets none."""
+    x = np.array([0.1, 0.2, 0.3])
+    low = (np.array([0.02, 0.03, 0.3]), np.array([0.021, 0.03, 0.301]),
+           np.array([0.05, 0.09, 0.5]), "k = 0", "#000000")
+    high = (np.array([0.97, 0.96, 0.6]), np.array([0.971, 0.959, 0.6]),
+            np.array([0.05, 0.09, 0.5]), "k = ±1", "#ff0000")
+    ax = _ax()
+    _draw_fractions(ax, x, [low, high], [], [], "α", "t")
+    ends = _bar_ends(ax)
+    assert ends.size == 8  # two bars per curve, two ends each: none at the 0.5 bound
+    assert ends.min() == 0.0 and ends.max() == 1.0  # clipped, not dropped
+    assert np.all((ends >= 0.0) & (ends <= 1.0))
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("clipped to [0, 1]" in t and f"< {INFORMATIVE_BOUND:g}" in t for t in texts)
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    """Two dampings either side of α = ω0, separatrices on (exact fractions), in a window
+    symmetric about (0, 0)."""
+    tmp = tmp_path_factory.mktemp("curves")
+    cfg = write_config(tmp / "s.yaml", f"""\
+pendulum: {{alpha: [0.5, 1.5], omega0: 1.0}}
+grid:
+  theta0: {{start: -3pi, stop: 3pi, num: 24}}
+  theta_dot0: {{start: -4, stop: 4, num: 20}}
+output: {tmp / 's.h5'}
+""")
+    return atlas.run(atlas.load_config(cfg), quiet=True)
+
+
+def _unit(below) -> float:
+    """The scale of the measured-error panel, read from its label ("[10⁻³]" …)."""
+    label = below.get_ylabel()
+    return next((10.0 ** -p for p in range(2, 16) if f"[10⁻{str(p).translate(_SUP)}]" in label),
+                1.0)
+
+
+_SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+@pytest.mark.slow
+def test_curves_of_a_real_sweep_are_honest(sweep):
+    """On a real atlas: bars inside [0, 1]; one colour per curve; the lower panel is the
+    measured error; ±k merged and said so (the window is symmetric), each merged curve the
+    sum of the two exact fractions; α = ω0 marked and named."""
+    ds = sweep.to_dataset(inherit=False)
+    ax = fraction_curves(sweep, ax=_ax(), max_curves=20)
+    assert np.all((_bar_ends(ax) >= 0.0) & (_bar_ends(ax) <= 1.0))
+    curves = {ln.get_label(): ln for ln in ax.lines if ln.get_label().startswith("k =")}
+    colours = [to_hex(ln.get_color()) for ln in curves.values()]
+    assert len(set(colours)) == len(colours) >= 3
+    below = ax.figure.axes[-1]
+    residual = next(ln for ln in below.lines
+                    if to_hex(ln.get_color()) == to_hex(curves["k = 0"].get_color()))
+    k0 = ds.sel(k=0)
+    np.testing.assert_allclose(residual.get_ydata() * _unit(below),
+                               k0["basin_fraction"] - k0["basin_fraction_exact"],
+                               rtol=1e-12, atol=1e-15)
+    assert "±k merged" in ax.get_title() and "k = ±1" in curves
+    np.testing.assert_allclose(curves["k = ±1"].get_ydata(),
+                               ds["basin_fraction_exact"].sel(k=[-1, 1]).sum("k"), rtol=1e-12)
+    assert any(t.get_text().startswith("α = ω0") for t in ax.texts)
+    assert [ln.get_xdata()[0] for ln in ax.lines if ln.get_linestyle() == ":"] == [1.0]
+
+
+def _fraction_tree(theta0, torque=0.0) -> xr.DataTree:
+    """An α sweep of two points and wells −1, 0, 1 whose fractions differ for ±k."""
+    f = np.array([[0.2, 0.5, 0.3], [0.25, 0.45, 0.3]])
+    ds = xr.Dataset({"basin_fraction_exact": (("alpha", "k"), f),
+                     "basin_fraction": (("alpha", "k"), f + 0.001),
+                     "basin_fraction_grid_error_bound": (("alpha", "k"), np.full((2, 3), 0.02))},
+                    coords={"alpha": [0.1, 0.2], "k": [-1, 0, 1], "omega0": 1.0,
+                            "torque": torque, "theta0": theta0,
+                            "theta_dot0": np.linspace(-4, 4, 5)})
+    return xr.DataTree(dataset=ds)
+
+
+@pytest.mark.parametrize("theta0, torque", [(np.linspace(-2 * np.pi, 3 * np.pi, 6), 0.0),
+                                            (np.linspace(-np.pi, np.pi, 6), 0.1)],
+                         ids=["shifted window", "torque"])
+def test_k_and_minus_k_stay_apart_without_the_symmetry(theta0, torque):
+    """A window not centred on (0, 0), or a torque (which breaks the point reflection): k
+    and −k are curves of their own, with their own values."""
+    ax = fraction_curves(_fraction_tree(theta0, torque), ax=_ax())
+    curves = {ln.get_label(): ln for ln in ax.lines if ln.get_label().startswith("k =")}
+    assert set(curves) == {"k = −1", "k = 0", "k = +1"} and "merged" not in ax.get_title()
+    np.testing.assert_array_equal(curves["k = −1"].get_ydata(), [0.2, 0.25])
+
+
+def test_k_and_minus_k_merge_in_a_symmetric_window():
+    ax = fraction_curves(_fraction_tree(np.linspace(-np.pi, np.pi, 6)), ax=_ax())
+    curves = {ln.get_label(): ln for ln in ax.lines if ln.get_label().startswith("k =")}
+    assert set(curves) == {"k = 0", "k = ±1"} and "±k merged" in ax.get_title()
+    np.testing.assert_allclose(curves["k = ±1"].get_ydata(), [0.5, 0.55], rtol=1e-15)
+
+
+def test_the_smaller_basins_are_thin_single_lines_never_one_sum():
+    """Beyond max_curves each basin is one thin grey line of its own size, none summed."""
+    x = np.array([1.0, 2.0])
+    others = [np.array([0.01, 0.02]), np.array([0.015, 0.0])]
+    big = (np.array([0.5, 0.6]), np.array([0.5, 0.6]), np.full(2, 0.5), "k = 0", "#00aa00")
+    ax = _ax()
+    _draw_fractions(ax, x, [big], others, [], "α", "t")
+    thin = [ln for ln in ax.lines if ln.get_linewidth() < 1 and ln.get_linestyle() == "-"
+            and len(ln.get_xdata())]
+    assert len(thin) == 2 and max(ln.get_ydata().max() for ln in thin) == 0.02
+
+
+def _torque_ds(torque=(0.06, 0.26, 0.46, 0.66, 0.86, 0.96), **extra) -> xr.Dataset:
+    return xr.Dataset({**extra}, coords={"torque": np.asarray(torque), "omega0": 1.0,
+                                         "alpha": 0.05})
+
+
+def test_bifurcations_are_read_from_the_file_or_passed_in():
+    """τ_c from a study file's homoclinic_torque, else as passed in by the command layer;
+    τ = ω0² only inside the swept range (here ω0² = 1 > 0.96: not drawn)."""
+    marks = bifurcation_marks(_torque_ds(homoclinic_torque=0.1307), "torque")
+    assert [v for v, _ in marks] == [0.1307] and "homoclinic" in marks[0][1]
+    assert bifurcation_marks(_torque_ds(), "torque") == []
+    assert [v for v, _ in bifurcation_marks(_torque_ds(), "torque", 0.2)] == [0.2]
+    wide = xr.Dataset(coords={"torque": [0.5, 1.2], "omega0": 1.0})
+    assert [v for v, _ in bifurcation_marks(wide, "torque")] == [1.0]
+
+
+def test_basin_stability_marks_the_homoclinic_torque_and_keeps_bars_in_range():
+    """A torque sweep drawn with the homoclinic torque passed in: marked; bars in [0, 1]
+    (rest states near 1, running near 0, bounds 0.05: clipped; bound 0.4: none); the rest
+    states and the running basin in two colours; the lower panel their measured errors."""
+    torque = np.array([0.06, 0.11, 0.16, 0.21])
+    rest = np.array([[0.98, 0.0], [0.97, 0.01], [0.7, 0.05], [0.5, 0.1]])
+    ds = _torque_ds(
+        torque,
+        basin_fraction_exact=(("torque", "k"), rest),
+        basin_fraction=(("torque", "k"), rest + 0.001),
+        basin_fraction_grid_error_bound=(("torque", "k"), np.full((4, 2), 0.025)),
+        running_fraction_exact=("torque", 1 - rest.sum(axis=1)),
+        running_fraction=("torque", 1 - rest.sum(axis=1) - 0.002),
+        running_fraction_grid_error_bound=("torque", [0.05, 0.05, 0.05, 0.4]),
+    ).assign_coords(k=[0, 1])
+    ax = basin_stability(xr.DataTree(dataset=ds), ax=_ax(), homoclinic_torque=0.13)
+    ends = _bar_ends(ax)
+    assert ends.size == 2 * 7 and ends.min() == 0.0 and ends.max() == 1.0
+    exact = {ln.get_label(): ln for ln in ax.lines if ln.get_label().endswith("exact area")}
+    assert to_hex(exact["rest states, exact area"].get_color()) != to_hex(
+        exact["running, exact area"].get_color())
+    assert [ln.get_xdata()[0] for ln in ax.lines if ln.get_linestyle() == ":"] == [0.13]
+    below = ax.figure.axes[-1]
+    np.testing.assert_allclose(sorted(np.round(ln.get_ydata()[0], 9) for ln in below.lines
+                                      if len(ln.get_xdata()) == 4), [-2.0, 2.0])
+    assert "[10⁻³]" in below.get_ylabel()

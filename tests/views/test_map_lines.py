@@ -1,0 +1,119 @@
+"""What the basin maps draw over their colours: separatrices that a thin tongue of a basin can
+be seen through, band names past LABELLED_WELLS wells, a distance scale that spreads its
+values, and words that say what is drawn."""
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from atlas.views import maps, plotting  # noqa: E402
+from atlas.views.style import LABELLED_WELLS, MAP_SIZE, basin_colours  # noqa: E402
+
+
+def _tongue_scene(n=400, rows=(199, 202)):
+    """A map of well 0 with a tongue of well 1 three grid rows high across it, its two
+    separatrices along the tongue's edges."""
+    grid = np.linspace(0.0, 1.0, n)
+    k = np.zeros((n, n))
+    k[slice(*rows)] = 1.0
+    half = 0.5 / (n - 1)
+    edges = (grid[rows[0]] - half, grid[rows[1] - 1] + half)
+    return {"grid": (grid, grid), "image": (k, 0, 1, False),
+            "separatrices": [(grid, np.full(n, y)) for y in edges], "critical": None,
+            "cycle": None, "title": "a tongue"}, rows[1] - rows[0]
+
+
+def test_a_tongue_four_pixels_high_keeps_its_colour_between_its_outlines():
+    """A tongue about 4 pixels high in the saved PNG, bounded by its two separatrices: at
+    least half of its pixel rows show the tongue's own colour (the old red lines, 1.2 pt
+    each, left one row of it)."""
+    scene, tongue_rows = _tongue_scene()
+    drawn = []
+
+    def draw(ax, **scene):
+        drawn.append(ax)
+        return maps._draw_basin(ax, **scene)
+
+    png = io.BytesIO()
+    plotting._draw_figure(png, MAP_SIZE, draw, scene)
+    png.seek(0)
+    image = np.round(plt.imread(png)[..., :3] * 255)
+    tongue_pixels = tongue_rows * drawn[0].get_window_extent().height / 399
+    assert 3.5 < tongue_pixels < 6
+    column = image[:, image.shape[1] // 3]
+    colour = basin_colours([0, 1])[1]
+    target = np.array([int(colour[i:i + 2], 16) for i in (1, 3, 5)])
+    kept = np.all(np.abs(column - target) <= 12, axis=1).sum()
+    assert kept >= 0.5 * tongue_pixels
+
+
+def test_bands_are_named_past_sixteen_wells_and_not_before():
+    """20 horizontal bands (wells −10 … 9), ten grid rows each: each named "k = …" inside its
+    own band; with 12 wells, none named (the colours suffice)."""
+    for wells, named in ((20, True), (12, False)):
+        ks = np.arange(-10, wells - 10)
+        k = np.repeat(ks, 10)[:, None] * np.ones((1, 40))
+        theta, theta_dot = np.linspace(0, 1, 40), np.arange(k.shape[0], dtype=float)
+        ax = Figure(figsize=MAP_SIZE).add_subplot()
+        maps._draw_basin(ax, (theta, theta_dot), (k, int(ks[0]), int(ks[-1]), False), [],
+                         None, None, "bands")
+        texts = {t.get_text(): t.get_position() for t in ax.texts}
+        assert (len(ks) > LABELLED_WELLS) == named
+        if named:
+            for j in ks:
+                name = f"k = {j:+d}".replace("+0", "0").replace("-", "−")
+                row = texts[name][1]
+                assert np.all(k[int(round(row))] == j), name
+
+
+def _distance_scene(d_cert):
+    """The distance to the line θ̇ = 0.5 of a 200 × 200 grid of the unit square (exact:
+    |θ̇ − 0.5|), its boundary drawn."""
+    grid = np.linspace(0.0, 1.0, 200)
+    d = np.abs(grid[:, None] - 0.5) * np.ones((1, 200))
+    return {"grid": (grid, grid), "image": (d, d[d > 0].min(), d.max()),
+            "separatrices": [(grid, np.full(200, 0.5))], "d_cert": d_cert}
+
+
+def test_the_distance_scale_spreads_its_values():
+    """No tenth of the colour scale holds half the map (from d_cert to the largest distance
+    the top tenth held 87 %), and the colour bar says how its limits were chosen."""
+    scene = _distance_scene(1e-9)
+    ax = Figure(figsize=MAP_SIZE).add_subplot()
+    maps._draw_boundary_distance(ax, **scene)
+    norm = ax.images[0].norm
+    d = scene["image"][0]
+    position = np.clip(norm(d[d > 0]), 0, 0.9999)
+    shares = np.histogram(position, bins=10, range=(0, 1))[0] / position.size
+    assert shares.max() < 0.5
+    label = ax.figure.axes[-1].get_ylabel()
+    assert "percentile" in label and "rad-ish" not in label and "Euclidean" in label
+
+
+def test_the_distance_title_says_what_white_means():
+    """d_cert measured and met: white is closer than d_cert; not met: none is; not
+    measured: said so, never "closer than d_cert not measured"."""
+    titles = {}
+    for name, d_cert in (("met", 0.01), ("none", 1e-9), ("nan", float("nan"))):
+        ax = Figure(figsize=MAP_SIZE).add_subplot()
+        maps._draw_boundary_distance(ax, **_distance_scene(d_cert))
+        titles[name] = ax.get_title()
+    assert "white: closer than d_cert = 1.0e-02" in titles["met"]
+    assert "none closer than d_cert = 1.0e-09" in titles["none"]
+    assert "d_cert not measured" in titles["nan"] and "closer than" not in titles["nan"]
+
+
+def test_the_trap_time_map_says_running_orbits_are_certified_too():
+    """t_trap is the time a label was certified, trapped or running: the colour bar says so,
+    and white (no value) is no label, not 'never trapped'."""
+    grid = np.linspace(0.0, 1.0, 20)
+    t = np.outer(grid, grid) * 10
+    ax = Figure(figsize=MAP_SIZE).add_subplot()
+    maps._draw_trap_time(ax, (grid, grid), (t, 0.01, 10.0), [])
+    assert "running" in ax.figure.axes[-1].get_ylabel()
+    assert "no label" in ax.get_title() and "never" not in ax.get_title()
