@@ -147,6 +147,24 @@ def _fraction_scene(tree: xr.DataTree, dim: str = "alpha", max_curves: int = 7,
                      + _held(full, ds, dim)}
 
 
+def _broken(x, y, marks, onset=None):
+    """(x, y) with a NaN between consecutive points that a bifurcation where the basins jump
+    separates (the torque marks: the homoclinic torque, the saddle-node; or the ``onset``
+    bracket of the homoclinic torque), so that a line never joins the two sides of a jump
+    with a slope the exact values do not have. (Critical damping α = ω0 changes the rest
+    state's kind, not the basins: no break there.)"""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    cuts = [value for value, text in marks if text.startswith("τ")]
+    if onset is not None:
+        cuts.append(0.5 * (onset[0] + onset[1]))
+    gaps = [i for i in range(x.size - 1)
+            if any(min(x[i], x[i + 1]) < c < max(x[i], x[i + 1]) for c in cuts)]
+    if not gaps:
+        return x, y
+    at = np.array(gaps) + 1
+    return np.insert(x, at, np.nan), np.insert(y, at, np.nan)
+
+
 def _error_bars(ax, x, grid, bound, color):
     """The grid error bound as error bars about the grid counts, where it is below
     INFORMATIVE_BOUND, clipped to [0, 1]; returns whether any bar was drawn."""
@@ -226,12 +244,12 @@ def _draw_fractions(ax, x, curves, others, marks, xlabel: str, title: str, onset
     below, unit = _residual_axes(ax, [g - e for e, g, *_ in curves])
     bars = False
     for values in others:
-        ax.plot(x, values, "-", color=_OTHERS_COLOR, lw=0.6, zorder=1)
+        ax.plot(*_broken(x, values, marks, onset), "-", color=_OTHERS_COLOR, lw=0.6, zorder=1)
     if others:
         ax.plot([], [], "-", color=_OTHERS_COLOR, lw=0.6,
                 label=f"{len(others)} smaller basins\n(one thin line each)")
     for e, g, b, label, color in curves:
-        ax.plot(x, e, "-", color=color, label=label, zorder=3)
+        ax.plot(*_broken(x, e, marks, onset), "-", color=color, label=label, zorder=3)
         ax.plot(x, g, "o", ms=3.5, color=color, zorder=4)
         bars |= _error_bars(ax, x, g, b, color)
         below.plot(x, (g - e) / unit, "o-", ms=3, lw=0.6, color=color)
@@ -293,7 +311,7 @@ def _draw_stability(ax, x, exact, grid, bound, running, running_exact, running_b
                                  (running_exact, running,
                                   nothing if running_bound is None else running_bound,
                                   colours[1], "running")):
-        ax.plot(x, e, "-", color=color, label=f"{name}, exact area")
+        ax.plot(*_broken(x, e, marks, onset), "-", color=color, label=f"{name}, exact area")
         ax.plot(x, g, "o", ms=3.5, color=color, label=f"{name}, grid count")
         bars |= _error_bars(ax, x, g, b, color)
         below.plot(x, (g - e) / unit, "o-", ms=3, lw=0.6, color=color)

@@ -148,16 +148,24 @@ def _label_bands(ax, grid, image: np.ndarray, ks: list[int]) -> None:
     """Name each well's band "k = …" at the pixel deepest inside it (:func:`_run_depth`;
     of equally deep pixels, the one nearest the middle column): the basin map's key once its
     colours alone are too many to tell apart. Bands nowhere _LABEL_DEPTH pixels deep stay
-    unnamed (the colour bar names them)."""
+    unnamed (the colour bar names them). The rows near θ̇ = 0, where the rest states and
+    saddles are marked, are avoided wherever the band is deep enough elsewhere."""
     import matplotlib.patheffects as pe
 
     th, v = grid
     middle = 1.0 - np.abs(np.linspace(-1.0, 1.0, image.shape[1]))  # 1 in the middle, 0 at edges
+    rows = np.linspace(v[0], v[-1], image.shape[0])
+    markers = np.abs(rows) <= max(0.06 * abs(v[-1] - v[0]),
+                                  3.0 * abs(v[-1] - v[0]) / max(image.shape[0] - 1, 1))
     for k in ks:
         depth = _run_depth(image == k)
         if depth.max() < _LABEL_DEPTH:
             continue
-        r, c = np.unravel_index((depth + 0.5 * middle).argmax(), depth.shape)
+        score = depth + 0.5 * middle
+        away = np.where(markers[:, None], -np.inf, score)
+        if depth[~markers].max(initial=0) >= _LABEL_DEPTH:
+            score = away
+        r, c = np.unravel_index(score.argmax(), depth.shape)
         ax.text(th[0] + (th[-1] - th[0]) * c / max(image.shape[1] - 1, 1),
                 v[0] + (v[-1] - v[0]) * r / max(image.shape[0] - 1, 1), f"k = {_well_name(k)}",
                 fontsize=6, ha="center", va="center", zorder=6,

@@ -187,3 +187,19 @@ def test_basin_stability_marks_the_homoclinic_torque_and_keeps_bars_in_range():
     np.testing.assert_allclose(sorted(np.round(ln.get_ydata()[0], 9) for ln in below.lines
                                       if len(ln.get_xdata()) == 4), [-2.0, 2.0])
     assert "[10⁻³]" in below.get_ylabel()
+
+
+def test_exact_lines_break_at_a_bifurcation():
+    """A line of exact values never joins two points that a bifurcation separates (a mark's
+    value, or the bracket of the homoclinic torque): the jump stays a jump."""
+    from atlas.views.curves import _broken
+
+    x = np.array([0.06, 0.11, 0.16, 0.21, 1.1])
+    y = np.array([1.0, 1.0, 0.48, 0.40, 0.0])
+    bx, by = _broken(x, y, [(1.0, "τ = ω0²: saddle-node"), (0.5, "α = ω0: critical damping")],
+                     onset=(0.11, 0.16))
+    gaps = np.flatnonzero(np.isnan(bx))
+    assert np.isnan(by[gaps]).all() and bx.size == x.size + 2
+    assert [bx[g - 1] for g in gaps] == [0.11, 0.21] and [bx[g + 1] for g in gaps] == [0.16, 1.1]
+    same = _broken(x, y, [], None)
+    assert np.array_equal(same[0], x) and np.array_equal(same[1], y)

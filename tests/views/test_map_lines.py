@@ -117,3 +117,20 @@ def test_the_trap_time_map_says_running_orbits_are_certified_too():
     maps._draw_trap_time(ax, (grid, grid), (t, 0.01, 10.0), [])
     assert "running" in ax.figure.axes[-1].get_ylabel()
     assert "no label" in ax.get_title() and "never" not in ax.get_title()
+
+
+def test_band_names_keep_off_the_rest_states_and_saddles():
+    """The markers of the rest states and saddles lie on θ̇ = 0: a band that is deep enough
+    elsewhere is named away from that row (here the well-0 band spans θ̇ ∈ [−15, 15], its
+    deepest pixel on θ̇ = 0), and still inside its own band."""
+    ks = np.arange(-10, 10)
+    widths = np.where(ks == 0, 31, 6)
+    k = np.repeat(ks, widths)[:, None] * np.ones((1, 40))
+    rows = k.shape[0]
+    zero = int(np.flatnonzero(k[:, 0] == 0).mean())
+    theta, theta_dot = np.linspace(0, 1, 40), np.arange(rows, dtype=float) - zero
+    ax = Figure(figsize=MAP_SIZE).add_subplot()
+    maps._draw_basin(ax, (theta, theta_dot), (k, -10, 9, False), [], None, None, "bands")
+    v = {t.get_text(): t.get_position()[1] for t in ax.texts}["k = 0"]
+    assert abs(v) > 0.06 * (theta_dot[-1] - theta_dot[0])
+    assert np.all(k[int(round(v + zero))] == 0)
