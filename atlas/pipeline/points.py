@@ -17,6 +17,7 @@ import xarray as xr
 from atlas.boundaries import exact
 from atlas.boundaries.certificate import certifier_for
 from atlas.errors import AtlasError
+from atlas.kernels.threads import concurrent_points
 from atlas.layout import Layout, node_name
 from atlas.physics import running
 from atlas.physics.pendulum import Pendulum, critical_points
@@ -80,7 +81,7 @@ def exact_boundaries(cfg: Config, pendulums: list[Pendulum], cycles: list,
         p, cycle = point
         return exact.exact_boundaries(p, window(cfg), cycle=cycle)
 
-    with ThreadPoolExecutor(min(2, max(1, len(pendulums)))) as pool:
+    with ThreadPoolExecutor(concurrent_points(len(pendulums))) as pool:
         return list(track(pool.map(one, zip(pendulums, cycles)), len(pendulums),
                           "exact boundaries"))
 
@@ -103,7 +104,7 @@ def trace_separatrices(cfg: Config, pendulums: list[Pendulum], boundaries: list,
         p, b, barrier = point
         return trace(p, *window(cfg), exact=b, barrier=barrier, **settings)
 
-    with ThreadPoolExecutor(min(2, max(1, len(pendulums)))) as pool:
+    with ThreadPoolExecutor(concurrent_points(len(pendulums))) as pool:
         return list(track(pool.map(one, zip(pendulums, boundaries, barriers)),
                           len(pendulums), "separatrices"))
 

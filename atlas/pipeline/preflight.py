@@ -186,8 +186,8 @@ def ask(yes: bool = False, quiet: bool = False, stdin=None) -> Callable[[Estimat
     from atlas.pipeline.progress import say
 
     def confirm(est: Estimate) -> bool:
-        inp = stdin or sys.stdin
-        if yes or not inp.isatty():
+        inp = stdin if stdin is not None else sys.stdin
+        if yes or not _is_terminal(inp):
             if not quiet:
                 say(est.line() + ("" if yes else
                                   "; stdin is not a terminal: starting without asking"))
@@ -195,8 +195,19 @@ def ask(yes: bool = False, quiet: bool = False, stdin=None) -> Callable[[Estimat
         print(f"{est.line()}. Start? [y/N] ", end="", file=sys.stderr, flush=True)
         try:
             answer = inp.readline()
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
+            if type(exc) is not KeyboardInterrupt:  # SIGTERM (atlas.cli): stopped, not "no"
+                raise
             answer = ""
         return answer.strip().lower() in ("y", "yes")
 
     return confirm
+
+
+def _is_terminal(stream) -> bool:
+    """Whether ``stream`` is an open terminal (stdin may be None, or closed, in a daemon or
+    a job started with ``<&-``: not a terminal)."""
+    try:
+        return bool(stream is not None and not stream.closed and stream.isatty())
+    except (AttributeError, ValueError, OSError):
+        return False

@@ -151,7 +151,9 @@ def _local(points, settings: StudySettings, workers: int | None):
     refuses) or, started afresh, import the caller's ``__main__`` again (a script without a
     ``__main__`` guard, a notebook). Each point is computed alone, so the results are the same
     whatever the number of threads."""
-    n = min(workers or 1, len(points) // _POINTS_PER_PROCESS)
+    from atlas.kernels.threads import concurrent_points
+
+    n = concurrent_points(len(points) // _POINTS_PER_PROCESS, most=workers or 1)
     if n < 2:
         yield from (compute_point(*point, settings) for point in points)
         return

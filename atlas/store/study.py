@@ -138,20 +138,29 @@ def write_study(ds: xr.Dataset, path: str | Path) -> None:
     path = Path(path)
     check_study(ds, path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    old = path.with_name(f".{path.name}.{os.getpid()}.old")
     try:
         if _is_zarr(path):
             ds.to_zarr(tmp, mode="w", consolidated=False)
-            if path.exists():
-                shutil.rmtree(path)
+            if path.exists() or path.is_symlink():  # a folder cannot be replaced in one step:
+                os.replace(path, old)              # the old study moves aside, then goes
         else:
             ds.to_netcdf(tmp, engine="h5netcdf")
         os.replace(tmp, path)
     except BaseException:
-        if tmp.is_dir():
-            shutil.rmtree(tmp, ignore_errors=True)
-        else:
-            tmp.unlink(missing_ok=True)
+        if old.exists() and not path.exists():  # put the old study back where it was
+            os.replace(old, path)
+        _remove(tmp)
         raise
+    _remove(old)
+
+
+def _remove(path: Path) -> None:
+    """Remove ``path`` (a file or a folder) if it is there."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
 
 
 def _attrs(path: Path) -> dict:
@@ -196,6 +205,14 @@ def open_study(path: str | Path) -> xr.Dataset:
     return ds
 
 
+def _numbers(value) -> np.ndarray:
+    """``value`` (an attribute) as a flat float array; empty if it holds no numbers."""
+    try:
+        return np.asarray(value, float).ravel()
+    except (TypeError, ValueError):
+        return np.zeros(0)
+
+
 def check_study(ds: xr.Dataset, path) -> None:
     """Refuse (one InputFileError line naming ``path``) a study that breaks the schema: its
     schema and format version, the required variables with their dims and float64 (int8 for
@@ -218,12 +235,11 @@ def check_study(ds: xr.Dataset, path) -> None:
     except ValueError:
         refuse("the attribute config is not a JSON object")
     for name in ("window_theta", "window_theta_dot"):
-        edges = np.asarray(attrs.get(name, []), float).ravel()
+        edges = _numbers(attrs.get(name, []))
         if edges.size != 2 or not np.isfinite(edges).all() or not edges[0] < edges[1]:
             refuse(f"the attribute {name} is not a window (min, max)")
-    if "gaussian_stability" in ds and not all(
-            np.isfinite(np.asarray(attrs.get(n, np.nan), float)).all()
-            for n in ("sigma_theta", "sigma_theta_dot")):
+    sigmas = [_numbers(attrs.get(n, np.nan)) for n in ("sigma_theta", "sigma_theta_dot")]
+    if "gaussian_stability" in ds and not all(s.size and np.isfinite(s).all() for s in sigmas):
         refuse("gaussian_stability without the attributes sigma_theta, sigma_theta_dot")
     for name in PARAMETERS:
         if name not in ds.coords:

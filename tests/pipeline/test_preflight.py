@@ -116,6 +116,36 @@ def test_no_question_with_yes_or_off_a_terminal(capsys):
     assert capsys.readouterr().err == ""
 
 
+def test_a_closed_or_missing_stdin_is_not_a_terminal(monkeypatch, capsys):
+    """A job started with stdin closed (``<&-``: sys.stdin is None) or a closed stream starts
+    without asking, as off a terminal, and says so: no traceback."""
+    monkeypatch.setattr("sys.stdin", None)
+    assert preflight.ask()(_estimate())
+    closed = _Terminal("y\n")
+    closed.close()
+    assert preflight.ask(stdin=closed)(_estimate())
+    assert capsys.readouterr().err.count("stdin is not a terminal") == 2
+
+
+def test_sigterm_at_the_question_stops_the_run_not_declines_it():
+    """SIGTERM while asking (atlas.cli raises its Terminated, a KeyboardInterrupt) is passed
+    on, so the run ends with 143, not as a declined run; Ctrl-C answers no."""
+    from atlas.cli import Terminated
+
+    for raised, passed_on in ((Terminated, True), (KeyboardInterrupt, False)):
+        typing = _Terminal()
+
+        def interrupted(exc=raised):
+            raise exc()
+
+        typing.readline = interrupted
+        if passed_on:
+            with pytest.raises(raised):
+                preflight.ask(stdin=typing)(_estimate())
+        else:
+            assert preflight.ask(stdin=typing)(_estimate()) is False
+
+
 def test_a_run_declined_writes_nothing(tmp_path, monkeypatch, capsys):
     cfg = _small(tmp_path)
     monkeypatch.setattr(preflight, "CONFIRM_BYTES", 1)

@@ -97,6 +97,7 @@ def test_zarr_study_reads_back_equal(study, tmp_path):
     (lambda ds: ds.assign(basin_stability=ds["basin_stability"] * 2), "summing to 1"),
     (lambda ds: ds.assign_attrs(config="[1, 2"), "config"),
     (lambda ds: ds.assign_attrs(window_theta=np.array([1.0, 0.0])), "window_theta"),
+    (lambda ds: ds.assign_attrs(window_theta_dot="minus ten to ten"), "window_theta_dot"),
 ])
 def test_a_damaged_study_is_refused(study, tmp_path, capsys, change, message):
     with xr.open_dataset(study, engine="h5netcdf", mask_and_scale=False) as f:
@@ -151,3 +152,29 @@ def test_gaussian_and_tipping_are_stored_when_asked(tmp_path, capsys):
     assert np.all(np.nan_to_num(tip.sel(target=-32768).values) == 0.0)
     assert main(["info", str(out)]) == 0
     assert "tipping probabilities: 2 steps" in capsys.readouterr().out
+
+
+def test_a_zarr_study_written_over_keeps_one_whole_study(study, tmp_path, monkeypatch):
+    """Writing a study over a Zarr one moves the old one aside first: if the rename of the new
+    one fails, the old study is back in place, whole, and no temporary is left."""
+    import os
+
+    from atlas.store.study import write_study
+
+    first = open_study(study)
+    path = tmp_path / "s.zarr"
+    write_study(first, path)
+    real = os.replace
+
+    def failing(src, dst):
+        if str(src).endswith(".tmp"):
+            raise OSError("no space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing)
+    with pytest.raises(OSError):
+        write_study(first, path)
+    monkeypatch.setattr(os, "replace", real)
+    np.testing.assert_array_equal(open_study(path)["basin_stability"].values,
+                                  first["basin_stability"].values)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]
