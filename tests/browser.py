@@ -41,6 +41,21 @@ def playwright_missing() -> str | None:
     return None
 
 
+def skip_without_browser():
+    """The pytest mark of the tests that need the browser: skipped, with the reason, where
+    there is no Chromium-family browser or no Playwright, except where $ATLAS_REQUIRE_BROWSER
+    is set (CI, .ci/run, installs a browser and sets it: there a missing one fails)."""
+    import pytest
+
+    missing = playwright_missing()
+    return pytest.mark.skipif(
+        (find_browser() is None or missing is not None)
+        and not os.environ.get("ATLAS_REQUIRE_BROWSER"),
+        reason=missing or "no Chromium-family browser found (install Debian's chromium: "
+        "apt-get install chromium, or set ATLAS_BROWSER); the page itself is still tested "
+        "without one")
+
+
 @dataclass
 class WatchedPage:
     """A Playwright page, with the dialogs it opened and the errors it reported since the last

@@ -122,3 +122,15 @@ def small_atlas(directory: Path, name: str, pendulum: dict, *, theta=("-5pi/6", 
         "separatrices": {"enabled": separatrices},
         "output": str(Path(directory) / f"{name}.h5")})
     return atlas.run(cfg, quiet=True)
+
+
+#: A small stability study's config (``atlas stability``): α = 0.2, ω0 = 1, a 2π × 6 window;
+#: ``{torque}`` (a number, a list or a range) and ``{output}`` filled by the test.
+STUDY_BODY = """\
+name: study
+pendulum: {{alpha: 0.2, omega0: 1.0, torque: {torque}}}
+grid:
+  theta0: {{start: -pi, stop: pi, num: 2}}
+  theta_dot0: {{start: -3, stop: 3, num: 2}}
+output: {output}
+"""

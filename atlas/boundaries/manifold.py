@@ -78,7 +78,8 @@ class _DenseOutput:
 
     @classmethod
     def from_pieces(cls, pieces) -> _DenseOutput:
-        """The dense output of :class:`_Piece` s, each starting where the one before ends."""
+        """The dense output of :class:`atlas.kernels.dop853.Solution` s, each starting where
+        the one before ends."""
         return cls(np.concatenate([pieces[0].t] + [q.t[1:] for q in pieces[1:]]),
                    *(np.concatenate([getattr(q, name) for q in pieces])
                      for name in ("t_old", "h", "y_old", "F")))
@@ -121,19 +122,6 @@ def to_left_branch(n, right, theta, theta_dot):
             np.where(right, -theta_dot, theta_dot))
 
 
-@dataclass(frozen=True)
-class _Piece:
-    """One DOP853 integration (:func:`atlas.kernels.dop853.stable_manifold`): the step ends
-    ``t`` [s] and states ``y`` (3, steps + 1) there, and each step's dense output."""
-
-    t: np.ndarray
-    y: np.ndarray
-    t_old: np.ndarray
-    h: np.ndarray
-    y_old: np.ndarray
-    F: np.ndarray
-
-
 class StableManifold:
     """The left branch L of the saddle (π, 0) of ``pendulum``, integrated until θ̇ > ``speed``
     [rad s⁻¹]; beyond that point L(u) > speed for ever (its energy exceeds ½speed² + 2ω0² and
@@ -158,34 +146,30 @@ class StableManifold:
         self._pieces = [self._integrate(0.0, [*self.start, q0], math.pi)]
         self._finish()
 
-    def _integrate(self, tau0: float, y0, theta_min: float) -> _Piece:
+    def _integrate(self, tau0: float, y0, theta_min: float):
         """DOP853 from state ``y0`` = (θ, θ̇, Q) at τ0 until θ̇ > ``speed`` and θ < theta_min
-        (compiled: :func:`atlas.kernels.dop853.stable_manifold`)."""
-        from atlas.kernels.dop853 import EVENT, FULL, stable_manifold
+        (compiled: :func:`atlas.kernels.dop853.stable_manifold`, through
+        :func:`atlas.kernels.dop853.solve`): a :class:`atlas.kernels.dop853.Solution`."""
+        from atlas.kernels.dop853 import ENERGY, EVENT, REVERSED, solve
 
         p = self.pendulum
         e_stop = 0.5 * self.speed**2 + p.saddle_energy
         t_cap = tau0 + 1e4 * (1.0 / p.alpha + 1.0 / p.omega0)
-        capacity = _STEPS
-        while True:
-            status, n, t, y, t_old, h, y_old, F = stable_manifold(
-                np.asarray(y0, float), float(tau0), t_cap, self.rtol, self.rtol,
-                float(p.alpha), float(p.omega0), e_stop, float(theta_min), capacity)
-            if status != FULL:
-                break
-            capacity *= 4
-        if status != EVENT:
+        piece = solve(REVERSED, [float(p.alpha), float(p.omega0), 0.0, 0.0], ENERGY,
+                      [e_stop, float(theta_min)], np.asarray(y0, float), t_cap, self.rtol,
+                      [self.rtol] * 3, 3, t0=float(tau0), capacity=_STEPS)
+        if piece.status != EVENT:
+            why = "step too small" if piece.status < 0 else "ran out of time"
             raise RuntimeError(f"the stable manifold did not reach speed {self.speed:g} "
-                               f"(DOP853 {'step too small' if status < 0 else 'ran out of time'})")
-        return _Piece(t[:n + 1].copy(), y[:n + 1].T.copy(), t_old[:n].copy(), h[:n].copy(),
-                      y_old[:n].copy(), F[:n].copy())
+                               f"(DOP853 {why})")
+        return piece
 
     def _finish(self) -> None:
         """Dense output, end point and samples of the integrated pieces."""
         first, rest = self._pieces[0], self._pieces[1:]
         self._sol = _DenseOutput.from_pieces(self._pieces)
         t = self._sol.t  # the step ends of every piece
-        y = np.concatenate([first.y] + [piece.y[:, 1:] for piece in rest], axis=1)
+        y = np.concatenate([first.y.T] + [piece.y[1:].T for piece in rest], axis=1)
         self.tau_end = float(t[-1])
         self.theta_end = float(y[0, -1])  # L(u) > speed for u < theta_end
         # samples at arc length ≤ SAMPLE_SPACING, from the saddle outward
@@ -205,7 +189,7 @@ class StableManifold:
             return self
         longer = copy.copy(self)
         last = self._pieces[-1]
-        longer._pieces = self._pieces + [self._integrate(self.tau_end, last.y[:, -1],
+        longer._pieces = self._pieces + [self._integrate(self.tau_end, last.y[-1],
                                                          theta_min)]
         longer._finish()
         return longer

@@ -11,7 +11,7 @@ from scipy.integrate import solve_ivp
 from atlas.boundaries import manifold
 from atlas.boundaries.manifold import StableManifold
 from atlas.kernels import dop853
-from atlas.kernels.dop853 import EVENT, FULL, TABLEAU, Tableau, stable_manifold
+from atlas.kernels.dop853 import EVENT, FULL, TABLEAU, Solution, Tableau, stable_manifold
 from atlas.physics.pendulum import START_DISTANCE, Pendulum
 
 RTOL = 1e-13
@@ -59,9 +59,9 @@ def test_same_method_as_scipy_same_curve(alpha, omega0, speed):
     # refined by Newton's method, through StableManifold's foot points)
     assert abs(n - (ref.t.size - 1)) <= max(3, n // 20)
     m = StableManifold(p, speed)
-    m._pieces[0] = manifold._Piece(ref.t, ref.y, *(np.array([getattr(q, a) for q in
-                                                             ref.sol.interpolants])
-                                                   for a in ("t_old", "h", "y_old", "F")))
+    m._pieces[0] = Solution(EVENT, ref.t, ref.y.T, *(np.array([getattr(q, a) for q in
+                                                              ref.sol.interpolants])
+                                                    for a in ("t_old", "h", "y_old", "F")))
     m._finish()
     inside = y[: n + 1, 1] <= speed
     _, dist = m.foot_points(y[: n + 1][inside, 0], y[: n + 1][inside, 1])

@@ -13,18 +13,11 @@ import xarray as xr
 from atlas.cli import main
 from atlas.errors import InputFileError
 from atlas.store.study import STUDY_SCHEMA, open_study
+from tests.helpers import STUDY_BODY as BODY
 from tests.helpers import write_config
 
 pytestmark = pytest.mark.slow  # runs the CLI in-process, computes a study
 
-BODY = """\
-name: study
-pendulum: {{alpha: 0.2, omega0: 1.0, torque: {torque}}}
-grid:
-  theta0: {{start: -pi, stop: pi, num: 2}}
-  theta_dot0: {{start: -3, stop: 3, num: 2}}
-output: {output}
-"""
 
 
 @pytest.fixture(scope="module")

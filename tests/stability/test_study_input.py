@@ -9,16 +9,8 @@ import numpy as np
 import pytest
 
 from atlas.cli import main
+from tests.helpers import STUDY_BODY as BODY
 from tests.helpers import write_config
-
-BODY = """\
-name: study
-pendulum: {{alpha: 0.2, omega0: 1.0, torque: {torque}}}
-grid:
-  theta0: {{start: -pi, stop: pi, num: 2}}
-  theta_dot0: {{start: -3, stop: 3, num: 2}}
-output: {output}
-"""
 
 
 @pytest.mark.parametrize("torque, message", [

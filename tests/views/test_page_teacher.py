@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 
 import numpy as np
@@ -26,16 +25,17 @@ import atlas
 from atlas.commands.orbit_integrate import integrate, window_period, wrapped
 from atlas.status import RUNNING
 from atlas.views.page import write_view
-from tests.browser import find_browser, headless_page, playwright_missing
+from tests.browser import (
+    find_browser,
+    headless_page,
+    playwright_missing,
+    skip_without_browser,
+)
 from tests.helpers import SWING, small_atlas
 
 BROWSER = find_browser()
 NO_PLAYWRIGHT = playwright_missing()
-needs_browser = pytest.mark.skipif(
-    (BROWSER is None or NO_PLAYWRIGHT is not None)
-    and not os.environ.get("ATLAS_REQUIRE_BROWSER"),
-    reason=NO_PLAYWRIGHT or "no Chromium-family browser found (apt-get install chromium, "
-    "or set ATLAS_BROWSER)")
+needs_browser = skip_without_browser()
 TWO_PI = 2 * math.pi
 
 

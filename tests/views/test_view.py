@@ -22,7 +22,12 @@ import pytest
 import atlas
 from atlas.cli import main
 from atlas.views.page import pack_distance, safe_json, unpack_distance, write_view
-from tests.browser import find_browser, headless_page, playwright_missing
+from tests.browser import (
+    find_browser,
+    headless_page,
+    playwright_missing,
+    skip_without_browser,
+)
 from tests.helpers import SWING
 
 pytestmark = pytest.mark.slow  # two atlas runs for the page, a browser
@@ -31,13 +36,7 @@ REPO = Path(__file__).resolve().parents[2]
 XSS = "</script><script>alert(1)</script>"
 BROWSER = find_browser()
 NO_PLAYWRIGHT = playwright_missing()
-# CI (.ci/run) installs a browser and sets ATLAS_REQUIRE_BROWSER: there a missing one fails.
-needs_browser = pytest.mark.skipif(
-    (BROWSER is None or NO_PLAYWRIGHT is not None)
-    and not os.environ.get("ATLAS_REQUIRE_BROWSER"),
-    reason=NO_PLAYWRIGHT or "no Chromium-family browser found (install Debian's chromium: "
-    "apt-get install chromium, or set ATLAS_BROWSER); the page itself is still tested "
-    "without one")
+needs_browser = skip_without_browser()
 
 
 def _run(tmp, name, alpha=0.1, num=(160, 96), sep=True, t_max=200.0, method="rk4"):
