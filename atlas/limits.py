@@ -59,6 +59,26 @@ MIN_MAX_SPACING = 1e-4
 MIN_WINDOW_TOLS = 1000
 
 
+#: Narrowest window side [rad or rad s⁻¹] of a stability study: its fractions are exact areas
+#: of the reference curves, good to their accuracy (≈ 1e-8 with torque: the polylines' chord
+#: error), so a fraction's error is about that accuracy over the side: ≤ 1e-4 from 1e-4 on.
+#: (A grid run's zoom goes further: its labels are certified point by point.)
+MIN_STUDY_SIDE = 1e-4
+
+
+def check_study_window(theta_window, theta_dot_window) -> None:
+    """Raise ValueError, in one line naming the axis, if a side of a stability study's window
+    ([rad], [rad s⁻¹]) is narrower than :data:`MIN_STUDY_SIDE`."""
+    for axis, (lo, hi) in (("theta0", theta_window), ("theta_dot0", theta_dot_window)):
+        side = float(hi) - float(lo)
+        if side < MIN_STUDY_SIDE:
+            raise ValueError(
+                f"{axis}: a study's window {side:.3g} wide is narrower than "
+                f"{MIN_STUDY_SIDE:g}: its exact fractions would carry the boundary curves' "
+                "own error (about 1e-8) relative to the window; widen it (a grid run, "
+                "`atlas run`, zooms further)")
+
+
 def _round_up(x: float) -> float:
     """``x`` rounded up to two significant digits (a bound that still holds when printed)."""
     unit = 10.0 ** (math.floor(math.log10(x)) - 1)

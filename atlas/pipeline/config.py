@@ -367,7 +367,7 @@ class Config(_Strict):
         from atlas.labels.labelling import check_integration, check_torque_reach
         from atlas.labels.methods import lookup as lookup_method
         from atlas.labels.trap import CHECK_EVERY
-        from atlas.limits import check_reach, check_separatrix_settings
+        from atlas.limits import check_reach, check_separatrix_settings, check_study_window
 
         dt, t_max = self.integrator.dt, self.integrator.t_max
         try:
@@ -380,6 +380,12 @@ class Config(_Strict):
                              "pendulum without torque (the running certificate is established "
                              "for 'rk4' only); use method: rk4 with a torque")
         if (info.context or {}).get("study"):
+            g = self.grid
+            try:
+                check_study_window((g.theta0.start, g.theta0.stop),
+                                   (g.theta_dot0.start, g.theta_dot0.stop))
+            except ValueError as exc:
+                raise ValueError(f"grid.{exc}") from None
             return self
         g = self.grid
         theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))

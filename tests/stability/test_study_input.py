@@ -72,3 +72,18 @@ def test_ranges_work_in_grid_configs_too(tmp_path):
     values = np.array(atlas.load_config(cfg).pendulum.torques)
     assert values.size == 4 and values[0] == 0.1 and values[-1] == 0.4
     assert np.allclose(np.diff(values), 0.1, rtol=1e-14)
+
+
+def test_a_window_too_narrow_for_exact_fractions_is_refused(tmp_path, capsys):
+    """A study's fractions are exact areas of curves good to about 1e-8: a window 1e-11 wide
+    is refused in one line naming the axis (exit 2, nothing written); 1e-3 wide is computed."""
+    out = tmp_path / "n.h5"
+    cfg = write_config(tmp_path / "n.yaml", BODY.format(torque="[0.0, 0.3]", output=out)
+                       .replace("{start: -pi, stop: pi, num: 2}",
+                                "{start: 3.14159265358979, stop: 3.14159265358980, num: 2}"))
+    assert main(["stability", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "grid.theta0" in err and "narrower than 0.0001" in err
+    assert not out.exists()
+    cfg.write_text(cfg.read_text().replace("3.14159265358980", "3.14259265358979"))
+    assert main(["stability", str(cfg)]) == 0 and out.exists()
