@@ -6,8 +6,8 @@ basin), its distance to the nearest boundary, the saddles of the boundaries near
 area of each basin in the window, and the boundaries' own error. :func:`exact_boundaries`
 picks the implementation: :class:`UntiltedExact` (τ = 0: the stable manifolds of
 :mod:`atlas.boundaries.manifold`, one DOP853 curve and its copies, areas by quadrature),
-:class:`TiltedExact` (0 < |τ| < ω0²: :mod:`atlas.boundaries.tilted`, polylines, areas by
-polygon clipping) and :class:`UnboundedExact` (|τ| > ω0²: no rest state, no boundary, the
+:class:`TiltedExact` (0 < |τ| < ω0²: :mod:`atlas.boundaries.tilted`, polylines for sides
+and distances, areas and nearest points exact for the DOP853 dense output) and :class:`UnboundedExact` (|τ| > ω0²: no rest state, no boundary, the
 running basin is the whole plane). Accuracy: distances and sides are exact for the
 reference curves, whose error is ``reference_error`` (the change from DOP853 rtol 1e-12 to
 1e-13, plus the polylines' chord error with torque). After Attractors.jl's small mapper
@@ -74,11 +74,12 @@ class ExactBoundaries(Protocol):
         """(lowest, highest) saddle n of the boundaries within ``radius`` [rad-ish] of each
         point, a superset (flattened; (0, 0) where none)."""
 
-    def nearest_point(self, theta, theta_dot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(distance [rad-ish], θ [rad], θ̇ [rad s⁻¹]) of the nearest point of the nearest
-        basin boundary to each point (the foot of :meth:`distance`); (inf, nan, nan) if
-        none. From a rest state: its minimal fatal shock (Halekotte & Feudel, Sci. Rep. 10,
-        11783, 2020)."""
+    def nearest_point(self, theta, theta_dot) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                       np.ndarray]:
+        """(distance [rad-ish], θ [rad], θ̇ [rad s⁻¹], the distance's error [rad-ish]) of the
+        nearest point of the nearest basin boundary to each point (the foot of
+        :meth:`distance`); (inf, nan, nan, nan) if none. From a rest state: its minimal
+        fatal shock (Halekotte & Feudel, Sci. Rep. 10, 11783, 2020)."""
 
 
 def exact_boundaries(pendulum: Pendulum, window: Box, *, cycle=FIND_CYCLE) -> ExactBoundaries:
@@ -198,7 +199,7 @@ class UntiltedExact:
             best = np.where(better, np.reshape(dist, theta.shape), best)
             foot_theta = np.where(better, fx, foot_theta)
             foot_theta_dot = np.where(better, -fv if right else fv, foot_theta_dot)
-        return best, foot_theta, foot_theta_dot
+        return best, foot_theta, foot_theta_dot, np.full(theta.shape, self.reference_error)
 
 
 def _reference_error(fine: StableManifold, coarse: StableManifold) -> float:
@@ -234,55 +235,31 @@ class TiltedExact:
         else:
             self.lower_well = self.upper_well = 0 if pendulum.torque > 0 else 1
         self.areas = self.tilted.areas()
-        self.reference_error = self.tilted.reference_error + self.tilted.chord_error
         self._vertices = {}  # the polylines' vertices binned, built on first use
 
     def __getstate__(self):
         return {**self.__dict__, "_vertices": {}}
 
+    @property
+    def reference_error(self) -> float:
+        """The polylines' error: their change from rtol 1e-12 plus their chord error (made
+        on first use: the areas and nearest points are exact for the dense output)."""
+        return self.tilted.reference_error + self.tilted.chord_error
+
     def side(self, theta, theta_dot):
         return self.tilted.side(theta, theta_dot)
 
     def nearest_point(self, theta, theta_dot):
-        """The nearest point of the polylines of every translate of the boundary, exactly (for
-        the polylines; error ``reference_error``): the nearer of the two saddles around the
-        point bounds the distance (a saddle is on its boundary); then every segment of any
-        translate that may come nearer than that (those with an end within the bound plus the
-        longest segment) is measured."""
-        from atlas.boundaries.segments import segment_distance
-
+        """The nearest point of every translate of the boundary, exact for the dense output of
+        the branches (:meth:`atlas.boundaries.tilted.TiltedBoundaries.nearest_point`; its
+        error the change from rtol 1e-12), one point at a time."""
         theta, theta_dot = np.broadcast_arrays(np.asarray(theta, float),
                                                np.asarray(theta_dot, float))
-        curves = self.tilted.curves(clip=False)
-        j0 = curves[0][0]
-        branches = [(t, v) for j, _, t, v in curves if j == j0]
-        ax, ay = (np.concatenate([c[:-1] for c in part]) for part in zip(*branches))
-        bx, by = (np.concatenate([c[1:] for c in part]) for part in zip(*branches))
-        longest = float(np.hypot(bx - ax, by - ay).max())
-        turn = 2.0 * math.pi
-        saddle = self.tilted.saddle_theta(j0)
-        out = [np.full(theta.shape, np.inf), np.full(theta.shape, np.nan),
-               np.full(theta.shape, np.nan)]
+        out = [np.empty(theta.shape) for _ in range(4)]
         for i in np.ndindex(theta.shape):
-            p, q = float(theta[i]), float(theta_dot[i])
-            offset = math.remainder(p - saddle, turn)  # from the nearest saddle's θ
-            reach = math.hypot(min(abs(offset), turn - abs(offset)), q) + longest
-            near = np.flatnonzero(np.abs(ay - q) <= reach)
-            m = math.ceil(reach / turn) + 1
-            shift = np.round((p - ax[near]) / turn)[None, :] + np.arange(-m, m + 1)[:, None]
-            keep = np.abs(p - turn * shift - ax[near]) <= reach
-            near, shift = np.broadcast_to(near, shift.shape)[keep], shift[keep]
-            x = p - turn * shift  # the point in the frame of translate j0
-            d = segment_distance(x, q, ax[near], ay[near], bx[near], by[near])
-            best = int(np.argmin(d))
-            e = near[best]
-            dx, dy = bx[e] - ax[e], by[e] - ay[e]
-            s = ((x[best] - ax[e]) * dx + (q - ay[e]) * dy) / max(dx * dx + dy * dy,
-                                                                  np.finfo(float).tiny)
-            s = min(max(s, 0.0), 1.0)
-            out[0][i] = d[best]
-            out[1][i] = ax[e] + s * dx + turn * shift[best]
-            out[2][i] = ay[e] + s * dy
+            for part, value in zip(out, self.tilted.nearest_point(float(theta[i]),
+                                                                 float(theta_dot[i]))):
+                part[i] = value
         return tuple(out)
 
     def distance(self, theta, theta_dot):
@@ -349,7 +326,8 @@ class UnboundedExact:
 
     def nearest_point(self, theta, theta_dot):
         shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
-        return np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, np.nan)
+        return (np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, np.nan),
+                np.full(shape, np.nan))
 
     def saddles_within(self, theta, theta_dot, radius: float):
         size = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))

@@ -20,6 +20,7 @@ Miranker, Q. Appl. Math. 36 (1978) 167. Derivation: docs/design/tilted-boundarie
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 
@@ -48,7 +49,7 @@ def _branch(p: Pendulum, sign: int, rtol: float, bottom: float, top: float):
     left (``sign`` −1, L) or right (+1, R), in reversed time from START_DISTANCE along the
     stable eigenvector, until θ̇ leaves (bottom, top) (compiled:
     :func:`atlas.kernels.dop853.integrate`, scipy's method step for step). Returns (dense
-    output of (θ, θ̇), reversed-time steps, 'top' or 'bottom')."""
+    output of (θ, θ̇), the :class:`atlas.kernels.dop853.Solution`, 'top' or 'bottom')."""
     from atlas.kernels.dop853 import BAND, EVENT, REVERSED, solve
 
     s = p.saddle_angle
@@ -61,7 +62,20 @@ def _branch(p: Pendulum, sign: int, rtol: float, bottom: float, top: float):
         raise RuntimeError(f"a stable branch did not leave the band (status {sol.status})")
     end = sol.y[-1, 1]
     dense = _DenseOutput(sol.t, sol.t_old, sol.h, sol.y_old[:, :2], sol.F[:, :, :2])
-    return dense, sol.t, "top" if end - top >= bottom - end else "bottom"
+    return dense, sol, "top" if end - top >= bottom - end else "bottom"
+
+
+def _pieces(sol) -> np.ndarray:
+    """The branch ``sol`` (from its start next to the saddle outward) as polynomial pieces,
+    one per DOP853 step, the last cut at the event (:mod:`atlas.kernels.dense_curves`)."""
+    from atlas.kernels.dense_curves import from_dense
+
+    span = np.ones(sol.h.size)
+    span[-1] = (sol.t[-1] - sol.t_old[-1]) / sol.h[-1]
+    out = np.empty((sol.h.size, 2, 8))
+    from_dense(np.ascontiguousarray(sol.y_old), np.ascontiguousarray(sol.F[:, ::-1]), span,
+               out)
+    return out
 
 
 def _refine(dense, t, tol: float, longest: float):
@@ -98,28 +112,52 @@ def _refine(dense, t, tol: float, longest: float):
 
 
 class _Fundamental:
-    """Γ_0 = L_0 ∪ R_0 of the canonical pendulum ``p`` (τ > 0) as one polyline, from L_0's
-    end through the saddle to R_0's end, at rtol ``rtol``; at ``times`` (the per-branch
-    reversed times of another _Fundamental) if given, else refined to CHORD_TOL."""
+    """Γ_0 = L_0 ∪ R_0 of the canonical pendulum ``p`` (τ > 0) at rtol ``rtol``: its two
+    branches integrated (``ends``, ``bistable``), as polynomial pieces (``pieces``, from L_0's
+    end through the saddle to R_0's end: the exact areas and nearest points) and, once
+    :meth:`polyline` is called, as one polyline (``left``, ``right``, ``theta``,
+    ``theta_dot``, ``times``, ``chord_error``: sides and distances of the grid's points)."""
 
-    def __init__(self, p: Pendulum, rtol: float, bottom: float, top: float, times=None):
-        self.times, self.ends, parts = [], [], []
-        saddle = np.array([[p.saddle_angle], [0.0]])
-        self.chord_error = 0.0
-        for i, sign in enumerate((-1, 1)):
-            dense, steps, end = _branch(p, sign, rtol, bottom, top)
+    def __init__(self, p: Pendulum, rtol: float, bottom: float, top: float):
+        from atlas.kernels.dense_curves import reversed_pieces, segment
+
+        self.saddle = p.saddle_angle
+        self.branches = [_branch(p, sign, rtol, bottom, top) for sign in (-1, 1)]
+        self.ends = [end for _, _, end in self.branches]
+        (_, left, _), (_, right, _) = self.branches
+        s = self.saddle
+        self.pieces = np.concatenate([
+            reversed_pieces(_pieces(left)),
+            segment(left.y[0, 0], left.y[0, 1], s, 0.0),
+            segment(s, 0.0, right.y[0, 0], right.y[0, 1]),
+            _pieces(right)])
+        self.theta_range = (float(min(left.y[:, 0].min(), right.y[:, 0].min())),
+                            float(max(left.y[:, 0].max(), right.y[:, 0].max())))
+        self.times = None
+
+    def polyline(self, times=None) -> _Fundamental:
+        """Make the polyline (once): through the reversed times ``times`` (the per-branch
+        times of another _Fundamental) if given, else refined to CHORD_TOL. Returns self."""
+        if self.times is not None:
+            return self
+        saddle = np.array([[self.saddle], [0.0]])
+        chord_error, all_times, parts = 0.0, [], []
+        for i, (dense, sol, _) in enumerate(self.branches):
+            steps = sol.t
             if times is None:
                 t, xy, err = _refine(dense, steps, CHORD_TOL, MAX_SEGMENT)
-                self.chord_error = max(self.chord_error, err)
+                chord_error = max(chord_error, err)
             else:
                 t = np.append(times[i][times[i] < steps[-1]], steps[-1])
                 xy = dense(t)
-            self.times.append(t)
-            self.ends.append(end)
+            all_times.append(t)
             parts.append(np.concatenate([saddle, xy], axis=1))
+        self.chord_error = chord_error
         self.left, self.right = parts
         self.theta, self.theta_dot = np.concatenate([self.left[:, ::-1], self.right[:, 1:]],
                                                     axis=1)
+        self.times = all_times
+        return self
 
     @property
     def bistable(self) -> bool:
@@ -149,7 +187,7 @@ class TiltedBoundaries:
                  rtol: float = RTOL, margin: float = MARGIN, cycle=FIND_CYCLE):
         """``cycle``: :func:`atlas.physics.running.limit_cycle`'s result for this pendulum if the
         caller has it (None: there is none); found here by default."""
-        from atlas.physics.running import limit_cycle
+        from atlas.physics.running import cycle_exists
 
         p = self.pendulum = pendulum
         if not p.alpha > 0.0:
@@ -169,25 +207,59 @@ class TiltedBoundaries:
         lo, hi = sorted((self.sign * v0, self.sign * v1))
         self._band = (min(lo, -ceiling) - margin, max(hi, ceiling) + margin)  # canonical
         self.band = tuple(sorted(self.sign * v for v in self._band))
-        self._fine = _Fundamental(canon, rtol, *self._band)
-        self._coarse = _Fundamental(canon, RTOL_CHECK, *self._band, times=self._fine.times)
-        if self._fine.ends[1] != "bottom" or self._coarse.ends != self._fine.ends:
-            raise RuntimeError(f"unexpected stable branches: ends {self._fine.ends} "
-                               f"(rtol {rtol:g}), {self._coarse.ends} ({RTOL_CHECK:g})")
-        self.bistable = self._fine.bistable
-        self.cycle = (limit_cycle(p.alpha, p.omega0, p.torque) if cycle is FIND_CYCLE
-                      else cycle)
-        if (self.cycle is not None) != self.bistable:
+        self._branches = _Fundamental(canon, rtol, *self._band)
+        self._branches_check = _Fundamental(canon, RTOL_CHECK, *self._band)
+        ends, check = self._branches.ends, self._branches_check.ends
+        if ends[1] != "bottom" or check != ends:
+            raise RuntimeError(f"unexpected stable branches: ends {ends} "
+                               f"(rtol {rtol:g}), {check} ({RTOL_CHECK:g})")
+        self.bistable = self._branches.bistable
+        if cycle is FIND_CYCLE:  # found on first use; its existence checked now
+            exists = cycle_exists(p.alpha, p.omega0, p.torque)
+        else:
+            self.cycle = cycle
+            exists = cycle is not None
+        if exists != self.bistable:
             raise RuntimeError("the stable branch L_0 disagrees with atlas.physics.running "
                                "about the running limit cycle (too close to the homoclinic "
                                "torque?)")
-        self.chord_error = self._fine.chord_error
-        self.reference_error = self._reference_error()
         self._indices = {}
         self._order = self._sorted = None  # Γ_0's vertices sorted by θ, for the indices
 
     def __getstate__(self):  # sent to workers without the distance indices (rebuilt there)
         return {**self.__dict__, "_indices": {}, "_order": None, "_sorted": None}
+
+    @cached_property
+    def cycle(self):
+        """The running limit cycle (:func:`atlas.physics.running.limit_cycle`), None if there
+        is none; found on first use unless the caller gave it."""
+        from atlas.physics.running import limit_cycle
+
+        p = self.pendulum
+        return limit_cycle(p.alpha, p.omega0, p.torque) if self.bistable else None
+
+    # ------------------------------------------------------------------ polylines
+    @cached_property
+    def _fine(self) -> _Fundamental:
+        """Γ_0 at rtol with its polyline refined to CHORD_TOL (made on first use: the areas
+        and nearest points do not need it)."""
+        return self._branches.polyline()
+
+    @cached_property
+    def _coarse(self) -> _Fundamental:
+        """Γ_0 at RTOL_CHECK, its polyline through the fine one's reversed times."""
+        return self._branches_check.polyline(self._fine.times)
+
+    @cached_property
+    def chord_error(self) -> float:
+        """The polylines' chord error [rad-ish] (≤ CHORD_TOL)."""
+        return self._fine.chord_error
+
+    @cached_property
+    def reference_error(self) -> float:
+        """The polylines' change from rtol 1e-13 to 1e-12 [rad-ish]
+        (:meth:`_reference_error`)."""
+        return self._reference_error()
 
     # ------------------------------------------------------------------ frames
     def _canonical(self, theta, theta_dot):
@@ -349,55 +421,87 @@ class TiltedBoundaries:
         return dist.reshape(shape), self._saddle(k).reshape(shape)
 
     # ------------------------------------------------------------------ areas
-    def _polygon(self, f: _Fundamental):
-        """Well 0's basin ∩ {bottom < θ̇ < top} (canonical) as a closed polygon: the tongue
-        Γ_0 closed along θ̇ = bottom, or the strip between Γ_{−1} and Γ_0 closed along
-        θ̇ = bottom and θ̇ = top."""
+    def _polygon(self, f: _Fundamental) -> np.ndarray:
+        """Well 0's basin ∩ {bottom < θ̇ < top} (canonical) as a closed curved polygon
+        (:mod:`atlas.kernels.dense_curves` pieces): the tongue Γ_0 closed along θ̇ = bottom,
+        or the strip between Γ_{−1} and Γ_0 closed along θ̇ = bottom and θ̇ = top."""
+        from atlas.kernels.dense_curves import reversed_pieces, segment
+
+        gamma = f.pieces
+        first, last = gamma[0, :, 0], gamma[-1, :, :].sum(axis=1)
         if self.bistable:
-            return f.theta, f.theta_dot
-        return (np.concatenate([f.theta, f.theta[::-1] - _TWO_PI]),
-                np.concatenate([f.theta_dot, f.theta_dot[::-1]]))
+            return np.concatenate([gamma, segment(*last, *first)])
+        before = gamma.copy()
+        before[:, 0, 0] -= _TWO_PI
+        return np.concatenate([gamma, segment(*last, last[0] - _TWO_PI, last[1]),
+                               reversed_pieces(before),
+                               segment(first[0] - _TWO_PI, first[1], *first)])
 
     def _fractions(self, f: _Fundamental, ks, window):
-        """Area fraction of ``window`` (canonical) in well k's basin, for each k in ``ks``,
-        and the boundary length in the window (for the chord error): compiled polygon
-        clipping (:mod:`atlas.kernels.polygon`)."""
-        from atlas.kernels.polygon import inside_lengths, window_areas
+        """Area fraction of ``window`` (canonical) in well k's basin, for each k in ``ks``:
+        the curved polygon clipped to the window, exact for the dense output
+        (:func:`atlas.kernels.dense_curves.window_areas`)."""
+        from atlas.kernels.dense_curves import window_areas
 
         (a, b), (lo, hi) = window
-        x, y = self._polygon(f)
         shifts = _TWO_PI * np.array(ks, np.float64)
-        areas, lengths = np.empty(shifts.size), np.empty(shifts.size)
-        window_areas(np.ascontiguousarray(x), np.ascontiguousarray(y), shifts, a, b, lo, hi,
-                     areas)
-        theta, theta_dot = np.ascontiguousarray(f.theta), np.ascontiguousarray(f.theta_dot)
-        inside_lengths(theta, theta_dot, shifts, a, b, lo, hi, lengths)
-        if not self.bistable:
-            more = np.empty(shifts.size)
-            inside_lengths(theta, theta_dot, shifts - _TWO_PI, a, b, lo, hi, more)
-            lengths += more
-        return areas / ((b - a) * (hi - lo)), lengths
+        areas = np.empty(shifts.size)
+        window_areas(self._polygon(f), shifts, a, b, lo, hi, areas)
+        return areas / ((b - a) * (hi - lo))
+
+    def _area_translates(self, theta_lo: float, theta_hi: float) -> range:
+        """Canonical k whose Γ_k may reach θ ∈ [theta_lo, theta_hi] (from the step ends, a
+        step's width to spare)."""
+        lo, hi = self._branches.theta_range
+        return range(math.floor((theta_lo - hi - 1.0) / _TWO_PI),
+                     math.ceil((theta_hi - lo + 1.0) / _TWO_PI) + 1)
 
     def areas(self) -> ExactAreas:
         """The exact area fraction of the window in each well's basin and in the running basin
-        (:class:`atlas.boundaries.exact.ExactAreas`; docs/design/tilted-boundaries.md). The
-        fractions sum to 1 (to their errors)."""
+        (:class:`atlas.boundaries.exact.ExactAreas`; docs/design/tilted-boundaries.md): exact
+        for the dense output of the branches at rtol, their error the change from
+        RTOL_CHECK. The fractions sum to 1 (to their errors)."""
         window = self._canonical_window()
         (a, b), (lo, hi) = window
-        ks = self._translates(a, b)
+        ks = self._area_translates(a, b)
         if not self.bistable:  # the strip of well k lies between Γ_{k−1} and Γ_k
             ks = range(ks.start, ks.stop + 1)
-        fine, length = self._fractions(self._fine, ks, window)
-        coarse, _ = self._fractions(self._coarse, ks, window)
-        scale = self.chord_error / ((b - a) * (hi - lo))
-        error = np.abs(fine - coarse) + scale * length + 4 * np.finfo(float).eps
+        fine = self._fractions(self._branches, ks, window)
+        coarse = self._fractions(self._branches_check, ks, window)
+        error = np.abs(fine - coarse) + 4 * np.finfo(float).eps
         running = running_error = 0.0
         if self.bistable:
             running = 1.0 - float(fine.sum())
-            running_error = float(abs(fine.sum() - coarse.sum()) + scale * length.sum()
-                                  + 4 * np.finfo(float).eps)
+            running_error = float(abs(fine.sum() - coarse.sum()) + 4 * np.finfo(float).eps)
         keep = fine > 0.0
         k = self.sign * np.array(ks, np.int64)[keep]
         order = np.argsort(k)
         return ExactAreas(k=k[order], fraction=fine[keep][order], running=running,
-                           error=error[keep][order], running_error=running_error)
+                          error=error[keep][order], running_error=running_error)
+
+    # ------------------------------------------------------------------ nearest point
+    def _nearest(self, f: _Fundamental, theta: float, theta_dot: float):
+        """(distance, θ, θ̇) of the nearest point of any Γ_k of ``f`` to one point
+        (actual frame), exact for the dense output (:func:`atlas.kernels.dense_curves.
+        nearest`): the nearer of the two saddles beside the point bounds the search."""
+        from atlas.kernels.dense_curves import nearest
+
+        x, v = self.sign * theta, self.sign * theta_dot
+        s = f.saddle
+        j0 = math.floor((x - s) / _TWO_PI)
+        best = min(math.hypot(x - s - _TWO_PI * j, v) for j in (j0, j0 + 1))
+        lo, hi = f.theta_range
+        ks = range(math.floor((x - best - hi - 1.0) / _TWO_PI),
+                   math.ceil((x + best - lo + 1.0) / _TWO_PI) + 1)
+        shifts = _TWO_PI * np.array(ks, np.float64)
+        d, t, w = nearest(f.pieces, shifts, float(x), float(v), math.inf)
+        return d, self.sign * t, self.sign * w
+
+    def nearest_point(self, theta: float, theta_dot: float):
+        """(distance [rad-ish], θ [rad], θ̇ [rad s⁻¹], error [rad-ish]) of the nearest point
+        of the boundaries to (θ, θ̇), exact for the dense output of the branches at rtol; the
+        error is the change of the distance from RTOL_CHECK (docs/design/tilted-boundaries.md).
+        """
+        d, t, w = self._nearest(self._branches, theta, theta_dot)
+        check, *_ = self._nearest(self._branches_check, theta, theta_dot)
+        return d, t, w, abs(d - check) + 4 * np.finfo(float).eps * max(d, 1.0)

@@ -1,12 +1,12 @@
-"""Polygons clipped to a box, compiled: the exact areas of the tilted basins.
+"""Polygons clipped to a box, compiled: the chord polygons of the tilted basins.
 
 :func:`clip` is Sutherland–Hodgman against one axis-parallel half-plane (exact for a simple
 polygon against a convex region; Sutherland & Hodgman, Comm. ACM 17 (1974) 32), the same
 operations as the numpy version it replaced; :func:`window_areas` measures, by the shoelace
 formula, one polygon shifted by each of several multiples of 2π in θ and clipped to a box
-(coordinates centred on the box, for rounding); :func:`inside_lengths` sums the
-segments of a polyline inside each shifted box. Used by
-:meth:`atlas.boundaries.tilted.TiltedBoundaries.areas` (docs/design/tilted-boundaries.md).
+(coordinates centred on the box, for rounding). The chord polygon of
+:func:`atlas.kernels.dense_curves.window_areas`, the tilted basins' exact areas
+(docs/design/tilted-boundaries.md).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 
 from atlas.kernels import cached_njit
 
-__all__ = ["clip", "window_areas", "inside_lengths"]
+__all__ = ["clip", "window_areas"]
 
 
 @cached_njit(nogil=True)
@@ -132,28 +132,3 @@ def window_areas(x, y, shifts, a, b, lo, hi, out):
         # no edge reaches the box: the polygon lies beside it, its area there is exactly 0
         # (the telescoped sums of Δθ̇ around it vanish only to rounding)
         out[i] = 0.5 * abs(total) if reached else 0.0
-
-
-@cached_njit(nogil=True)
-def inside_lengths(x, y, shifts, a, b, lo, hi, out):
-    """out[i] = length of the polyline's segments whose ends both lie in
-    [a − shifts[i], b − shifts[i]] × [lo, hi] (≈ its length in that box); the segments
-    sorted by their smaller θ once, so each shift visits only those starting in its box."""
-    n = x.size - 1
-    if n < 1:
-        out[:] = 0.0
-        return
-    xmin = np.minimum(x[:-1], x[1:])
-    xmax = np.maximum(x[:-1], x[1:])
-    order = np.argsort(xmin)
-    xmin_sorted = xmin[order]
-    for i in range(shifts.size):
-        a0, b0 = a - shifts[i], b - shifts[i]
-        total = 0.0
-        for t in range(np.searchsorted(xmin_sorted, a0), n):
-            if xmin_sorted[t] > b0:
-                break
-            j = order[t]
-            if (xmax[j] <= b0 and lo <= y[j] <= hi and lo <= y[j + 1] <= hi):
-                total += np.hypot(x[j + 1] - x[j], y[j + 1] - y[j])
-        out[i] = total

@@ -208,6 +208,18 @@ def _fixed_point(turn: _Turn, omega0: float):
     return theta_s, float(v), float(period)
 
 
+def cycle_exists(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12) -> bool:
+    """Whether :func:`limit_cycle` finds a running limit cycle, without finding it: whether
+    the orbit leaving the saddle forwards gets round a whole turn (P(0⁺) > 0, the module
+    docstring's bracket) at ``rtol`` and at rtol·10 (two DOP853 turns instead of some
+    twenty)."""
+    _check(alpha, omega0)
+    if torque == 0.0:
+        return False
+    return all(_Turn(alpha, omega0, abs(torque), r).escape(omega0) > 0.0
+               for r in (rtol, 10.0 * rtol))
+
+
 def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12,
                 samples: int = CYCLE_SAMPLES) -> LimitCycle | None:
     """The running limit cycle of θ̈ = τ − ω0² sin θ − 2αθ̇, or None where there is none

@@ -5,8 +5,8 @@ basin (Halekotte & Feudel, "Minimal fatal shocks in multistable complex networks
 It is the Euclidean (θ, θ̇) distance from the rest state (θ* + 2πk, 0) to the nearest point of
 its basin boundary (the metric of ``boundary_distance``, θ and θ̇ as one unit), and that
 point: :meth:`atlas.boundaries.exact.ExactBoundaries.nearest_point` of the rest state, exact
-to the boundaries' ``reference_error`` (without torque ≈ 1e-13, Newton's method on the DOP853
-dense output; with torque the polylines' chord error, ≤ 1e-8). The shock is not limited to the
+to the boundaries' own error (without torque ≈ 1e-13, Newton's method on the DOP853 dense
+output; with torque exact for the dense output, its error the change from rtol 1e-12). The shock is not limited to the
 window. By the 2π-periodicity of θ it is the same for every k, its point translated by 2πk.
 """
 
@@ -34,6 +34,5 @@ def minimal_fatal_shock(boundaries) -> FatalShock:
     p = boundaries.pendulum
     if not p.has_rest_states:
         return FatalShock(math.nan, math.nan, math.nan, math.nan)
-    distance, theta, theta_dot = boundaries.nearest_point(p.rest_angle, 0.0)
-    return FatalShock(float(distance), float(theta), float(theta_dot),
-                      float(boundaries.reference_error))
+    distance, theta, theta_dot, error = boundaries.nearest_point(p.rest_angle, 0.0)
+    return FatalShock(float(distance), float(theta), float(theta_dot), float(error))

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from atlas.kernels.polygon import clip, inside_lengths, window_areas
+from atlas.kernels.polygon import clip, window_areas
 
 
 def _direct(x, y, shift, a, b, lo, hi):
@@ -49,14 +49,6 @@ def test_folded_polygon_matches_direct_clipping():
     ref = [_direct(x, y, sh, a, b, lo, hi) for sh in shifts]
     assert np.abs(out - ref).max() < 1e-11
     assert np.count_nonzero(np.array(ref) > 0.1) >= 10  # the copies do meet the box
-
-
-def test_inside_lengths_counts_segments_in_each_box():
-    x = np.linspace(0.0, 10.0, 1001)
-    y = np.zeros_like(x)
-    out = np.empty(2)
-    inside_lengths(x, y, np.array([0.0, -5.0]), 1.0, 3.0, -1.0, 1.0, out)
-    assert out == pytest.approx([2.0, 2.0], rel=1e-12)
 
 
 def test_a_polygon_beside_the_box_has_no_area_there():

@@ -56,8 +56,8 @@ def _reference_distance(alpha, omega0, torque, point, speed=6.0):
 WINDOW = ((-math.pi, math.pi), (-4.0, 4.0))
 
 
-@pytest.mark.parametrize("alpha, torque, tol", [(0.2, 0.0, 1e-9), (0.05, 0.5, 1e-7),
-                                                (0.3, 0.2, 1e-7)])
+@pytest.mark.parametrize("alpha, torque, tol", [(0.2, 0.0, 1e-9), (0.05, 0.5, 1e-9),
+                                                (0.3, 0.2, 1e-9)])
 def test_the_shock_against_scipy_dop853(alpha, torque, tol):
     b = exact_boundaries(Pendulum(alpha, 1.0, torque), WINDOW)
     shock = minimal_fatal_shock(b)
@@ -66,9 +66,13 @@ def test_the_shock_against_scipy_dop853(alpha, torque, tol):
     # the point is on a boundary: its distance from the rest state is the shock, and the
     # boundaries are nearer to it than anything else (distance ≈ 0)
     assert abs(math.hypot(shock.theta - rest[0], shock.theta_dot) - shock.distance) < 1e-12
-    assert float(b.distance(shock.theta, shock.theta_dot)[0]) < tol
-    # the metric of boundary_distance: the same number as the exact distance of the rest state
-    assert abs(float(b.distance(*rest)[0]) - shock.distance) < 1e-12
+    assert float(b.distance(shock.theta, shock.theta_dot)[0]) <= b.reference_error + 1e-12
+    # the metric of boundary_distance: the same number as the exact distance of the rest
+    # state, to the error of the curves boundary_distance measures (with torque polylines)
+    assert abs(float(b.distance(*rest)[0]) - shock.distance) <= b.reference_error + 1e-12
+    # the error claimed is an honest one: the scipy reference lies within it and 1e-11
+    assert abs(shock.distance - _reference_distance(alpha, 1.0, torque, rest)) \
+        <= shock.error + 1e-11
 
 
 def _undamped(omega0):
