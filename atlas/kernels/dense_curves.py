@@ -95,8 +95,8 @@ def real_roots(c, n, out):
     each derivative split (0, 1) into intervals where the one below is monotone, so each of
     its roots lies alone in an interval whose ends differ in sign, where Newton's method kept
     inside the bracket finds it to rounding (a polynomial monotone on all of [0, 1], the usual
-    piece, skips the derivatives); a root that is also a root of the derivative (a tangency, or an inflection
-    on 0) is kept where the polynomial is exactly 0 there."""
+    piece, skips the derivatives); a root that is also a root of the derivative (a
+    tangency, or an inflection on 0) is kept where the polynomial is exactly 0 there."""
     deg = n - 1
     while deg > 0 and c[deg] == 0.0:
         deg -= 1
@@ -197,7 +197,7 @@ _REVERSE = _reversal()
 
 def reversed_pieces(C: np.ndarray) -> np.ndarray:
     """The same curve traversed backwards: the pieces in reversed order, each p(1 − x)."""
-    return np.ascontiguousarray((C[::-1] @ _REVERSE.T))
+    return np.ascontiguousarray(C[::-1] @ _REVERSE.T)
 
 
 def _bernstein() -> np.ndarray:
@@ -255,8 +255,8 @@ def _cuts(C, i, box, levels, n_levels, c, cuts, m, shifted, roots):
     """Append to ``cuts`` (m used) the parameters in (0, 1) where coordinate ``c`` of piece
     i crosses any of ``levels`` within its range ``box``; returns the new m (``shifted``,
     ``roots``: scratch)."""
-    for l in range(n_levels):
-        level = levels[l]
+    for j in range(n_levels):
+        level = levels[j]
         if level < box[c, 0] or level > box[c, 1]:
             continue
         for p in range(_N):

@@ -8,8 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from atlas.kernels.dense_curves import (from_dense, nearest, ranges, real_roots,
-                                        reversed_pieces, segment, window_areas)
+from atlas.kernels.dense_curves import (
+    from_dense,
+    nearest,
+    ranges,
+    real_roots,
+    reversed_pieces,
+    segment,
+    window_areas,
+)
 from atlas.kernels.dop853 import BAND, REVERSED, solve
 
 
