@@ -7,7 +7,8 @@ its basin boundary (the metric of ``boundary_distance``, θ and θ̇ as one unit
 point: :meth:`atlas.boundaries.exact.ExactBoundaries.nearest_point` of the rest state, exact
 to the boundaries' own error (without torque ≈ 1e-13, Newton's method on the DOP853 dense
 output; with torque exact for the dense output, its error the change from rtol 1e-12). The
-shock is not limited to the window. By the 2π-periodicity of θ it is the same for every k, its point translated by 2πk.
+shock is not limited to the window. By the 2π-periodicity of θ it is the same for every k,
+its point translated by 2πk.
 """
 
 from __future__ import annotations
