@@ -114,6 +114,52 @@ def test_independent_of_threads_chunking_and_order(kernel):
             np.testing.assert_array_equal(x[idx], y)
 
 
+@pytest.mark.parametrize("torque", [0.0, 0.5])
+@pytest.mark.parametrize("kernel, parallel", [(label_lanes, "_label_lanes"),
+                                              (label_trigfree, "_label_trigfree")])
+def test_a_single_chunk_runs_serially_with_the_parallel_labels(kernel, parallel, torque,
+                                                               monkeypatch):
+    """A call of one chunk (the separatrix bisection's small batches) runs the serial twin
+    of the parallel kernel, on the calling thread, with the labels and path counts that the
+    parallel kernel gives the same orbits within a larger batch; τ = 0 and τ ≠ 0 kernels."""
+    from atlas.kernels import lanes
+
+    th, v = _grid(64, 64)
+    th = np.concatenate([th, np.linspace(-3.0, 3.0, 32), [np.nan]])
+    v = np.concatenate([v, np.linspace(25.0, 90.0, 32), [0.0]])  # + full-reduction lanes
+    cap = energy_cap(DT, ALPHA, OMEGA0, torque)
+    n_checks = n_checks_for(20.0, DT, 16)
+
+    def run(theta0, theta_dot0):
+        n = theta0.size
+        out = (np.full(n, SENTINEL, np.int32), np.zeros(n, np.int8), np.zeros(n, np.int32))
+        paths = kernel(theta0, theta_dot0, ALPHA, OMEGA0, DT, n_checks, 16, cap, *out,
+                       torque=torque)
+        return out, paths
+
+    assert n_chunks(th.size) > 1
+    whole, whole_paths = run(th, v)
+
+    def not_parallel(*args):
+        raise AssertionError("a call of one chunk entered the parallel kernel")
+
+    suffix = "_torque" if torque else ""
+    monkeypatch.setattr(lanes, parallel + suffix, not_parallel)
+    assert not getattr(lanes, parallel + suffix + "_serial").targetoptions.get("parallel")
+    paths = np.zeros(3, np.int64)
+    for lo in range(0, th.size, 1000):
+        part = slice(lo, lo + 1000)
+        assert n_chunks(th[part].size) == 1
+        out, counts = run(th[part].copy(), v[part].copy())
+        paths += counts
+        for name, x, y in zip(("attractor", "status", "n_trap"), whole, out):
+            np.testing.assert_array_equal(x[part], y, err_msg=name)
+    np.testing.assert_array_equal(paths, whole_paths)
+    assert paths[SCALAR] >= 1
+    if kernel is label_lanes:
+        assert paths[FULL] > 0
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("propagate", [propagate_lanes, propagate_trigfree])
 def test_propagate_independent_of_threads_and_blocks(propagate):
