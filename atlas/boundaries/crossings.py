@@ -58,18 +58,12 @@ def axis_crossings(m: StableManifold, saddles: np.ndarray, tol: float, dt: float
 
 def tilted_crossings(exact, labels, window: Window, tol: float):
     """With torque: where the label changes along the axis θ0 = 0 in the window — the exact
-    polylines' crossings of θ = 0 (``exact``: :class:`atlas.boundaries.tilted.TiltedBoundaries`),
-    each bisected along θ̇ on the certified RK4 labels of ``labels``. Returns (θ̇0, bracket
-    width, basin below, basin above; :data:`atlas.boundaries.exact.RUNNING_SIDE` for the
-    running basin)."""
-    speeds = []
-    for _, _, theta, theta_dot in exact.curves(clip=True):
-        s = np.sign(theta)
-        for i in np.flatnonzero(s[:-1] * s[1:] < 0):
-            f = theta[i] / (theta[i] - theta[i + 1])
-            speeds.append(theta_dot[i] + f * (theta_dot[i + 1] - theta_dot[i]))
-    speeds = np.sort(np.array([v for v in speeds
-                               if window.theta_dot[0] < v < window.theta_dot[1]]))
+    polylines' crossings of θ = 0 (``exact``: :class:`atlas.boundaries.tilted.TiltedBoundaries`,
+    its :meth:`~atlas.boundaries.tilted.TiltedBoundaries.axis_speeds`), each bisected along θ̇
+    on the certified RK4 labels of ``labels``. Returns (θ̇0, bracket width, basin below,
+    basin above; :data:`atlas.boundaries.exact.RUNNING_SIDE` for the running basin)."""
+    speeds = exact.axis_speeds()
+    speeds = np.sort(speeds[(window.theta_dot[0] < speeds) & (speeds < window.theta_dot[1])])
     empty = np.zeros(0)
     if (window.theta[0] > 0.0 or window.theta[1] < 0.0) or not speeds.size:
         return empty, empty, empty.astype(np.int64), empty.astype(np.int64)

@@ -82,6 +82,12 @@ class ExactBoundaries(Protocol):
         :meth:`distance`); (inf, nan, nan, nan) if none. From a rest state: its minimal
         fatal shock (Halekotte & Feudel, Sci. Rep. 10, 11783, 2020)."""
 
+    def running_shock(self) -> tuple[float, float, float, float, float, float]:
+        """The running limit cycle's minimal fatal shock: (distance [rad-ish], the cycle's
+        point θ [rad], θ̇ [rad s⁻¹], the boundary's point θ, θ̇, error [rad-ish]) of the
+        nearest pair of the cycle and a basin boundary; NaN where there is no running cycle
+        or no boundary."""
+
 
 def exact_boundaries(pendulum: Pendulum, window: Box, *, cycle=FIND_CYCLE) -> ExactBoundaries:
     """The exact basin boundaries of ``pendulum`` (α > 0) over ``window``: the one place
@@ -178,6 +184,9 @@ class UntiltedExact:
     def saddles_within(self, theta, theta_dot, radius: float):
         return self._index(_FIRST_MARGIN).saddles_within(theta, theta_dot, radius)
 
+    def running_shock(self):
+        return (math.nan,) * 6  # no torque, no running cycle
+
     def nearest_point(self, theta, theta_dot):
         """The foot of :meth:`distance` on the boundary of saddle n: Newton's method on the
         dense output of L (:meth:`StableManifold.foot_points`, ≈ 1e-13) for both branches of
@@ -250,6 +259,9 @@ class TiltedExact:
     def side(self, theta, theta_dot):
         return self.tilted.side(theta, theta_dot)
 
+    def running_shock(self):
+        return self.tilted.running_shock()
+
     def nearest_point(self, theta, theta_dot):
         """The nearest point of every translate of the boundary, exact for the dense output of
         the branches (:meth:`atlas.boundaries.tilted.TiltedBoundaries.nearest_point`; its
@@ -285,15 +297,10 @@ class TiltedExact:
         near = (reach <= _VERTEX_MARGIN and theta.min() >= w0 and theta.max() <= w1
                 and theta_dot.min() >= u0 and theta_dot.max() <= u1)
         key = "window" if near else "all"
-        if key not in self._vertices:
-            m = _VERTEX_MARGIN
-            parts = []  # (θ, θ̇, n) of each branch, cut to the window's margin when near
-            for j, _, t, v in self.tilted.iter_curves(clip=False):
-                if near:
-                    keep = (t >= w0 - m) & (t <= w1 + m) & (v >= u0 - m) & (v <= u1 + m)
-                    t, v = t[keep], v[keep]
-                parts.append((t, v, np.full(t.size, 2 * j + 1)))
-            t, v, n = (np.concatenate([q[i] for q in parts]) for i in range(3))
+        if key not in self._vertices:  # every branch's vertices (near: in the window's margin)
+            m = _VERTEX_MARGIN if near else math.inf
+            t, v, j = self.tilted.vertices_within((w0 - m, w1 + m), (u0 - m, u1 + m))
+            n = 2 * j + 1
             box = ((t.min(), t.max()), (v.min(), v.max())) if t.size else ((0, 1), (0, 1))
             self._vertices[key] = (t, v, n, box, bins(t, v, box, _VERTEX_CELL))
         t, v, n, ((t0, _), (v0, _)), (cell, shape, start, items) = self._vertices[key]
@@ -329,6 +336,9 @@ class UnboundedExact:
         shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
         return (np.full(shape, np.inf), np.full(shape, np.nan), np.full(shape, np.nan),
                 np.full(shape, np.nan))
+
+    def running_shock(self):
+        return (math.nan,) * 6  # the running basin is the whole plane: no boundary
 
     def saddles_within(self, theta, theta_dot, radius: float):
         size = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))

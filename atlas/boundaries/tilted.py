@@ -20,7 +20,7 @@ Miranker, Q. Appl. Math. 36 (1978) 167. Derivation: docs/design/tilted-boundarie
 from __future__ import annotations
 
 import math
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -39,6 +39,10 @@ MAX_SEGMENT = 0.004
 #: Default clearance [rad-ish] of the integrated band beyond the window's θ̇ range (and of the
 #: boundary search beyond its θ range).
 MARGIN = 2.0
+#: How far [rad] points may lie beyond the window's θ range and still be answered by the
+#: window's distance index (the trace's probes and located points lie about 1e-3 off
+#: vertices in the window).
+_INDEX_SLACK = 0.01
 _TWO_PI = 2.0 * math.pi
 
 
@@ -83,32 +87,43 @@ def _refine(dense, t, tol: float, longest: float):
     vertices (2, n), chord error). Its chord error — the distance of the dense output at the
     middle of each segment's time interval from the chord — is ≤ ``tol`` (it shrinks like
     the square of a segment, so a segment is cut into ⌈1.2√(error/tol)⌉ pieces), and no
-    segment is longer than ``longest``. Each segment is measured once: only new pieces are
-    measured again, and only new vertices evaluated."""
-    y = dense(t)
-    dev = np.full(t.size - 1, np.nan)
-    for _ in range(12):
-        todo = np.flatnonzero(np.isnan(dev))
-        if todo.size == 0:
-            return t, y, float(dev.max(initial=0.0))
-        mid = dense(0.5 * (t[todo] + t[todo + 1]))
-        (ax, ay), (bx, by) = y[:, todo], y[:, todo + 1]
-        worst = segment_distance(mid[0], mid[1], ax, ay, bx, by)
-        pieces = np.ones(dev.size, np.int64)
-        pieces[todo] = np.maximum(np.ceil(np.sqrt(worst / tol) * 1.2),
-                                  np.ceil(np.hypot(bx - ax, by - ay) / longest))
-        whole = pieces[todo] == 1
-        dev[todo[whole]] = worst[whole]
-        offset = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
-        t = np.append(np.repeat(t[:-1], pieces)
-                      + offset * np.repeat(np.diff(t) / pieces, pieces), t[-1])
-        new = np.append(offset > 0, False)
-        grown = np.empty((2, t.size))
-        grown[:, ~new] = y
-        grown[:, new] = dense(t[new])
-        y = grown
-        dev = np.where(np.repeat(pieces, pieces) == 1, np.repeat(dev, pieces), np.nan)
-    raise RuntimeError("the branch polyline did not reach its chord tolerance")
+    segment is longer than ``longest``. Each segment is measured once (compiled:
+    :func:`atlas.kernels.segments.refine`)."""
+    from atlas.kernels.segments import refine
+
+    times, xy, error, ok = refine(np.ascontiguousarray(t, dtype=np.float64), dense.t,
+                                  dense.t_old, dense.h, np.ascontiguousarray(dense.y_old),
+                                  dense.F, float(tol), float(longest))
+    if not ok:
+        raise RuntimeError("the branch polyline did not reach its chord tolerance")
+    return times, xy, float(error)
+
+
+def _runs_around(inside: np.ndarray):
+    """(start, stop) of each run of vertices where ``inside`` holds, widened by one vertex at
+    either end (so that the run's polyline reaches the edge of the region), the runs that
+    then touch merged."""
+    near = inside.copy()
+    near[1:] |= inside[:-1]
+    near[:-1] |= inside[1:]
+    edges = np.flatnonzero(np.diff(near, prepend=False, append=False))
+    return zip(edges[::2].tolist(), edges[1::2].tolist())
+
+
+def _first_where(x: np.ndarray, shift: float, bound: float, side: str) -> int:
+    """The first index of the sorted ``x`` where x + ``shift`` (rounded, so monotone in x)
+    is ≥ ``bound`` (side 'left') or > it ('right'): numpy's bisection on x against
+    bound − shift, then moved while the rounded sums say otherwise."""
+    i = int(np.searchsorted(x, bound - shift, side=side))
+
+    def beyond(j):
+        return x[j] + shift > bound if side == "right" else x[j] + shift >= bound
+
+    while i > 0 and beyond(i - 1):
+        i -= 1
+    while i < x.size and not beyond(i):
+        i += 1
+    return i
 
 
 class _Fundamental:
@@ -223,11 +238,10 @@ class TiltedBoundaries:
             raise RuntimeError("the stable branch L_0 disagrees with atlas.physics.running "
                                "about the running limit cycle (too close to the homoclinic "
                                "torque?)")
-        self._indices = {}
-        self._order = self._sorted = None  # Γ_0's vertices sorted by θ, for the indices
+        self._indices = {}  # (θ lo, θ hi) → Segments: the window's, and the last one beyond
 
     def __getstate__(self):  # sent to workers without the distance indices (rebuilt there)
-        return {**self.__dict__, "_indices": {}, "_order": None, "_sorted": None}
+        return {**self.__dict__, "_indices": {}}
 
     @cached_property
     def cycle(self):
@@ -316,24 +330,83 @@ class TiltedBoundaries:
         """:meth:`curves` one entry at a time (unclipped, all translates of a monostable
         pendulum's branches together take hundreds of MB; one at a time, a few)."""
         (a, b), (v0, v1) = self.window
-        ct, _ = self._canonical_window()
+        for j, branch, vertices in self.branches():
+            theta, theta_dot = vertices()
+            if not clip:
+                yield j, branch, theta, theta_dot
+                continue
+            inside = (theta >= a) & (theta <= b) & (theta_dot >= v0) & (theta_dot <= v1)
+            for start, stop in _runs_around(inside):
+                yield j, branch, theta[start:stop], theta_dot[start:stop]
+
+    def branches(self):
+        """The unclipped branches of :meth:`iter_curves`, each as (saddle index j, branch,
+        ``vertices``): ``vertices(index=slice(None))`` gives (θ [rad], θ̇ [rad s⁻¹]) of the
+        vertices ``index`` (a slice or an index array) of that branch — the same doubles as
+        the whole branch's there, without shifting the whole polyline to Γ_k for a few."""
         f = self._fine
-        for k in self._translates(*ct):
+        for k in self._translates(*self._canonical_window()[0]):
             for name, xy in (("left", f.left), ("right", f.right)):
-                theta = self.sign * (xy[0] + _TWO_PI * k)
-                theta_dot = self.sign * xy[1]
                 branch = name if self.sign > 0 else {"left": "right", "right": "left"}[name]
-                j = self._saddle(k)
-                if not clip:
-                    yield j, branch, theta, theta_dot
-                    continue
+                yield self._saddle(k), branch, partial(self._translate, xy, k)
+
+    def _translate(self, xy, k: int, index=slice(None)):
+        """(θ [rad], θ̇ [rad s⁻¹]) in the actual frame of the vertices ``index`` of Γ_0's
+        polyline ``xy`` (canonical) shifted to Γ_k: the one place the curves, the branches,
+        the axis crossings and the binned vertices take them from (the same doubles for a
+        vertex, however many are asked)."""
+        return self.sign * (xy[0, index] + _TWO_PI * k), self.sign * xy[1, index]
+
+    def axis_speeds(self) -> np.ndarray:
+        """θ̇ [rad s⁻¹] where the branches in the window (:meth:`curves`' clipped runs) cross
+        the axis θ = 0 (a segment whose ends have θ of opposite signs), by linear
+        interpolation along the segment; unsorted. Found on Γ_0: Γ_k's segment crosses θ = 0
+        where Γ_0's crosses θ = −2πk (each segment, shorter than MAX_SEGMENT, can cross one
+        line only), so only the segments that cross and their neighbours (the clipping) are
+        shifted."""
+        (a, b), (v0, v1) = self.window
+        ks = self._translates(*self._canonical_window()[0])
+        speeds = []
+        for xy in (self._fine.left, self._fine.right):
+            x = xy[0]
+            k = np.rint(-0.5 * (x[:-1] + x[1:]) / _TWO_PI).astype(np.int64)  # the one line
+            seg = np.flatnonzero((k >= ks.start) & (k < ks.stop))
+            shifted = (x[seg] + _TWO_PI * k[seg], x[seg + 1] + _TWO_PI * k[seg])
+            seg = seg[np.sign(shifted[0]) * np.sign(shifted[1]) < 0]
+            for i, k_i in zip(seg.tolist(), k[seg].tolist()):
+                # the segment belongs to a clipped run when both ends are next to a vertex of
+                # Γ_k in the window (:meth:`iter_curves`)
+                near = np.arange(max(i - 1, 0), min(i + 2, x.size - 1) + 1)
+                theta, theta_dot = self._translate(xy, k_i, near)
                 inside = (theta >= a) & (theta <= b) & (theta_dot >= v0) & (theta_dot <= v1)
-                near = inside.copy()
-                near[1:] |= inside[:-1]
-                near[:-1] |= inside[1:]
-                edges = np.flatnonzero(np.diff(np.concatenate([[0], near, [0]]).astype(int)))
-                for start, stop in zip(edges[::2], edges[1::2]):
-                    yield j, branch, theta[start:stop], theta_dot[start:stop]
+                at = i - near[0]  # the segment's first end within ``near``
+                if not (inside[max(at - 1, 0):at + 2].any() and inside[at:at + 3].any()):
+                    continue
+                (t0, t1), (w0, w1) = theta[at:at + 2], theta_dot[at:at + 2]
+                f = t0 / (t0 - t1)
+                speeds.append(w0 + f * (w1 - w0))
+        return np.array(speeds)
+
+    def vertices_within(self, theta_range, theta_dot_range):
+        """(θ [rad], θ̇ [rad s⁻¹], saddle j) of every vertex of every branch (:meth:`iter_curves`,
+        unclipped) with θ ∈ ``theta_range`` and θ̇ ∈ ``theta_dot_range`` (closed; infinite
+        bounds allowed), in no particular order. Γ_0's vertices within the θ̇ range are sorted
+        by θ once; Γ_k's within the θ range are then a slice of them (θ0 + 2πk, rounded, is
+        monotone in θ0), its ends found by bisection and checked on the shifted values."""
+        (t0, t1), (u0, u1) = theta_range, theta_dot_range
+        f = self._fine
+        xy = np.concatenate([f.left, f.right], axis=1)
+        speed = self.sign * xy[1]
+        xy = xy[:, (speed >= u0) & (speed <= u1)]
+        xy = xy[:, np.argsort(xy[0], kind="stable")]
+        lo, hi = sorted((self.sign * t0, self.sign * t1))  # θ0 + 2πk ∈ [lo, hi], canonical
+        parts = []
+        for k in self._translates(*self._canonical_window()[0]):
+            first = _first_where(xy[0], _TWO_PI * k, lo, "left")
+            stop = _first_where(xy[0], _TWO_PI * k, hi, "right")
+            theta, theta_dot = self._translate(xy, k, slice(first, stop))
+            parts.append((theta, theta_dot, np.full(theta.size, self._saddle(k), np.int64)))
+        return tuple(np.concatenate([q[i] for q in parts]) for i in range(3))
 
     # ------------------------------------------------------------------ side
     def side(self, theta, theta_dot):
@@ -365,31 +438,37 @@ class TiltedBoundaries:
 
     # ------------------------------------------------------------------ distance
     def _index(self, theta_lo: float, theta_hi: float) -> Segments:
-        """The segments of every Γ_k (canonical) with a vertex in θ ∈ [lo, hi], and their
-        neighbours (the last two indices are kept)."""
-        key = (theta_lo, theta_hi)
-        if key not in self._indices:
-            f = self._fine
-            if self._order is None:  # Γ_0's vertices by θ, once: each translate's are a slice
-                self._order = np.argsort(f.theta, kind="stable")
-                self._sorted = f.theta[self._order]
-            last = f.theta.size - 1
-            runs = []
-            for k in self._translates(theta_lo, theta_hi):
-                shift = _TWO_PI * k
-                lo = np.searchsorted(self._sorted, theta_lo - shift, side="left")
-                hi = np.searchsorted(self._sorted, theta_hi - shift, side="right")
-                inside = np.sort(self._order[lo:hi])  # θ + shift ∈ [theta_lo, theta_hi]
-                if not inside.size:
-                    continue
-                near = np.sort(np.clip(np.concatenate([inside - 1, inside, inside + 1]), 0,
-                                       last))
-                near = near[np.r_[True, np.diff(near) != 0]]  # and their neighbours, once
-                cuts = np.flatnonzero(np.diff(near) > 1) + 1
-                for run in np.split(near, cuts):
-                    runs.append((f.theta[run] + shift, f.theta_dot[run], k))
-            self._indices = {**dict(list(self._indices.items())[-1:]), key: Segments(runs)}
+        """Segments of every Γ_k (canonical) that hold those with a vertex in θ ∈ [lo, hi] and
+        their neighbours: sides and distances of points are the same for any such superset
+        (they need only segments within reach of the points). An index built before whose θ
+        range covers [lo, hi] is used; else the window's (its θ range ± ``margin``,
+        MAX_SEGMENT and ``_INDEX_SLACK``: every query of points in the window, or next to it,
+        whatever asks), built once and kept; else, for a query beyond it, [lo, hi]'s (the
+        last such one kept too)."""
+        for (lo, hi), index in self._indices.items():
+            if lo <= theta_lo and theta_hi <= hi:
+                return index
+        (a, b), _ = self._canonical_window()
+        reach = self.margin + MAX_SEGMENT + _INDEX_SLACK
+        window = (a - reach, b + reach)
+        key = window if window[0] <= theta_lo and theta_hi <= window[1] \
+            else (theta_lo, theta_hi)
+        kept = {k: index for k, index in self._indices.items() if k == window}
+        self._indices = {**kept, key: self._segments(*key)}
         return self._indices[key]
+
+    def _segments(self, theta_lo: float, theta_hi: float) -> Segments:
+        """The segments of every Γ_k (canonical) with a vertex in θ ∈ [lo, hi], and their
+        neighbours: per translate k, the runs of Γ_0's vertices in [lo − 2πk, hi − 2πk], one
+        vertex beyond either end, shifted by 2πk."""
+        f = self._fine
+        runs = []
+        for k in self._translates(theta_lo, theta_hi):
+            shift = _TWO_PI * k
+            inside = (f.theta >= theta_lo - shift) & (f.theta <= theta_hi - shift)
+            runs.extend((f.theta[start:stop] + shift, f.theta_dot[start:stop], k)
+                        for start, stop in _runs_around(inside))
+        return Segments(runs)
 
     def distance(self, theta, theta_dot):
         """(distance, saddle): the Euclidean distance [rad-ish, θ and θ̇ as one unit] from each
@@ -496,6 +575,44 @@ class TiltedBoundaries:
         shifts = _TWO_PI * np.array(ks, np.float64)
         d, t, w = nearest(f.pieces, shifts, float(x), float(v), math.inf)
         return d, self.sign * t, self.sign * w
+
+    def running_shock(self):
+        """The minimal fatal shock of the running limit cycle (Halekotte & Feudel 2020): the
+        nearest pair of a point of the cycle and a point of a basin boundary (any tongue's),
+        as (distance [rad-ish], the cycle's point θ [rad], θ̇ [rad s⁻¹], the boundary's point
+        θ, θ̇, error [rad-ish]); NaN where there is no running cycle (not ``bistable``). The
+        cycle is one turn from its fixed point (:attr:`cycle`) by DOP853 at rtol 1e-12, as
+        pieces; the pair is exact for the pieces (:func:`atlas.kernels.dense_curves.
+        nearest_between`). The error: the distance's change with the boundaries at
+        RTOL_CHECK, plus the cycle's own (its relative error times its largest speed)."""
+        from atlas.kernels.dense_curves import nearest_between
+        from atlas.kernels.dop853 import EVENT, FLOW, TURN, solve
+
+        if not self.bistable:
+            return (math.nan,) * 6
+        p, cycle = self.pendulum, self.cycle
+        theta_s, v = self.sign * cycle.theta0, self.sign * float(cycle.theta_dot[0])
+        tau, rtol = abs(p.torque), 1e-12
+        scale = (p.omega0**2 + tau) / (2.0 * p.alpha)
+        turn = solve(FLOW, (p.alpha, p.omega0, tau, 0.0), TURN, (theta_s + _TWO_PI, 0.0),
+                     (theta_s, v), 4.0 * cycle.period, rtol,
+                     (rtol * _TWO_PI, rtol * scale), dim=2)
+        if turn.status != EVENT:
+            raise RuntimeError("the running cycle did not complete a turn")
+        pieces = _pieces(turn)
+        lo, hi = self._branches.theta_range
+        shifts = _TWO_PI * np.arange(math.floor((theta_s - _TWO_PI - hi) / _TWO_PI),
+                                     math.ceil((theta_s + 2.0 * _TWO_PI - lo) / _TWO_PI) + 1,
+                                     dtype=np.float64)
+        # the saddle (θs, 0) is on a boundary, the cycle's point (θs, v) above it: a bound
+        bound = v * (1.0 + 1e-9)
+        fine = nearest_between(pieces, self._branches.pieces, shifts, bound)
+        check = nearest_between(pieces, self._branches_check.pieces, shifts, bound)
+        error = (abs(fine[0] - check[0]) + cycle.error * float(np.abs(cycle.theta_dot).max())
+                 + 4 * np.finfo(float).eps * max(fine[0], 1.0))
+        d, a_t, a_v, b_t, b_v = (float(x) for x in fine)
+        sign = self.sign
+        return d, sign * a_t, sign * a_v, sign * b_t, sign * b_v, error
 
     def nearest_point(self, theta: float, theta_dot: float):
         """(distance [rad-ish], θ [rad], θ̇ [rad s⁻¹], error [rad-ish]) of the nearest point

@@ -159,17 +159,18 @@ def _vertices(exact, window: Window, max_spacing: float):
     parts = []  # (saddle j, branch, vertex numbers, θ, θ̇, arc lengths) per branch
     fine = fine_spacing(window)
     arcs = {}  # every translate of a branch has its arc lengths and picks: computed once
-    for j, name, theta, theta_dot in exact.iter_curves(clip=False):
+    for j, name, vertices in exact.branches():  # only the picked vertices shifted to Γ_k
         if name not in arcs:
+            theta, theta_dot = vertices()
             step = np.hypot(np.diff(theta), np.diff(theta_dot))
             along = np.concatenate([[0.0], np.cumsum(step)])
             picks = np.unique(np.searchsorted(along, np.arange(_FIRST_VERTEX, along[-1],
                                                                max_spacing)))
             arcs[name] = along, picks[picks < theta.size]
         along, picks = arcs[name]
-        pos, x, v = along[picks], theta[picks], theta_dot[picks]
+        pos, (x, v) = along[picks], vertices(picks)
         if fine < max_spacing:  # a small window: points on the chords, ``fine`` apart
-            pos, x, v = _fine_points(window, fine, along, theta, theta_dot, pos, x, v)
+            pos, x, v = _fine_points(window, fine, along, *vertices(), pos, x, v)
         number = np.flatnonzero(window.margin(x, v) >= 0)  # along the branch: gaps outside
         parts.append((np.full(number.size, j, np.int64),
                       np.full(number.size, schema.BRANCHES.index(name), np.int8),

@@ -16,11 +16,13 @@ Wanner, *Solving ODEs I*, §II.6), or a straight segment. A closed chain of piec
   inside, the lune between it and its chord, ½∫((θ − θ₀) dθ̇ − (θ̇ − θ̇₀) dθ), a polynomial of
   degree 13 integrated exactly by 7-point Gauss–Legendre quadrature;
 - :func:`nearest`: the nearest point of a set of pieces (and their translates by 2πk in θ)
-  to a point, from the roots of the derivative of the squared distance.
+  to a point, from the roots of the derivative of the squared distance;
+- :func:`nearest_between`: the nearest pair of points of two sets of pieces (a limit cycle
+  and the basin boundaries), by Newton's method from the nearest samples.
 
 Used by :mod:`atlas.boundaries.tilted` for the tilted basins' exact areas and minimal fatal
-shocks: a branch of some 300 steps instead of a polyline of 10⁵ vertices
-(docs/design/tilted-boundaries.md).
+shocks (of the rest states and of the running cycle): a branch of some 300 steps instead of
+a polyline of 10⁵ vertices (docs/design/tilted-boundaries.md).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from atlas.kernels import cached_njit
 from atlas.kernels.polygon import window_areas as chord_areas
 
 __all__ = ["DEGREE", "from_dense", "segment", "reversed_pieces", "real_roots", "window_areas",
-           "nearest", "ranges"]
+           "nearest", "nearest_between", "ranges"]
 
 #: Degree of a piece's polynomials (DOP853's dense output).
 DEGREE = 7
@@ -339,6 +341,34 @@ def window_areas(C, shifts, a, b, lo, hi, out):
 
 # --------------------------------------------------------------------------- nearest point
 
+@nb.njit
+def _project(C, i, shift, x, y, scratch):
+    """(distance, x ∈ [0, 1]) of the nearest point of piece i translated by ``shift`` in θ
+    to (x, y): the squared distance (θ − x)² + (θ̇ − y)², a polynomial of degree 14, is
+    smallest at an end or at a real root of its derivative (:func:`real_roots`); ``scratch``
+    (4 × 15) holds the polynomials."""
+    sq, dsq, roots, u = scratch[0], scratch[1], scratch[2], scratch[3]
+    sq[:] = 0.0
+    for c in range(2):
+        for p in range(_N):
+            u[p] = C[i, c, p]
+        u[0] += (shift - x) if c == 0 else -y
+        for p in range(_N):
+            for q in range(_N):
+                sq[p + q] += u[p] * u[q]
+    for p in range(_MAX_COEFFS - 1):
+        dsq[p] = sq[p + 1] * (p + 1)
+    dsq[_MAX_COEFFS - 1] = 0.0
+    r = real_roots(dsq, _MAX_COEFFS - 1, roots)
+    best, where = np.inf, 0.0
+    for q in range(r + 2):
+        t = 0.0 if q == r else (1.0 if q == r + 1 else roots[q])
+        d = math.hypot(_horner(C[i, 0], _N, t) + shift - x, _horner(C[i, 1], _N, t) - y)
+        if d < best:
+            best, where = d, t
+    return best, where
+
+
 @cached_njit(nogil=True)
 def nearest(C, shifts, x, y, best):
     """The nearest point of the pieces ``C``, each translated by every shifts[j] in θ, to
@@ -365,34 +395,193 @@ def nearest(C, shifts, x, y, best):
             d = math.hypot(th - x, v - y)
             if d < out_d:
                 out_d, out_t, out_v = d, th, v
-    sq = np.zeros(_MAX_COEFFS)
-    dsq = np.zeros(_MAX_COEFFS)
-    roots = np.empty(_MAX_COEFFS)
-    u = np.empty(_N)
+    scratch = np.empty((4, _MAX_COEFFS))
     for j in range(shifts.size):
         for i in range(n):
             gx = max(box[i, 0, 0] + shifts[j] - x, 0.0, x - box[i, 0, 1] - shifts[j])
             gy = max(box[i, 1, 0] - y, 0.0, y - box[i, 1, 1])
             if math.hypot(gx, gy) >= out_d:
                 continue
-            # squared distance as a polynomial: (θ − x)² + (θ̇ − y)²
-            sq[:] = 0.0
-            for c in range(2):
-                for p in range(_N):
-                    u[p] = C[i, c, p]
-                u[0] += (shifts[j] - x) if c == 0 else -y
-                for p in range(_N):
-                    for q in range(_N):
-                        sq[p + q] += u[p] * u[q]
-            for p in range(_MAX_COEFFS - 1):
-                dsq[p] = sq[p + 1] * (p + 1)
-            dsq[_MAX_COEFFS - 1] = 0.0
-            r = real_roots(dsq, _MAX_COEFFS - 1, roots)
-            for q in range(r + 2):
-                t = 0.0 if q == r else (1.0 if q == r + 1 else roots[q])
-                th = _horner(C[i, 0], _N, t) + shifts[j]
-                v = _horner(C[i, 1], _N, t)
-                d = math.hypot(th - x, v - y)
-                if d < out_d:
-                    out_d, out_t, out_v = d, th, v
+            d, t = _project(C, i, shifts[j], x, y, scratch)
+            if d < out_d:
+                out_d = d
+                out_t, out_v = _horner(C[i, 0], _N, t) + shifts[j], _horner(C[i, 1], _N, t)
     return out_d, out_t, out_v
+
+
+# --------------------------------------------------------------------------- nearest pair
+
+#: Samples per piece of :func:`nearest_between`'s first guess on a pair of pieces.
+_PAIR_SAMPLES = 9
+_PAIR_NEWTON = 12
+
+
+@nb.njit(inline="always")
+def _point_and_derivatives(C, i, x, out):
+    """out = (θ, θ̇, θ', θ̇', θ'', θ̇'') of piece i at x (derivatives in x)."""
+    for c in range(2):
+        f, d, dd = 0.0, 0.0, 0.0
+        for p in range(_N - 1, -1, -1):
+            dd = dd * x + 2.0 * d
+            d = d * x + f
+            f = f * x + C[i, c, p]
+        out[c], out[2 + c], out[4 + c] = f, d, dd
+
+
+_GOLDEN = 0.5 * (3.0 - math.sqrt(5.0))
+
+
+@nb.njit
+def _distance_along(A, i, s, B, k, shift, scratch):
+    """The distance from A's piece i at s to B's piece k translated by ``shift``."""
+    return _project(B, k, shift, _horner(A[i, 0], _N, s), _horner(A[i, 1], _N, s),
+                    scratch)[0]
+
+
+@nb.njit
+def _pair_by_projection(A, i, B, k, shift, s0, scratch):
+    """(s, t): the nearest pair of piece i of A and piece k of B (translated by ``shift``)
+    where Newton's method in (s, t) does not converge (nearly parallel pieces): the
+    distance from A(s) to piece k (:func:`_project`, exact) minimised over s ∈ [0, 1] by
+    golden section, to rounding (one minimum: pieces far shorter than their curvature
+    radius). ``s0``: the nearest sample, unused but for the signature's sake."""
+    lo, hi = 0.0, 1.0
+    x1, x2 = lo + _GOLDEN * (hi - lo), hi - _GOLDEN * (hi - lo)
+    f1 = _distance_along(A, i, x1, B, k, shift, scratch)
+    f2 = _distance_along(A, i, x2, B, k, shift, scratch)
+    for _ in range(80):
+        if hi - lo <= 4.0 * _EPS:
+            break
+        if f1 <= f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = lo + _GOLDEN * (hi - lo)
+            f1 = _distance_along(A, i, x1, B, k, shift, scratch)
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = hi - _GOLDEN * (hi - lo)
+            f2 = _distance_along(A, i, x2, B, k, shift, scratch)
+    s = 0.5 * (lo + hi)
+    return s, _project(B, k, shift, _horner(A[i, 0], _N, s), _horner(A[i, 1], _N, s),
+                       scratch)[1]
+
+
+@cached_njit(nogil=True)
+def nearest_between(A, B, shifts, best):
+    """The nearest pair of points of the pieces ``A`` and of the pieces ``B`` translated by
+    every shifts[j] in θ, if nearer than ``best`` (inf: none known): (distance, θ_A, θ̇_A,
+    θ_B, θ̇_B), (best, nan, nan, nan, nan) if none is nearer. Every pair of pieces whose range
+    boxes may come nearer than the best found is sampled at 9 × 9 points, and the nearest
+    sample pair refined by Newton's method on the squared distance |A(s) − B(t)|² in (s, t),
+    kept in [0, 1]²; where Newton does not converge (nearly parallel pieces, an indefinite
+    Hessian, a minimum on an edge of [0, 1]²), the exact distance from A(s) to the piece of
+    B is minimised over s by golden section (:func:`_pair_by_projection`). Exact for the
+    polynomials where a pair's distance has one minimum (pieces far shorter than their
+    curvature radius, as DOP853 steps are)."""
+    na, nb_ = A.shape[0], B.shape[0]
+    box_a, box_b = np.empty((na, 2, 2)), np.empty((nb_, 2, 2))
+    ranges(A, box_a)
+    ranges(B, box_b)
+    m = _PAIR_SAMPLES
+    sa, sb = np.empty((na, m, 2)), np.empty((nb_, m, 2))
+    for i in range(na):
+        for q in range(m):
+            for c in range(2):
+                sa[i, q, c] = _horner(A[i, c], _N, q / (m - 1))
+    for i in range(nb_):
+        for q in range(m):
+            for c in range(2):
+                sb[i, q, c] = _horner(B[i, c], _N, q / (m - 1))
+    # the longest gap between a piece's consecutive samples: every point of the piece lies
+    # within (a little more than) half of it from a sample
+    gap_a, gap_b = np.zeros(na), np.zeros(nb_)
+    for i in range(na):
+        for q in range(m - 1):
+            gap_a[i] = max(gap_a[i], math.hypot(sa[i, q + 1, 0] - sa[i, q, 0],
+                                                sa[i, q + 1, 1] - sa[i, q, 1]))
+    for i in range(nb_):
+        for q in range(m - 1):
+            gap_b[i] = max(gap_b[i], math.hypot(sb[i, q + 1, 0] - sb[i, q, 0],
+                                                sb[i, q + 1, 1] - sb[i, q, 1]))
+    out = np.array([best, np.nan, np.nan, np.nan, np.nan])
+    pa, pb = np.empty(6), np.empty(6)
+    scratch = np.empty((4, _MAX_COEFFS))
+    # A's whole range, to keep only the pieces of B that may come nearer than the best
+    a_lo_t, a_hi_t = box_a[:, 0, 0].min(), box_a[:, 0, 1].max()
+    a_lo_v, a_hi_v = box_a[:, 1, 0].min(), box_a[:, 1, 1].max()
+    near_k = np.empty(nb_ * shifts.size, np.int64)
+    near_j = np.empty(nb_ * shifts.size, np.int64)
+    for sweep in range(2):  # the sample pairs (a distance reached), then Newton
+        count = 0
+        for j in range(shifts.size):
+            for k in range(nb_):
+                gx = max(box_b[k, 0, 0] + shifts[j] - a_hi_t, 0.0,
+                         a_lo_t - box_b[k, 0, 1] - shifts[j])
+                gy = max(box_b[k, 1, 0] - a_hi_v, 0.0, a_lo_v - box_b[k, 1, 1])
+                if math.hypot(gx, gy) < out[0]:
+                    near_k[count], near_j[count] = k, j
+                    count += 1
+        for c in range(count):
+            k, j = near_k[c], near_j[c]
+            shift = shifts[j]
+            for i in range(na):
+                gx = max(box_b[k, 0, 0] + shift - box_a[i, 0, 1], 0.0,
+                         box_a[i, 0, 0] - box_b[k, 0, 1] - shift)
+                gy = max(box_b[k, 1, 0] - box_a[i, 1, 1], 0.0,
+                         box_a[i, 1, 0] - box_b[k, 1, 1])
+                if math.hypot(gx, gy) >= out[0]:
+                    continue
+                # the nearest sample pair
+                d2, s0, t0 = np.inf, 0.0, 0.0
+                for qa in range(m):
+                    for qb in range(m):
+                        dx = sa[i, qa, 0] - sb[k, qb, 0] - shift
+                        dy = sa[i, qa, 1] - sb[k, qb, 1]
+                        if dx * dx + dy * dy < d2:
+                            d2, s0, t0 = dx * dx + dy * dy, qa / (m - 1), qb / (m - 1)
+                if sweep == 0:  # a distance reached, to prune the second sweep
+                    if math.sqrt(d2) < out[0]:
+                        out[0] = math.sqrt(d2)
+                        out[1], out[2] = _horner(A[i, 0], _N, s0), _horner(A[i, 1], _N, s0)
+                        out[3] = _horner(B[k, 0], _N, t0) + shift
+                        out[4] = _horner(B[k, 1], _N, t0)
+                    continue
+                if math.sqrt(d2) - 0.6 * (gap_a[i] + gap_b[k]) >= out[0]:
+                    continue  # no point of this pair comes nearer than the best found
+                # Newton in (s, t) from it
+                s, t = s0, t0
+                converged = False
+                for _ in range(_PAIR_NEWTON):
+                    _point_and_derivatives(A, i, s, pa)
+                    _point_and_derivatives(B, k, t, pb)
+                    rx, ry = pa[0] - pb[0] - shift, pa[1] - pb[1]
+                    gs = rx * pa[2] + ry * pa[3]
+                    gt = -(rx * pb[2] + ry * pb[3])
+                    hss = pa[2] * pa[2] + pa[3] * pa[3] + rx * pa[4] + ry * pa[5]
+                    htt = pb[2] * pb[2] + pb[3] * pb[3] - rx * pb[4] - ry * pb[5]
+                    hst = -(pa[2] * pb[2] + pa[3] * pb[3])
+                    det = hss * htt - hst * hst
+                    if det <= 0.0 or hss <= 0.0:
+                        break
+                    s_raw = s - (htt * gs - hst * gt) / det
+                    t_raw = t - (hss * gt - hst * gs) / det
+                    s_new, t_new = min(max(s_raw, 0.0), 1.0), min(max(t_raw, 0.0), 1.0)
+                    if s_new != s_raw or t_new != t_raw:
+                        break  # the minimum is on an edge of [0, 1]²: minimise in s below
+                    if abs(s_new - s) <= 1e-14 and abs(t_new - t) <= 1e-14:
+                        converged = True
+                    s, t = s_new, t_new
+                    if converged:
+                        break
+                s1, t1 = s, t
+                if not converged:  # the distance to piece k along A(s), minimised in s
+                    s1, t1 = _pair_by_projection(A, i, B, k, shift, s0, scratch)
+                # the nearest of Newton's end, its start and the minimisation in s
+                for s_end, t_end in ((s, t), (s0, t0), (s1, t1)):
+                    a_t = _horner(A[i, 0], _N, s_end)
+                    a_v = _horner(A[i, 1], _N, s_end)
+                    b_t = _horner(B[k, 0], _N, t_end) + shift
+                    b_v = _horner(B[k, 1], _N, t_end)
+                    d = math.hypot(a_t - b_t, a_v - b_v)
+                    if d < out[0]:
+                        out[0], out[1], out[2], out[3], out[4] = d, a_t, a_v, b_t, b_v
+    return out

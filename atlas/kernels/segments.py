@@ -1,17 +1,20 @@
-"""Polylines against points, compiled: the nearest segment and the vertical ray's crossings.
+"""Polylines, compiled: made from a dense output, and against points (the nearest segment and
+the vertical ray's crossings).
 
 The tilted basin boundaries (:mod:`atlas.boundaries.tilted`) are polylines of some 10⁵
-short segments each. :func:`build` groups them, in their order along the curves, into a
-bounding-volume hierarchy: ``FAN`` consecutive segments per leaf box, ``FAN`` boxes per box
-of the level above, until at most ``FAN`` boxes remain (consecutive pieces of a smooth curve
-have tight boxes). :func:`nearest_segments` finds, per point (``prange``: independent of the
-thread count), the Euclidean distance to the nearest segment and its tag by a depth-first
-search, nearest box first, that skips every box farther than the best distance found: exact
-for the polylines (the box distance is a lower bound). :func:`ray_sides` counts, per point,
-the crossings of the upward vertical ray with the segments of each tag (a segment covers
-θ ∈ [min, max) of its ends, its θ̇ at θ by linear interpolation), one column of equal θ at a
-time, for the side rule of :meth:`atlas.boundaries.tilted.TiltedBoundaries.side`.
-References: Ericson, *Real-Time Collision Detection* (2005), ch. 6 (bounding-volume
+short segments each, cut from DOP853's dense output by :func:`refine` until every chord lies
+within a tolerance of the curve. :func:`build` groups them, in their order along the curves,
+into a bounding-volume hierarchy: ``FAN`` consecutive segments per leaf box, ``FAN`` boxes
+per box of the level above, until at most ``FAN`` boxes remain (consecutive pieces of a
+smooth curve have tight boxes). :func:`nearest_segments` finds, per point (``prange``:
+independent of the thread count), the Euclidean distance to the nearest segment and its tag
+by a depth-first search, nearest box first, that skips every box farther than the best
+distance found: exact for the polylines (the box distance is a lower bound).
+:func:`ray_sides` counts, per point, the crossings of the upward vertical ray with the
+segments of each tag (a segment covers θ ∈ [min, max) of its ends, its θ̇ at θ by linear
+interpolation), for the side rule of :meth:`atlas.boundaries.tilted.TiltedBoundaries.side`:
+one column of equal θ at a time for a grid, in one walk of the hierarchy for scattered
+points. References: Ericson, *Real-Time Collision Detection* (2005), ch. 6 (bounding-volume
 hierarchies, ordered traversal); docs/design/tilted-boundaries.md.
 """
 
@@ -23,12 +26,126 @@ import numba as nb
 import numpy as np
 
 from atlas.kernels import cached_njit
+from atlas.kernels.dop853 import dense_component, dense_step
 
-__all__ = ["FAN", "build", "nearest_segments", "ray_sides"]
+__all__ = ["FAN", "refine", "build", "nearest_segments", "ray_sides"]
 
 #: Children per box of the hierarchy (segments per leaf box).
 FAN = 16
 _CHUNK = 256  # points per parallel task of nearest_segments
+#: :func:`ray_sides` walks the hierarchy once for all points (instead of once per column of
+#: equal θ) when they hold fewer than this many a column on average (measured on the tilted
+#: boundaries: scattered points ~2 µs each instead of ~13 µs; equal near 64 a column).
+_SWEEP_BELOW = 32
+#: Generations of cuts :func:`refine` may make (a chord cut into pieces is one generation
+#: older than its pieces): a chord that would be cut beyond them fails the refinement.
+MAX_GENERATIONS = 11
+_TINY = 2.2250738585072014e-308  # the smallest normal double: a zero-length chord's divisor
+
+
+@nb.njit(inline="always")
+def _dense_at(tau, hint, t, t_old, h, y_old):
+    """The step of the dense output that holds ``tau``: ``hint`` if it does (its step ends in
+    ``t``), else found by bisection; and x = (τ − t_old)/h there (as
+    :func:`atlas.kernels.dop853.dense_output`: the same step, the same doubles)."""
+    last = h.size - 1
+    if hint <= last and t[hint] <= tau < t[hint + 1]:
+        step = hint
+    else:
+        step = dense_step(tau, t, last)
+    return step, (tau - t_old[step]) / h[step]
+
+
+@nb.njit(inline="always")
+def _chord_distance(px, py, ax, ay, bx, by):
+    """Distance from a point to a chord [a, b], as
+    :func:`atlas.boundaries.segments.segment_distance` (the same operations in the same order:
+    the same doubles)."""
+    dx, dy = bx - ax, by - ay
+    qx, qy = px - ax, py - ay
+    s = (qx * dx + qy * dy) / max(dx * dx + dy * dy, _TINY)
+    s = min(max(s, 0.0), 1.0)
+    return math.hypot(qx - s * dx, qy - s * dy)
+
+
+@cached_njit(nogil=True)
+def refine(times, t, t_old, h, y_old, F, tol, longest):
+    """The polyline of a dense output (step ends ``t``, ``t_old``, ``h``, ``y_old`` (steps,
+    2), ``F`` (steps, powers, 2) highest power first: :func:`atlas.kernels.dop853.dense_output`)
+    through the times ``times`` (increasing) and as many more as its chords need: every chord
+    — its distance from the dense output at the middle of its time interval, measured once —
+    within ``tol`` and no longer than ``longest`` [rad-ish]. A chord that is not is cut into
+    max(⌈1.2√(distance/tol)⌉, ⌈length/longest⌉) pieces of equal time (the distance shrinks
+    like the square of a piece), each measured in turn, at most ``MAX_GENERATIONS`` deep.
+
+    Returns (times (n,), vertices (2, n), largest chord distance, ok): chord by chord in time
+    order, depth first, the same doubles as cutting every chord of a generation at once (the
+    numpy loop this replaces); ``ok`` false when the generations ran out."""
+    capacity = 2 * times.size + 16
+    out_t, out_xy = np.empty(capacity), np.empty((2, capacity))
+    # the chords still to measure, last in first out: (start, end) times and vertices, and
+    # generation; a chord's pieces are pushed last first, so they are measured in order
+    st_t = np.empty((MAX_GENERATIONS * 64, 2))
+    st_y = np.empty((MAX_GENERATIONS * 64, 4))
+    st_gen = np.empty(MAX_GENERATIONS * 64, np.int64)
+    out_t[0] = times[0]
+    step, x = _dense_at(times[0], 0, t, t_old, h, y_old)
+    out_xy[0, 0] = dense_component(F, step, 0, x, y_old)
+    out_xy[1, 0] = dense_component(F, step, 1, x, y_old)
+    n, worst_all = 1, 0.0
+    for i in range(times.size - 1):
+        hint = step  # the step of the chord's start: usually holds the whole chord
+        sp = 1
+        st_t[0, 0], st_t[0, 1] = times[i], times[i + 1]
+        st_y[0, 0], st_y[0, 1] = out_xy[0, n - 1], out_xy[1, n - 1]
+        step, x = _dense_at(times[i + 1], hint, t, t_old, h, y_old)
+        st_y[0, 2] = dense_component(F, step, 0, x, y_old)
+        st_y[0, 3] = dense_component(F, step, 1, x, y_old)
+        st_gen[0] = 0
+        while sp > 0:
+            sp -= 1
+            ta, tb, gen = st_t[sp, 0], st_t[sp, 1], st_gen[sp]
+            ax, ay, bx, by = st_y[sp, 0], st_y[sp, 1], st_y[sp, 2], st_y[sp, 3]
+            mid_step, x = _dense_at(0.5 * (ta + tb), hint, t, t_old, h, y_old)
+            worst = _chord_distance(dense_component(F, mid_step, 0, x, y_old),
+                                    dense_component(F, mid_step, 1, x, y_old), ax, ay, bx, by)
+            pieces = int(max(math.ceil(math.sqrt(worst / tol) * 1.2),
+                             math.ceil(math.hypot(bx - ax, by - ay) / longest)))
+            if pieces <= 1:  # measured whole (0: a point): its end is the next vertex
+                worst_all = max(worst_all, worst)
+                if n == out_t.size:
+                    grown_t, grown_xy = np.empty(2 * n), np.empty((2, 2 * n))
+                    grown_t[:n], grown_xy[:, :n] = out_t, out_xy
+                    out_t, out_xy = grown_t, grown_xy
+                out_t[n], out_xy[0, n], out_xy[1, n] = tb, bx, by
+                n += 1
+                continue
+            if gen + 1 >= MAX_GENERATIONS:
+                return out_t[:n], out_xy[:, :n], worst_all, False
+            if sp + pieces > st_gen.size:
+                size = 2 * (sp + pieces)
+                grown_st_t, grown_st_y = np.empty((size, 2)), np.empty((size, 4))
+                grown_gen = np.empty(size, np.int64)
+                grown_st_t[:sp], grown_st_y[:sp], grown_gen[:sp] = st_t[:sp], st_y[:sp], \
+                    st_gen[:sp]
+                st_t, st_y, st_gen = grown_st_t, grown_st_y, grown_gen
+            span = (tb - ta) / float(pieces)
+            end_t, end_x, end_y = tb, bx, by
+            for o in range(pieces - 1, -1, -1):  # the last piece pushed first
+                start_t = ta + float(o) * span
+                if o > 0:
+                    piece_step, x = _dense_at(start_t, hint, t, t_old, h, y_old)
+                    start_x = dense_component(F, piece_step, 0, x, y_old)
+                    start_y = dense_component(F, piece_step, 1, x, y_old)
+                else:
+                    start_x, start_y = ax, ay
+                st_t[sp, 0], st_t[sp, 1] = start_t, end_t
+                st_y[sp, 0], st_y[sp, 1], st_y[sp, 2], st_y[sp, 3] = start_x, start_y, \
+                    end_x, end_y
+                st_gen[sp] = gen + 1
+                sp += 1
+                end_t, end_x, end_y = start_t, start_x, start_y
+    return out_t[:n], out_xy[:, :n], worst_all, True
 
 
 @cached_njit(nogil=True)
@@ -209,9 +326,42 @@ def ray_sides(px, py, ax, ay, bx, by, tag, xlo, xhi, start, k_lo, k_hi, flip_fro
     with the segments of each tag k ∈ [k_lo, k_hi] (the translates Γ_k), the parity of k
     flipped first where px < flip_from[k − k_lo] (a branch that continues beyond the band
     above: pass −inf for none). ``bistable``: the largest k of odd parity, or ``running``
-    where there is none; else k_lo + the number of k of even parity. Points are taken column
-    by column (equal θ), each column's crossings found once and swept from the top."""
+    where there is none; else k_lo + the number of k of even parity. Points on a grid are
+    taken column by column (equal θ), each column's crossings found once and swept from the
+    top (:func:`_column_sides`); scattered points (fewer than ``_SWEEP_BELOW`` a column on
+    average: each its own column, or nearly) are taken together, the hierarchy walked once
+    for all of them (:func:`_swept_sides`). Both count the same crossings: the same sides."""
     order = np.argsort(px)
+    columns = min(order.size, 1)
+    for i in range(1, order.size):
+        columns += px[order[i]] != px[order[i - 1]]
+    if order.size < _SWEEP_BELOW * columns:
+        _swept_sides(order, px, py, ax, ay, bx, by, tag, xlo, xhi, start, k_lo, k_hi,
+                     flip_from, bistable, running, out)
+    else:
+        _column_sides(order, px, py, ax, ay, bx, by, tag, xlo, xhi, start, k_lo, k_hi,
+                      flip_from, bistable, running, out)
+
+
+@nb.njit(inline="always")
+def _side(parity, odd, k_lo, bistable, running):
+    """The side of a point from its parities per tag (``odd`` of them odd): ray_sides' rule."""
+    n_k = parity.size
+    if not bistable:
+        return k_lo + n_k - odd
+    if odd > 0:
+        for k in range(n_k - 1, -1, -1):
+            if parity[k]:
+                return k + k_lo
+    return running
+
+
+@cached_njit(nogil=True)
+def _column_sides(order, px, py, ax, ay, bx, by, tag, xlo, xhi, start, k_lo, k_hi,
+                  flip_from, bistable, running, out):
+    """:func:`ray_sides` column by column (``order``: the points by θ): each column's
+    crossings found once (:func:`_column`), sorted from the top, and swept down the column's
+    points."""
     n_k = k_hi - k_lo + 1
     parity = np.zeros(n_k, np.bool_)
     cross_y, cross_tag = np.empty(1024), np.empty(1024, np.int64)
@@ -238,14 +388,80 @@ def ray_sides(px, py, ax, ay, bx, by, tag, xlo, xhi, start, k_lo, k_hi, flip_fro
                     parity[k] = not parity[k]
                     odd += 1 if parity[k] else -1
                 c += 1
-            if bistable:
-                label = running
-                if odd > 0:
-                    for k in range(n_k - 1, -1, -1):
-                        if parity[k]:
-                            label = k + k_lo
-                            break
-                out[q] = label
-            else:
-                out[q] = k_lo + n_k - odd
+            out[q] = _side(parity, odd, k_lo, bistable, running)
         i = j
+
+
+@nb.njit(inline="always")
+def _first_above(values, bound, lo, hi, strict):
+    """The first index i in [lo, hi) of the sorted ``values`` with values[i] > ``bound``
+    (``strict``) or ≥ it, hi if none: bisection."""
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if values[mid] > bound or (not strict and values[mid] == bound):
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+@cached_njit(nogil=True)
+def _swept_sides(order, px, py, ax, ay, bx, by, tag, xlo, xhi, start, k_lo, k_hi, flip_from,
+                 bistable, running, out):
+    """:func:`ray_sides` for scattered points (``order``: the points by θ): the hierarchy is
+    walked once, each box with the run of points whose θ it covers (a box with none is
+    skipped), and each segment of a leaf crossed with the rays of its run's points below it
+    (θ ∈ [min, max) of its ends, θ̇ there as :func:`_column` has it: the same crossings)."""
+    n, n_k = order.size, k_hi - k_lo + 1
+    sx, sy = px[order], py[order]
+    parity = np.empty((n, n_k), np.bool_)
+    odd = np.zeros(n, np.int64)
+    for q in range(n):
+        for k in range(n_k):
+            parity[q, k] = sx[q] < flip_from[k]
+            odd[q] += parity[q, k]
+    levels = start.size - 1
+    n_seg = ax.size
+    st_level = np.empty(FAN * (levels + 1), np.int64)
+    st_box = np.empty(FAN * (levels + 1), np.int64)
+    st_lo = np.empty(FAN * (levels + 1), np.int64)
+    st_hi = np.empty(FAN * (levels + 1), np.int64)
+    sp = 0
+    top = levels - 1
+    for b in range(start[top], start[top + 1]):
+        lo = _first_above(sx, xlo[b], 0, n, False)  # the points with xlo ≤ θ ≤ xhi
+        hi = _first_above(sx, xhi[b], lo, n, True)
+        if lo < hi:
+            st_level[sp], st_box[sp], st_lo[sp], st_hi[sp] = top, b - start[top], lo, hi
+            sp += 1
+    while sp > 0:
+        sp -= 1
+        level, box, lo, hi = st_level[sp], st_box[sp], st_lo[sp], st_hi[sp]
+        if level == 0:
+            for s in range(box * FAN, min((box + 1) * FAN, n_seg)):
+                k = tag[s] - k_lo
+                x0, x1 = ax[s], bx[s]
+                if x0 == x1 or not 0 <= k < n_k:
+                    continue
+                if x0 < x1:
+                    xl, yl, xr, yr = x0, ay[s], x1, by[s]
+                else:
+                    xl, yl, xr, yr = x1, by[s], x0, ay[s]
+                q = _first_above(sx, xl, lo, hi, False)
+                while q < hi and sx[q] < xr:
+                    if (yr - yl) / (xr - xl) * (sx[q] - xl) + yl > sy[q]:
+                        parity[q, k] = not parity[q, k]
+                        odd[q] += 1 if parity[q, k] else -1
+                    q += 1
+            continue
+        first = box * FAN
+        last = min(first + FAN, start[level] - start[level - 1])
+        for c in range(first, last):
+            b = start[level - 1] + c
+            c_lo = _first_above(sx, xlo[b], lo, hi, False)
+            c_hi = _first_above(sx, xhi[b], c_lo, hi, True)
+            if c_lo < c_hi:
+                st_level[sp], st_box[sp], st_lo[sp], st_hi[sp] = level - 1, c, c_lo, c_hi
+                sp += 1
+    for q in range(n):
+        out[order[q]] = _side(parity[q], odd[q], k_lo, bistable, running)

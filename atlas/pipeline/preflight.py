@@ -7,9 +7,9 @@ with the run's kernels on this machine, and the run's orbits are divided by that
 times the labelling only (the RK4 map and its energy trap, the bulk of a big run): the
 separatrices and the certificate's distances come on top, and the sample's orbits are
 spread over the grid at random, so the figure is "about" (its ± is the sample's spread,
-tens of per cent). The calibration takes about a second (:func:`measure_rate`; and the
-kernels' loading, which the run would do anyway), and it is done only where the run may be
-big: :data:`PREFLIGHT_ORBITS` orbits or more, or :data:`CALIBRATE_STEPS` RK4 steps if
+tens of per cent). The calibration takes about a third of a second (:func:`measure_rate`;
+and the kernels' loading, which the run would do anyway), and it is done only where the run
+may be big: :data:`PREFLIGHT_ORBITS` orbits or more, or :data:`CALIBRATE_STEPS` RK4 steps if
 every orbit ran to ``t_max``. A GPU's rate is not measured on a sample (it would time the
 launch, not the device): there the line gives no time.
 
@@ -56,7 +56,7 @@ CONFIRM_BYTES = 10**9
 STRETCH = 64
 #: The calibration's sample: from FIRST_SAMPLE orbits, fourfold until one call takes CALL_S
 #: seconds or MAX_SAMPLE orbits, then as large at up to MAX_POINTS parameter points in all.
-FIRST_SAMPLE, MAX_SAMPLE, CALL_S, MAX_POINTS = 1024, 65536, 0.2, 4
+FIRST_SAMPLE, MAX_SAMPLE, CALL_S, MAX_POINTS = 1024, 65536, 0.05, 3
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,14 @@ _OVER = {"homoclinic_torque": ("alpha", "omega0"), "saddle_node_torque": ("omega
          "focus_node_damping": ("omega0", "torque"), "homoclinic_damping": ("omega0", "torque")}
 
 
+#: The running cycle's fatal shock: variable → field of
+#: :class:`atlas.stability.shocks.RunningShock`.
+_RUNNING_SHOCK = {"running_fatal_shock": "distance", "running_fatal_shock_error": "error",
+                  "running_shock_theta": "theta", "running_shock_theta_dot": "theta_dot",
+                  "running_shock_target_theta": "target_theta",
+                  "running_shock_target_theta_dot": "target_theta_dot"}
+
+
 def study_dataset(cfg, settings: StudySettings, results: list[PointResult]) -> xr.Dataset:
     """The study of ``cfg`` (a validated :class:`atlas.pipeline.config.Config`) from the
     results of its points (``cfg.pendulum.points`` order)."""
@@ -67,7 +75,7 @@ def study_dataset(cfg, settings: StudySettings, results: list[PointResult]) -> x
     foot_t, foot_v = shock.copy(), shock.copy()
     point = {name: np.full(n, np.nan) for name in
              ("running_stability", "running_stability_error", "minimal_fatal_shock_error",
-              "gaussian_stability", "gaussian_stability_error")}
+              "gaussian_stability", "gaussian_stability_error", *_RUNNING_SHOCK)}
     status = np.zeros(n, np.int8)
     for i, r in enumerate(results):
         status[i] = r.status
@@ -80,6 +88,8 @@ def study_dataset(cfg, settings: StudySettings, results: list[PointResult]) -> x
         point["running_stability_error"][i] = r.running_error
         point["minimal_fatal_shock_error"][i] = r.shock.error
         point["gaussian_stability"][i], point["gaussian_stability_error"][i] = r.gaussian
+        for name, field in _RUNNING_SHOCK.items():
+            point[name][i] = getattr(r.running_shock, field)
         shock[:, i] = r.shock.distance
         foot_t[:, i] = r.shock.theta + 2.0 * np.pi * ks
         foot_v[:, i] = r.shock.theta_dot

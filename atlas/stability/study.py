@@ -1,7 +1,7 @@
 """A stability study: per parameter point, exactly (from the manifolds, no orbits sampled),
-the basin stability of every rest state and of the running cycle, the minimal fatal shock,
-the Gaussian-perturbation stability if asked, and the basins for the tipping probabilities;
-then every point of a config's parameter ranges, here or as Dask tasks.
+the basin stability of every rest state and of the running cycle, the minimal fatal shocks
+of both, the Gaussian-perturbation stability if asked, and the basins for the tipping
+probabilities; then every point of a config's parameter ranges, here or as Dask tasks.
 
 A point is independent of every other: :func:`compute_point` takes numbers and returns
 numbers (:class:`PointResult`), so a Dask worker computes whole points and a point lost with a
@@ -24,7 +24,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from atlas.stability.bifurcations import at_saddle_node
-from atlas.stability.shocks import FatalShock, minimal_fatal_shock
+from atlas.stability.shocks import (
+    FatalShock,
+    RunningShock,
+    minimal_fatal_shock,
+    running_fatal_shock,
+)
 
 __all__ = ["StudySettings", "PointResult", "compute_point", "compute_points", "POINT_STATUS",
            "PHASES", "cores"]
@@ -49,7 +54,8 @@ class StudySettings:
 @dataclass
 class PointResult:
     """One parameter point's numbers. ``k`` the wells whose basins meet the window, with
-    ``fraction`` and ``error``; ``running``, ``running_error``; ``shock`` of well 0's rest
+    ``fraction`` and ``error``; ``running``, ``running_error``; ``running_shock`` of the
+    running limit cycle; ``shock`` of well 0's rest
     state; ``gaussian`` (P, error) or (NaN, NaN); ``basins`` {basin: shapely geometry ∩
     window} when tipping is asked; ``status`` (:data:`POINT_STATUS`) and ``message``;
     ``seconds`` per phase."""
@@ -65,6 +71,7 @@ class PointResult:
     running: float = math.nan
     running_error: float = math.nan
     shock: FatalShock = FatalShock(math.nan, math.nan, math.nan, math.nan)
+    running_shock: RunningShock = RunningShock(*(math.nan,) * 6)
     gaussian: tuple[float, float] = (math.nan, math.nan)
     basins: dict | None = None
     seconds: dict = field(default_factory=dict)
@@ -111,6 +118,8 @@ def compute_point(alpha: float, omega0: float, torque: float,
         out.running, out.running_error = float(areas.running), float(areas.running_error)
         out.seconds["boundaries"], clock = time.perf_counter() - clock, time.perf_counter()
         out.shock = minimal_fatal_shock(boundaries)
+        if p.has_rest_states:
+            out.running_shock = running_fatal_shock(boundaries)
         out.seconds["shock"], clock = time.perf_counter() - clock, time.perf_counter()
         if settings.sigma is not None and p.has_rest_states:
             out.gaussian = _gaussian(boundaries, settings)

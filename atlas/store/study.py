@@ -52,8 +52,8 @@ STUDY_VARIABLES = {
                         "omega0^2) + 2 pi k, 0), from the stable manifolds: a grid run's "
                         "basin_fraction_exact"),
     "basin_stability_error": (_K, True, "error estimate of basin_stability", "1",
-                              "the reference's change from rtol 1e-12 to 1e-13, with torque "
-                              "plus the polylines' chord error"),
+                              "the reference's change from rtol 1e-12 to 1e-13 (with torque "
+                              "both exact for the DOP853 dense output)"),
     "running_stability": (_PARAMS, True, "basin stability of the running limit cycle", "1",
                           "exact area fraction of the window in the running basin (0 where "
                           "there is no running cycle)"),
@@ -64,11 +64,30 @@ STUDY_VARIABLES = {
                             "of its basin boundary (Halekotte & Feudel 2020); the same for "
                             "every k; NaN without rest state"),
     "minimal_fatal_shock_error": (_PARAMS, True, "error estimate of minimal_fatal_shock", "1",
-                                  "the boundaries' reference error"),
+                                  "without torque the boundaries' reference error; with "
+                                  "torque the distance's change with the boundaries at "
+                                  "rtol 1e-12"),
     "fatal_shock_theta": (_K, True, "theta of the nearest boundary point of rest state k",
                           "rad", ""),
     "fatal_shock_theta_dot": (_K, True, "theta_dot of the nearest boundary point of rest "
                               "state k", "rad s-1", ""),
+    "running_fatal_shock": (_PARAMS, False, "minimal fatal shock of the running limit cycle",
+                            "1", "Euclidean (theta, theta_dot) distance, theta [rad] and "
+                            "theta_dot [rad s-1] as one unit, from the nearest point of the "
+                            "running cycle to the nearest point of a basin boundary "
+                            "(Halekotte & Feudel 2020); NaN where there is no running cycle "
+                            "or no rest state"),
+    "running_fatal_shock_error": (_PARAMS, False, "error estimate of running_fatal_shock",
+                                  "1", "the distance's change with the boundaries at rtol "
+                                  "1e-12, plus the cycle's own error"),
+    "running_shock_theta": (_PARAMS, False, "theta of the running cycle's point nearest a "
+                            "boundary", "rad", ""),
+    "running_shock_theta_dot": (_PARAMS, False, "theta_dot of the running cycle's point "
+                                "nearest a boundary", "rad s-1", ""),
+    "running_shock_target_theta": (_PARAMS, False, "theta of the boundary point nearest the "
+                                   "running cycle", "rad", ""),
+    "running_shock_target_theta_dot": (_PARAMS, False, "theta_dot of the boundary point "
+                                       "nearest the running cycle", "rad s-1", ""),
     "point_status": (_PARAMS, True, "what the numbers of the parameter point are", "1",
                      "exact: from the stable manifolds; saddle_node: |torque| = omega0^2, no "
                      "certified boundaries, values NaN; failed: the boundaries failed, "

@@ -70,8 +70,15 @@ def study_lines(ds: xr.Dataset) -> list[str]:
     if shock is not None and np.isfinite(shock.values).any():
         v = shock.values[np.isfinite(shock.values)]
         error = np.nanmax(ds["minimal_fatal_shock_error"].values)
-        lines.append(f"minimal fatal shock: {v.min():.10g} to {v.max():.10g} (Euclidean "
+        lines.append(f"minimal fatal shock of the rest states: {v.min():.10g} to "
+                     f"{v.max():.10g} (Euclidean "
                      f"(theta, theta_dot) distance, ± {error:.0e})")
+    cycle = ds["running_fatal_shock"].values if "running_fatal_shock" in ds else None
+    if cycle is not None and np.isfinite(cycle).any():
+        v = cycle[np.isfinite(cycle)]
+        error = np.nanmax(ds["running_fatal_shock_error"].values)
+        lines.append(f"minimal fatal shock of the running cycle: {v.min():.10g} to "
+                     f"{v.max():.10g} (the same distance, ± {error:.0e})")
     if "gaussian_stability" in ds:
         g = ds["gaussian_stability"].values
         lines.append(f"gaussian stability (sigma_theta = {ds.attrs['sigma_theta']:g}, "

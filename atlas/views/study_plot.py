@@ -131,7 +131,11 @@ def _shock_curve(ds: xr.Dataset, axis: str):
         x = ds[axis].values
         ax.plot(*_curve(ds, axis, ds["minimal_fatal_shock"].isel(k=0).values),
                 color="#1b7837", lw=1.6, marker="." if x.size <= 60 else None,
-                label="minimal fatal shock of the rest states")
+                label="of the rest states")
+        if "running_fatal_shock" in ds and np.isfinite(ds["running_fatal_shock"].values).any():
+            ax.plot(*_curve(ds, axis, ds["running_fatal_shock"].values), color="#525252",
+                    lw=1.6, ls="--", marker="." if x.size <= 60 else None,
+                    label="of the running cycle")
         _bifurcation_lines(ax, ds, axis)
         _nan_points(ax, ds, axis)
         ax.set_xlim(x[0], x[-1])
@@ -140,7 +144,8 @@ def _shock_curve(ds: xr.Dataset, axis: str):
         ax.set_ylabel("minimal fatal shock √(Δθ² + Δθ̇²)")
         ax.set_title(f"minimal fatal shock: {_parameter_title(ds, (axis,))}", fontsize=9,
                      pad=14)
-        ax.legend(loc="lower left")
+        ax.legend(loc="upper center", title="minimal fatal shock", fontsize=8,
+                  title_fontsize=8)
 
     return draw
 

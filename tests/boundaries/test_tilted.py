@@ -316,6 +316,70 @@ def test_distance_equals_brute_force(case, built):
                                atol=1e-15)
 
 
+def test_one_index_serves_every_query_in_the_window(built, monkeypatch):
+    """Sides of a grid, of points 1e-3 off the branches, of points just beyond the window's
+    θ range and of the axis θ = 0, and distances of those off the branches, all come from
+    one index, the window's, built once; each equals what an index built for the query's own
+    θ range (the segments within reach of its points) gives, bit for bit."""
+    tb = built["bstab"]
+    monkeypatch.setattr(tb, "_indices", {})
+    (a, b), (lo, hi) = tb.window
+    grid = np.meshgrid(np.linspace(a, b, 64), np.linspace(lo, hi, 48))
+    theta, theta_dot, n0, n1, _ = branch_points(tb, 300, seed=6)
+    off = (theta + 1e-3 * n0, theta_dot - 1e-3 * n1)
+    queries = [grid, off, (np.full(20, b + 5e-3), np.linspace(lo, hi, 20)),
+               (np.zeros(30), np.linspace(lo, hi, 30))]
+    sides = [tb.side(*q) for q in queries]
+    dist, saddle = tb.distance(*off)
+    assert len(tb._indices) == 1
+    assert len(set(np.concatenate([side.ravel() for side in sides]).tolist())) >= 5
+    monkeypatch.setattr(tb, "_index", tb._segments)  # each query's own range
+    for q, side in zip(queries, sides):
+        np.testing.assert_array_equal(tb.side(*q), side)
+    own_dist, own_saddle = tb.distance(*off)
+    np.testing.assert_array_equal(own_dist, dist)
+    np.testing.assert_array_equal(own_saddle, saddle)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_axis_speeds_are_the_crossings_of_the_clipped_curves(case, built):
+    """axis_speeds (found on Γ_0) are the crossings of θ = 0 by the segments of curves()'
+    clipped runs, each translate's polyline walked whole: the same doubles."""
+    tb = built[case]
+    speeds = []
+    for _, _, theta, theta_dot in tb.curves(clip=True):
+        s = np.sign(theta)
+        for i in np.flatnonzero(s[:-1] * s[1:] < 0):
+            f = theta[i] / (theta[i] - theta[i + 1])
+            speeds.append(theta_dot[i] + f * (theta_dot[i + 1] - theta_dot[i]))
+    assert len(speeds) >= 2
+    np.testing.assert_array_equal(np.sort(tb.axis_speeds()), np.sort(speeds))
+
+
+@pytest.mark.parametrize("case", ["bstab", "reversed"])
+@pytest.mark.parametrize("margin", [0.5, math.inf])
+def test_vertices_within_a_box_are_the_branches_vertices_there(case, margin, built):
+    """vertices_within (Γ_0 sorted by θ once, each translate a slice) gives the vertices of
+    every unclipped branch in the box, with their saddles: the same points as masking each
+    translate's whole polyline."""
+    tb = built[case]
+    (a, b), (lo, hi) = tb.window
+    box = (a - margin, b + margin), (lo - margin, hi + margin)
+    expected = []
+    for j, _, theta, theta_dot in tb.iter_curves(clip=False):
+        keep = ((theta >= box[0][0]) & (theta <= box[0][1]) & (theta_dot >= box[1][0])
+                & (theta_dot <= box[1][1]))
+        expected.append(np.stack([theta[keep], theta_dot[keep], np.full(keep.sum(), j)]))
+    expected = np.concatenate(expected, axis=1)
+    got = np.stack(tb.vertices_within(*box))
+    assert expected.shape[1] > 10_000
+
+    def by_point(points):
+        return points[:, np.lexsort(points)]
+
+    np.testing.assert_array_equal(by_point(got), by_point(expected))
+
+
 # --------------------------------------------------------------------------- areas
 
 @pytest.mark.parametrize("case", CASES)

@@ -1,6 +1,8 @@
-"""The compiled polyline queries (atlas.kernels.segments, through
-atlas.boundaries.segments.Segments) against brute force: the distance to every segment, and
-the parity of crossings counted segment by segment."""
+"""The compiled polylines (atlas.kernels.segments, through
+atlas.boundaries.segments.Segments) against brute force: the distance to every segment, the
+parity of crossings counted segment by segment (for points by columns and scattered), and the
+refinement of a dense output into a polyline against its own tolerances and against the
+breadth-first numpy loop it replaced (the same doubles)."""
 
 import math
 
@@ -8,6 +10,7 @@ import numpy as np
 import pytest
 
 from atlas.boundaries.segments import Segments, segment_distance
+from atlas.kernels import segments as kernel
 
 
 def _runs(rng):
@@ -47,11 +50,14 @@ def test_empty_segments_are_infinitely_far():
 
 
 @pytest.mark.parametrize("bistable", [True, False])
-def test_sides_are_the_parity_of_crossings(bistable):
+@pytest.mark.parametrize("per_column", [100, 30, 1])
+def test_sides_are_the_parity_of_crossings(bistable, per_column):
+    """Columns of equal θ as a grid's (100 a column: taken column by column), fewer (30:
+    swept) and scattered points (1: swept): the parity of the crossings above each."""
     rng = np.random.default_rng(5)
     runs = _runs(rng)
     seg = Segments(runs)
-    px = np.repeat(rng.uniform(-3, 5, 40), 30)  # columns of equal θ, as a grid's
+    px = np.repeat(rng.uniform(-3, 5, 1200 // per_column), per_column)
     py = rng.uniform(-3, 5, px.size)
     flip = np.array([-np.inf, 0.5, -np.inf])  # tag 4 flipped left of θ = 0.5
     out = seg.sides(px, py, 3, 5, flip, bistable, 99)
@@ -71,3 +77,98 @@ def test_sides_are_the_parity_of_crossings(bistable):
         expect = 3 + np.count_nonzero(~parity, axis=1)
     np.testing.assert_array_equal(out, expect)
     assert np.unique(out).size >= 2  # the points do fall on different sides
+
+
+@pytest.mark.parametrize("bistable", [True, False])
+def test_both_sweeps_give_the_same_sides(bistable):
+    """Column by column and swept give the same side to every point, whatever the layout
+    (ray_sides picks one by the points a column)."""
+    rng = np.random.default_rng(8)
+    seg = Segments(_runs(rng))
+    flip = np.array([0.0, -np.inf, 1.5])
+    for px in (rng.uniform(-3, 5, 900), np.repeat(rng.uniform(-3, 5, 9), 100),
+               np.zeros(5), np.array([seg.ax[7]])):  # scattered, a grid, one column, a vertex
+        py = rng.uniform(-3, 5, px.size)
+        order = np.argsort(px)
+        sides = []
+        for sweep in (kernel._column_sides, kernel._swept_sides):
+            out = np.empty(px.size, np.int64)
+            sweep(order, px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
+                  seg.start, 3, 5, flip, bistable, 99, out)
+            sides.append(out)
+        np.testing.assert_array_equal(sides[0], sides[1])
+        np.testing.assert_array_equal(seg.sides(px, py, 3, 5, flip, bistable, 99), sides[0])
+
+
+# --------------------------------------------------------------------------- refine
+
+@pytest.fixture(scope="module")
+def branch():
+    """The dense output of a stable branch of the bSTAB pendulum's saddle (DOP853)."""
+    from atlas.boundaries.tilted import _branch
+    from atlas.physics.pendulum import Pendulum
+
+    dense, sol, _ = _branch(Pendulum(0.05, 1.0, 0.5), -1, 1e-13, -12.0, 12.0)
+    return dense, sol.t
+
+
+def _breadth_first(dense, t, tol, longest):
+    """The refinement as numpy did it before it was compiled: a generation of chords at a
+    time, every chord still unmeasured measured at once, cut, its new vertices evaluated."""
+    y = dense(t)
+    dev = np.full(t.size - 1, np.nan)
+    for _ in range(kernel.MAX_GENERATIONS + 1):
+        todo = np.flatnonzero(np.isnan(dev))
+        if todo.size == 0:
+            return t, y, float(dev.max(initial=0.0))
+        mid = dense(0.5 * (t[todo] + t[todo + 1]))
+        (ax, ay), (bx, by) = y[:, todo], y[:, todo + 1]
+        worst = segment_distance(mid[0], mid[1], ax, ay, bx, by)
+        pieces = np.ones(dev.size, np.int64)
+        pieces[todo] = np.maximum(np.ceil(np.sqrt(worst / tol) * 1.2),
+                                  np.ceil(np.hypot(bx - ax, by - ay) / longest))
+        whole = pieces[todo] == 1
+        dev[todo[whole]] = worst[whole]
+        offset = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+        t = np.append(np.repeat(t[:-1], pieces)
+                      + offset * np.repeat(np.diff(t) / pieces, pieces), t[-1])
+        new = np.append(offset > 0, False)
+        grown = np.empty((2, t.size))
+        grown[:, ~new] = y
+        grown[:, new] = dense(t[new])
+        y = grown
+        dev = np.where(np.repeat(pieces, pieces) == 1, np.repeat(dev, pieces), np.nan)
+    raise AssertionError("the generations ran out")
+
+
+def _refine(dense, t, tol, longest):
+    return kernel.refine(t, dense.t, dense.t_old, dense.h, np.ascontiguousarray(dense.y_old),
+                         dense.F, tol, longest)
+
+
+@pytest.mark.parametrize("tol, longest", [(1e-8, 0.004), (1e-6, 0.05), (1e-10, 1.0)])
+def test_refine_meets_its_tolerances(branch, tol, longest):
+    """Every chord within ``tol`` of the dense output at its middle time and no longer than
+    ``longest``; the vertices are the dense output at the times (bit for bit), which hold
+    the given ones; the error returned is the largest chord distance."""
+    dense, steps = branch
+    times, xy, error, ok = _refine(dense, steps, tol, longest)
+    assert ok and times.size > 2 * steps.size
+    np.testing.assert_array_equal(xy, dense(times))
+    assert np.all(np.diff(times) > 0) and np.isin(steps, times).all()
+    mid = dense(0.5 * (times[:-1] + times[1:]))
+    chord = segment_distance(mid[0], mid[1], xy[0, :-1], xy[1, :-1], xy[0, 1:], xy[1, 1:])
+    assert error == chord.max() <= tol
+    assert np.hypot(*np.diff(xy, axis=1)).max() <= longest
+    assert chord.max() > 0.1 * tol  # not refined far beyond the tolerance either
+
+
+@pytest.mark.parametrize("tol, longest", [(1e-8, 0.004), (1e-6, 0.05)])
+def test_refine_is_the_breadth_first_refinement(branch, tol, longest):
+    """Depth first, chord by chord, the same vertices as a generation at a time."""
+    dense, steps = branch
+    times, xy, error, ok = _refine(dense, steps, tol, longest)
+    old_times, old_xy, old_error = _breadth_first(dense, steps, tol, longest)
+    assert ok and error == old_error
+    np.testing.assert_array_equal(times, old_times)
+    np.testing.assert_array_equal(xy, old_xy)

@@ -14,7 +14,7 @@ from scipy.optimize import minimize_scalar
 
 from atlas.boundaries.exact import exact_boundaries
 from atlas.physics.pendulum import Pendulum
-from atlas.stability.shocks import minimal_fatal_shock
+from atlas.stability.shocks import minimal_fatal_shock, running_fatal_shock
 
 pytestmark = pytest.mark.slow  # integrates manifolds
 
@@ -97,3 +97,97 @@ def test_the_shock_tends_to_the_undamped_separatrix(omega0):
     order = np.polyfit(np.log(alphas), np.log(gaps), 1)[0]
     assert 0.8 < order < 1.2, (gaps, order)
     assert gaps[-1] < 0.05 * omega0
+
+
+def _scipy_cycle(alpha, omega0, torque):
+    """The running limit cycle by scipy alone: the fixed point of the Poincaré map
+    θ̇(θs) ↦ θ̇(θs + 2π) at the saddle's angle θs by scipy's brentq, each turn by scipy's
+    DOP853 (rtol = atol = 1e-12); then one turn densely sampled: (θ, θ̇), 20,001 points."""
+    from scipy.optimize import brentq
+
+    theta_s = math.pi - math.asin(torque / omega0**2)
+
+    def flow(_, y):
+        return [y[1], torque - omega0**2 * math.sin(y[0]) - 2 * alpha * y[1]]
+
+    def around(_, y):
+        return y[0] - theta_s - 2 * math.pi
+
+    around.terminal = True
+
+    def turn(v):
+        return solve_ivp(flow, (0.0, 1e3), [theta_s, v], method="DOP853", rtol=1e-12,
+                         atol=1e-12, events=around, dense_output=True)
+
+    def excess(v):  # P(v) − v; an orbit that does not get round counts as P = 0
+        sol = turn(v)
+        return (sol.y[1, -1] if sol.status == 1 else 0.0) - v
+
+    v = brentq(excess, 1e-6, 2.0 * torque / (2 * alpha) + 1.0, xtol=1e-14)
+    sol = turn(v)
+    return sol.sol(np.linspace(0.0, sol.t[-1], 20001))
+
+
+def _scipy_branches(alpha, omega0, torque, speed=12.0):
+    """Both stable branches of the saddles (π − arcsin τ + 2πj, 0), j = −1 … 2, by scipy's
+    DOP853 (rtol = atol = 1e-13) until |θ̇| > speed, densely sampled: a list of (θ, θ̇)."""
+    theta_s = math.pi - math.asin(torque / omega0**2)
+    kappa = omega0**2 * math.cos(math.asin(torque / omega0**2))
+    lam = -alpha - math.sqrt(alpha**2 + kappa)
+    norm = math.hypot(1.0, lam)
+
+    def back(_, y):
+        return [-y[1], -(torque - omega0**2 * math.sin(y[0]) - 2 * alpha * y[1])]
+
+    def fast(_, y):
+        return abs(y[1]) - speed
+
+    fast.terminal = True
+    out = []
+    for sign in (-1.0, 1.0):
+        y0 = [theta_s + sign * 1e-8 / norm, sign * 1e-8 * lam / norm]
+        sol = solve_ivp(back, (0, 1e3), y0, method="DOP853", rtol=1e-13, atol=1e-13,
+                        dense_output=True, events=fast)
+        th, v = sol.sol(np.linspace(0, sol.t[-1], 100001))
+        out += [(th + 2 * math.pi * j, v) for j in range(-1, 3)]
+    return out
+
+
+@pytest.mark.parametrize("alpha, torque", [(0.05, 0.5), (0.1, 0.5), (0.05, 0.2), (0.05, 0.136)])
+def test_the_running_cycles_shock_against_scipy(alpha, torque):
+    """The running cycle's minimal fatal shock against an independent construction: the
+    cycle and the boundaries by scipy alone, the nearest pair of their samples refined by
+    scipy's bounded minimisation of the distance from the cycle to the nearest boundary
+    sample's neighbourhood; within the sampling's resolution (1e-8) and the shock's own
+    error."""
+    from scipy.spatial import cKDTree
+
+    b = exact_boundaries(Pendulum(alpha, 1.0, torque), WINDOW)
+    shock = running_fatal_shock(b)
+    ct, cv = _scipy_cycle(alpha, 1.0, torque)
+    points = np.concatenate([np.column_stack(branch) for branch in _scipy_branches(
+        alpha, 1.0, torque)])
+    tree = cKDTree(points)
+    d, _ = tree.query(np.column_stack([ct, cv]))
+    i = int(np.argmin(d))
+    # refine along the cycle: the distance to the boundary samples near the best one
+    near = points[tree.query_ball_point([ct[i], cv[i]], d[i] + 0.05)]
+    s = np.linspace(max(i - 3, 0), min(i + 3, ct.size - 1), 6001)
+    th, v = np.interp(s, np.arange(ct.size), ct), np.interp(s, np.arange(ct.size), cv)
+    reference = float(np.min(np.hypot(th[:, None] - near[None, :, 0],
+                                      v[:, None] - near[None, :, 1])))
+    assert abs(shock.distance - reference) < 1e-6 + shock.error, (shock, reference)
+    # the pair: a point of the cycle, and a point on a boundary (its distance ≈ 0)
+    assert math.hypot(shock.theta - shock.target_theta,
+                      shock.theta_dot - shock.target_theta_dot) == pytest.approx(
+        shock.distance, abs=1e-12)
+    assert float(b.distance(shock.target_theta, shock.target_theta_dot)[0]) \
+        <= b.reference_error + 1e-12
+    assert shock.error < 1e-8
+
+
+def test_no_running_cycle_no_running_shock():
+    """Below the homoclinic torque, and without torque, there is no running cycle."""
+    for torque in (0.0, 0.1):
+        b = exact_boundaries(Pendulum(0.05, 1.0, torque), WINDOW)
+        assert all(math.isnan(x) for x in running_fatal_shock(b))
