@@ -187,8 +187,16 @@ class LimitCycle:
         return self.direction * 2.0 * math.pi / self.period
 
 
-def _fixed_point(turn: _Turn, omega0: float):
-    """(θs, v, T): the fixed point v of P and the period (canonical frame), or None."""
+#: Half-width, relative, of the bracket around a fixed point already found at another
+#: tolerance (:func:`_fixed_point`'s ``near``).
+_NEAR = 1e-6
+
+
+def _fixed_point(turn: _Turn, omega0: float, near: float | None = None):
+    """(θs, v, T): the fixed point v of P and the period (canonical frame), or None.
+    ``near``: the fixed point found at another tolerance; P contracts, so v·(1 ∓ _NEAR)
+    brackets this one too, and Brent's method needs a few turns instead of some twelve (the
+    whole bracket (0, scale) is taken where it does not)."""
     p0 = turn.escape(omega0)
     if not p0 > 0.0:
         return None
@@ -201,7 +209,12 @@ def _fixed_point(turn: _Turn, omega0: float):
         reached, _, theta_dot, _ = turn.run(theta_s, v, end)
         return (theta_dot if reached else 0.0) - v
 
-    v = _brentq(excess, 0.0, turn.scale, xtol=1e-15 * turn.scale, rtol=1e-15)
+    lo, hi = 0.0, turn.scale
+    if near is not None:
+        a, b = near * (1.0 - _NEAR), near * (1.0 + _NEAR)
+        if excess(a) > 0.0 > excess(b):
+            lo, hi = a, b
+    v = _brentq(excess, lo, hi, xtol=1e-15 * turn.scale, rtol=1e-15)
     reached, _, _, period = turn.run(theta_s, v, end)
     if not reached:  # cannot happen: P(v) = v > 0 means the orbit got round
         raise RuntimeError("the limit cycle's orbit did not complete a turn")
@@ -235,9 +248,12 @@ def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-
     if torque == 0.0:
         return None
     direction = 1 if torque > 0 else -1
-    found = [_fixed_point(_Turn(alpha, omega0, abs(torque), r), omega0)
-             for r in (rtol, 10.0 * rtol)]
-    if found[0] is None or found[1] is None:
+    found = [_fixed_point(_Turn(alpha, omega0, abs(torque), rtol), omega0)]
+    if found[0] is None:
+        return None
+    found.append(_fixed_point(_Turn(alpha, omega0, abs(torque), 10.0 * rtol), omega0,
+                              near=found[0][1]))
+    if found[1] is None:
         return None
     (theta_s, v, period), (_, v_check, period_check) = found
     error = float(max(abs(v - v_check) / v, abs(period - period_check) / period))
