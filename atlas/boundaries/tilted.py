@@ -475,29 +475,52 @@ class TiltedBoundaries:
         point (θ [rad], θ̇ [rad s⁻¹], broadcast) to the nearest basin boundary, and the index j
         of that boundary's saddle s_j (the translate of the branches through it).
 
-        The boundaries within θ ± ``margin`` of the points are searched first, then, for
-        points farther than that from all of them, those within θ ± the distance found (no
-        nearer boundary can lie beyond), and so on. Exact for the polylines wherever the
-        distance is at most the point's clearance from the band's edges beyond which the
-        boundaries continue (the bottom, and the top when the branches leave there:
-        ``bistable`` false); for points of the window that is at least ``margin``. The
-        error: ``chord_error`` + ``reference_error``."""
+        The boundaries within θ ± ``margin`` of the points are searched first (the window's
+        index, :meth:`_index`). A point is done when the distance found is at most its
+        clearance from the θ range the searched segments cover (less MAX_SEGMENT): every
+        other segment lies beyond that range, farther. The others are searched again on the
+        boundaries within θ ± the largest distance found (no nearer boundary can lie beyond;
+        a whole turn more if none was found), each from its squared distance found, a bound
+        that prunes the wider search at once, skipping the boxes within the θ range searched
+        before (:func:`atlas.kernels.segments.nearer_segments`: the same minimum as a search
+        of the wider index alone), and so on. Exact for the polylines wherever the distance
+        is at most the point's clearance from the band's edges beyond which the boundaries
+        continue (the bottom, and the top when the branches leave there: ``bistable``
+        false); for points of the window that is at least ``margin``. The error:
+        ``chord_error`` + ``reference_error``."""
+        from atlas.kernels.segments import nearer_segments
+
         x, v = self._canonical(theta, theta_dot)
         shape = x.shape
         x, v = x.ravel(), v.ravel()
         if x.size == 0:
             return np.zeros(shape), np.zeros(shape, np.int64)
-        dist, k = np.full(x.size, np.inf), np.zeros(x.size, np.int64)
+        dist2, k = np.full(x.size, np.inf), np.zeros(x.size, np.int64)
         todo, reach = np.arange(x.size), self.margin
+        searched = (math.inf, -math.inf)  # θ where every segment has been searched
         while todo.size:
             lo, hi = float(x[todo].min()), float(x[todo].max())
-            index = self._index(lo - reach - MAX_SEGMENT, hi + reach + MAX_SEGMENT)
-            dist[todo], k[todo] = index.nearest(x[todo], v[todo])
-            todo = todo[dist[todo] > reach]
+            wanted = (lo - reach - MAX_SEGMENT, hi + reach + MAX_SEGMENT)
+            index = self._index(*wanted)
+            # the θ range whose segments it holds: its key (a kept index may cover more)
+            covered = next((key for key, kept in self._indices.items() if kept is index),
+                           wanted)
+            px, py, d2, near = x[todo], v[todo], dist2[todo], k[todo]
+            nearer_segments(px, py, index.ax, index.ay, index.bx, index.by, index.tag,
+                            index.xlo, index.xhi, index.ylo, index.yhi, index.start, *searched,
+                            d2, near)
+            dist2[todo], k[todo] = d2, near
+            found = np.sqrt(d2)
+            # every segment the index lacks lies beyond the θ range it covers
+            beyond = found > np.minimum(px - covered[0], covered[1] - px) - MAX_SEGMENT
+            todo, found = todo[beyond], found[beyond]
+            # the segments there are searched (the index holds every one with a vertex in its
+            # θ range: those within it, to the rounding of the translates' shifts)
+            searched = (covered[0] + MAX_SEGMENT, covered[1] - MAX_SEGMENT)
             # none nearer than the distance found lies beyond it (a whole turn if none found)
-            reach = float(dist[todo].max(initial=reach + _TWO_PI)) \
-                if np.all(np.isfinite(dist[todo])) else reach + _TWO_PI
-        return dist.reshape(shape), self._saddle(k).reshape(shape)
+            reach = float(found.max(initial=reach + _TWO_PI)) if np.all(np.isfinite(found)) \
+                else reach + _TWO_PI
+        return np.sqrt(dist2).reshape(shape), self._saddle(k).reshape(shape)
 
     # ------------------------------------------------------------------ areas
     def _polygon(self, f: _Fundamental) -> np.ndarray:

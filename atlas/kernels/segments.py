@@ -9,7 +9,10 @@ per box of the level above, until at most ``FAN`` boxes remain (consecutive piec
 smooth curve have tight boxes). :func:`nearest_segments` finds, per point (``prange``:
 independent of the thread count), the Euclidean distance to the nearest segment and its tag
 by a depth-first search, nearest box first, that skips every box farther than the best
-distance found: exact for the polylines (the box distance is a lower bound).
+distance found: exact for the polylines (the box distance is a lower bound). Each search
+starts from the leaf of the previous point's nearest segment (neighbours on a grid share
+their nearest boundary: a tight first bound); :func:`nearer_segments` also from a bound the
+caller knows (a search among fewer segments before).
 :func:`ray_sides` counts, per point, the crossings of the upward vertical ray with the
 segments of each tag (a segment covers θ ∈ [min, max) of its ends, its θ̇ at θ by linear
 interpolation), for the side rule of :meth:`atlas.boundaries.tilted.TiltedBoundaries.side`:
@@ -28,11 +31,11 @@ import numpy as np
 from atlas.kernels import cached_njit
 from atlas.kernels.dop853 import dense_component, dense_step
 
-__all__ = ["FAN", "refine", "build", "nearest_segments", "ray_sides"]
+__all__ = ["FAN", "refine", "build", "nearest_segments", "nearer_segments", "ray_sides"]
 
 #: Children per box of the hierarchy (segments per leaf box).
 FAN = 16
-_CHUNK = 256  # points per parallel task of nearest_segments
+_CHUNK = 256  # points per parallel task of nearest_segments (each seeds the next search)
 #: :func:`ray_sides` walks the hierarchy once for all points (instead of once per column of
 #: equal θ) when they hold fewer than this many a column on average (measured on the tilted
 #: boundaries: scattered points ~2 µs each instead of ~13 µs; equal near 64 a column).
@@ -205,60 +208,130 @@ def nearest_segments(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, out
     """Per point (px, py): the distance to the nearest segment (ax, ay) → (bx, by) and that
     segment's ``tag`` into ``out_dist``, ``out_tag`` (inf, 0 without segments); the
     hierarchy from :func:`build`. Exact for the segments (module docstring)."""
-    levels = start.size - 1
-    capacity = FAN * (levels + 1)
-    n_chunks = (px.size + _CHUNK - 1) // _CHUNK
-    for chunk in nb.prange(n_chunks):  # the search's stacks allocated once per chunk
-        st_level = np.empty(capacity, np.int64)
-        st_box = np.empty(capacity, np.int64)
-        st_lb = np.empty(capacity)
-        lbs = np.empty(FAN)
-        ids = np.empty(FAN, np.int64)
-        for p in range(chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size)):
-            out_dist[p], out_tag[p] = _nearest(px[p], py[p], ax, ay, bx, by, tag, xlo, xhi,
-                                               ylo, yhi, start, st_level, st_box, st_lb, lbs,
-                                               ids)
+    for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
+        first, stop = chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size)
+        out_dist[first:stop] = np.inf
+        out_tag[first:stop] = 0
+        _nearest_run(first, stop, px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start,
+                     np.inf, -np.inf, out_dist, out_tag)
+        for p in range(first, stop):
+            out_dist[p] = math.sqrt(out_dist[p])
+
+
+@cached_njit(parallel=True, nogil=True)
+def nearer_segments(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, searched_lo,
+                    searched_hi, dist2, near_tag):
+    """:func:`nearest_segments` from known bounds, on squared distances: on entry
+    ``dist2``, ``near_tag`` hold each point's squared distance to some segment and its tag
+    (inf, 0 for none), the nearest of a search before; each is replaced where a nearer
+    segment is found, and the search skips every box not nearer than it and every box
+    within θ ∈ [``searched_lo``, ``searched_hi``] (the segments that search had: pass inf,
+    −inf for none). The minimum over both searches' segments: the same doubles as one
+    search over them all."""
+    for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
+        _nearest_run(chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size), px, py, ax, ay, bx,
+                     by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, dist2,
+                     near_tag)
 
 
 @nb.njit(inline="always")
-def _nearest(x, y, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, st_level, st_box, st_lb,
-             lbs, ids):
-    """(distance, tag) of the segment nearest (x, y): depth-first, nearest box first, on
-    squared distances (the root taken once, at the end)."""
+def _nearest_run(first, stop, px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start,
+                 searched_lo, searched_hi, dist2, near_tag):
+    """:func:`_nearest` for the points [first, stop) in turn (one parallel task), each
+    search's stacks allocated once and each point's search started from the leaf of the
+    previous point's nearest segment: a grid's neighbours (a row's, in its order) share
+    their nearest boundary, so the first bound is nearly the distance itself and prunes
+    the search at once (about half the work of a search from the top alone)."""
+    levels = start.size - 1
+    capacity = FAN * (levels + 1)
+    st_level = np.empty(capacity, np.int64)
+    st_box = np.empty(capacity, np.int64)
+    st_lb = np.empty(capacity)
+    lbs = np.empty(FAN)
+    ids = np.empty(FAN, np.int64)
+    near = np.empty(FAN)
+    seed = -1  # the previous point's nearest segment (−1: none yet)
+    for p in range(first, stop):
+        dist2[p], near_tag[p], nearest = _nearest(
+            px[p], py[p], dist2[p], near_tag[p], seed // FAN if seed >= 0 else -1, ax, ay,
+            bx, by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, st_level,
+            st_box, st_lb, lbs, ids, near)
+        if nearest >= 0:
+            seed = nearest
+
+
+@nb.njit(inline="always")
+def _nearest(x, y, best, best_tag, seed_leaf, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start,
+             searched_lo, searched_hi, st_level, st_box, st_lb, lbs, ids, near):
+    """(squared distance, tag, index) of the segment nearest (x, y), or (``best``,
+    ``best_tag``, −1) when none is nearer than that bound: the leaf ``seed_leaf`` first (−1:
+    none), then depth-first from the top, nearest box first, skipping every box not nearer
+    than the best so far (the leaf searched first among them) or within θ ∈
+    [searched_lo, searched_hi] (:func:`_box_bound2`)."""
     top = start.size - 2
-    n_seg = ax.size
-    best, best_tag = np.inf, 0
+    best_seg = -1
+    if seed_leaf >= 0:
+        best, best_seg = _leaf_nearest(x, y, seed_leaf, ax, ay, bx, by, near, best, best_seg)
     sp = 0
     for b in range(start[top], start[top + 1]):  # the top boxes, farthest pushed first
         st_level[sp], st_box[sp] = top, b - start[top]
-        st_lb[sp] = _box_distance2(x, y, xlo[b], xhi[b], ylo[b], yhi[b])
+        st_lb[sp] = _box_bound2(x, y, xlo[b], xhi[b], ylo[b], yhi[b], searched_lo,
+                                searched_hi)
         sp += 1
     _sort_pushed(st_level, st_box, st_lb, 0, sp)
     while sp > 0:
         sp -= 1
         level, box, lb = st_level[sp], st_box[sp], st_lb[sp]
-        if lb >= best:
+        if lb >= best or (level == 0 and box == seed_leaf):
             continue
         if level == 0:
-            for s in range(box * FAN, min((box + 1) * FAN, n_seg)):
-                d = _segment_distance2(x, y, ax[s], ay[s], bx[s], by[s])
-                if d < best:
-                    best, best_tag = d, tag[s]
+            best, best_seg = _leaf_nearest(x, y, box, ax, ay, bx, by, near, best, best_seg)
             continue
         first = box * FAN
-        last = min(first + FAN, start[level] - start[level - 1])
+        count = min(FAN, start[level] - start[level - 1] - first)
+        below = start[level - 1] + first
+        for c in range(count):  # all children measured first (a loop without branches)
+            b = below + c
+            near[c] = _box_bound2(x, y, xlo[b], xhi[b], ylo[b], yhi[b], searched_lo,
+                                  searched_hi)
         m = 0
-        for c in range(first, last):
-            b = start[level - 1] + c
-            d = _box_distance2(x, y, xlo[b], xhi[b], ylo[b], yhi[b])
-            if d < best:
-                lbs[m], ids[m] = d, c
+        for c in range(count):
+            if near[c] < best:
+                lbs[m], ids[m] = near[c], first + c
                 m += 1
         for i in range(m):  # push the farthest first: the nearest is searched next
             st_level[sp + i], st_box[sp + i], st_lb[sp + i] = level - 1, ids[i], lbs[i]
         _sort_pushed(st_level, st_box, st_lb, sp, sp + m)
         sp += m
-    return math.sqrt(best), best_tag
+    if best_seg >= 0:
+        best_tag = tag[best_seg]
+    return best, best_tag, best_seg
+
+
+@nb.njit(inline="always")
+def _box_bound2(x, y, xlo, xhi, ylo, yhi, searched_lo, searched_hi):
+    """The squared distance from (x, y) to a box, or inf for a box within θ ∈ [searched_lo,
+    searched_hi] (its segments searched before: nothing there to find)."""
+    if searched_lo <= xlo and xhi <= searched_hi:
+        return np.inf
+    return _box_distance2(x, y, xlo, xhi, ylo, yhi)
+
+
+@nb.njit(inline="always")
+def _leaf_nearest(x, y, leaf, ax, ay, bx, by, near, best, best_seg):
+    """The leaf's segments measured into ``near`` (a loop without branches, which the
+    compiler can vectorise), then the nearest of them where it is nearer than ``best`` (the
+    first of equals, as segment by segment): (squared distance, index), else (best,
+    best_seg)."""
+    first = leaf * FAN
+    count = min(FAN, ax.size - first)
+    for i in range(count):
+        s = first + i
+        near[i] = _segment_distance2(x, y, ax[s], ay[s], bx[s], by[s])
+    for i in range(count):
+        if near[i] < best:
+            best, best_seg = near[i], first + i
+    return best, best_seg
 
 
 @nb.njit(inline="always")

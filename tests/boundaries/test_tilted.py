@@ -316,6 +316,33 @@ def test_distance_equals_brute_force(case, built):
                                atol=1e-15)
 
 
+@pytest.mark.parametrize("case", ["bstab", "reversed"])
+def test_distance_rounds_are_one_search_of_every_boundary_within_reach(case, built,
+                                                                         monkeypatch):
+    """A grid of the window, a third of it farther than ``margin`` from every boundary: the
+    points the window's index cannot answer are searched again on a wider one, from the
+    distances found and skipping what was searched. The same doubles and saddles as one
+    search of an index holding every boundary within θ ± 12 of the window, and for the
+    farthest points the brute-force minimum."""
+    tb = built[case]
+    monkeypatch.setattr(tb, "_indices", {})
+    (a, b), (lo, hi) = tb.window
+    theta, theta_dot = (g.ravel() for g in np.meshgrid(np.linspace(a, b, 128),
+                                                        np.linspace(lo, hi, 96)))
+    dist, saddle = tb.distance(theta, theta_dot)
+    assert len(tb._indices) == 2 and np.mean(dist > tb.margin) > 0.2  # a second round
+    (ca, cb), _ = tb._canonical_window()
+    wide = (ca - 12.0, cb + 12.0)
+    monkeypatch.setattr(tb, "_indices", {wide: tb._segments(*wide)})
+    one, one_saddle = tb.distance(theta, theta_dot)
+    assert len(tb._indices) == 1 and dist.max() < 10.0  # one round
+    np.testing.assert_array_equal(one, dist)
+    np.testing.assert_array_equal(one_saddle, saddle)
+    far = np.argsort(dist)[-8:]
+    np.testing.assert_allclose(dist[far], brute_distance(tb, theta[far], theta_dot[far], 12.0),
+                               rtol=1e-12, atol=1e-15)
+
+
 def test_one_index_serves_every_query_in_the_window(built, monkeypatch):
     """Sides of a grid, of points 1e-3 off the branches, of points just beyond the window's
     θ range and of the axis θ = 0, and distances of those off the branches, all come from

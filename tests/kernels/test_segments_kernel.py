@@ -44,6 +44,89 @@ def test_nearest_is_the_brute_force_minimum():
     assert np.all(dist[:5] == 0.0)
 
 
+def _brute_nearest(runs, px, py):
+    """(distance, tag) of the nearest segment, over every segment of every run."""
+    best = np.full(px.size, np.inf)
+    best_tag = np.zeros(px.size, np.int64)
+    for x, y, k in runs:
+        d = segment_distance(px[:, None], py[:, None], x[None, :-1], y[None, :-1],
+                             x[None, 1:], y[None, 1:]).min(axis=1)
+        best_tag = np.where(d < best, k, best_tag)
+        best = np.minimum(best, d)
+    return best, best_tag
+
+
+def test_nearest_does_not_depend_on_the_order_of_the_points():
+    """Each search starts from the previous point's nearest leaf (a bound only): a grid's
+    points row by row (neighbours: tight bounds, several parallel tasks of _CHUNK points)
+    and shuffled (loose bounds) get the same doubles and tags, the brute-force minimum."""
+    rng = np.random.default_rng(9)
+    runs = _runs(rng)
+    seg = Segments(runs)
+    px, py = (g.ravel() for g in np.meshgrid(np.linspace(-4, 6, 40), np.linspace(-3, 6, 30)))
+    assert px.size > 4 * kernel._CHUNK
+    dist, tag = seg.nearest(px, py)
+    shuffled = rng.permutation(px.size)
+    dist_s, tag_s = seg.nearest(px[shuffled], py[shuffled])
+    np.testing.assert_array_equal(dist_s, dist[shuffled])
+    np.testing.assert_array_equal(tag_s, tag[shuffled])
+    best, best_tag = _brute_nearest(runs, px, py)
+    np.testing.assert_allclose(dist, best, rtol=4e-16, atol=0)
+    np.testing.assert_array_equal(tag, best_tag)
+
+
+def _search(seg, px, py, dist2, tag, searched=(np.inf, -np.inf)):
+    kernel.nearer_segments(px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
+                           seg.ylo, seg.yhi, seg.start, *searched, dist2, tag)
+
+
+def test_nearer_segments_continue_a_search_of_fewer_segments():
+    """A search of the segments with a vertex in θ ∈ [a, b], continued on all of them from
+    its squared distances and skipping the boxes within [a, b] (less the longest segment),
+    gives the doubles and tags of one search of all: for points whose nearest segment lies
+    beyond [a, b] as well as within. Without the bounds, the skipped boxes are missed."""
+    rng = np.random.default_rng(10)
+    runs = _runs(rng)
+    a, b = -0.5, 1.5
+    fewer = []
+    for x, y, k in runs:  # the runs of vertices in [a, b], one vertex beyond either end
+        inside = np.flatnonzero((x >= a) & (x <= b))
+        cut = np.flatnonzero(np.diff(inside) > 1)
+        for part in np.split(inside, cut + 1):
+            lo, hi = max(part[0] - 1, 0), min(part[-1] + 2, x.size)
+            fewer.append((x[lo:hi], y[lo:hi], k))
+    seg, part = Segments(runs), Segments(fewer)
+    longest = max(np.hypot(np.diff(x), np.diff(y)).max() for x, y, _ in runs)
+    px, py = rng.uniform(-4, 6, 2000), rng.uniform(-3, 6, 2000)
+    dist, tag = seg.nearest(px, py)
+    dist2, near = np.full(px.size, np.inf), np.zeros(px.size, np.int64)
+    _search(part, px, py, dist2, near)
+    beyond = np.sqrt(dist2) > dist  # nearest segment not among the fewer
+    assert 100 < beyond.sum() < px.size - 100
+    searched = (a + longest, b - longest)
+    _search(seg, px, py, dist2, near, searched)
+    np.testing.assert_array_equal(np.sqrt(dist2), dist)
+    np.testing.assert_array_equal(near, tag)
+    unbounded, unbounded_tag = np.full(px.size, np.inf), np.zeros(px.size, np.int64)
+    _search(seg, px, py, unbounded, unbounded_tag, searched)
+    assert np.all(unbounded >= dist2) and np.any(unbounded > dist2)
+
+
+def test_a_bound_no_segment_beats_is_kept():
+    rng = np.random.default_rng(11)
+    seg = Segments(_runs(rng))
+    px, py = rng.uniform(-4, 6, 600), rng.uniform(-3, 6, 600)
+    dist, tag = seg.nearest(px, py)
+    dist2 = np.where(np.arange(px.size) % 2 == 0, 0.25 * dist**2, np.inf)
+    near = np.full(px.size, 77)
+    _search(seg, px, py, dist2, near)
+    kept = np.arange(px.size) % 2 == 0
+    np.testing.assert_array_equal(dist2[kept], 0.25 * dist[kept] ** 2)
+    assert np.all(near[kept] == 77)
+    np.testing.assert_array_equal(np.sqrt(dist2[~kept]), dist[~kept])
+    np.testing.assert_array_equal(near[~kept], tag[~kept])
+
+
 def test_empty_segments_are_infinitely_far():
     dist, tag = Segments([]).nearest(np.array([0.0]), np.array([1.0]))
     assert dist[0] == math.inf and tag[0] == 0
