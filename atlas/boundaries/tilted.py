@@ -126,6 +126,12 @@ def _first_where(x: np.ndarray, shift: float, bound: float, side: str) -> int:
     return i
 
 
+def _widened(distance: float) -> float:
+    """A distance found at one tolerance, widened to bound the same distance at another
+    (they differ by some 1e-12): a search for it prunes at once."""
+    return distance * (1.0 + 1e-6) + 1e-9
+
+
 class _Fundamental:
     """Γ_0 = L_0 ∪ R_0 of the canonical pendulum ``p`` (τ > 0) at rtol ``rtol``: its two
     branches integrated (``ends``, ``bistable``), as polynomial pieces (``pieces``, from L_0's
@@ -582,10 +588,13 @@ class TiltedBoundaries:
                           error=error[keep][order], running_error=running_error)
 
     # ------------------------------------------------------------------ nearest point
-    def _nearest(self, f: _Fundamental, theta: float, theta_dot: float):
+    def _nearest(self, f: _Fundamental, theta: float, theta_dot: float,
+                 near: float | None = None):
         """(distance, θ, θ̇) of the nearest point of any Γ_k of ``f`` to one point
         (actual frame), exact for the dense output (:func:`atlas.kernels.dense_curves.
-        nearest`): the nearer of the two saddles beside the point bounds the search."""
+        nearest`): the nearer of the two saddles beside the point bounds the search, or
+        ``near`` (the distance found at another tolerance) a little widened, where that
+        finds it."""
         from atlas.kernels.dense_curves import nearest
 
         x, v = self.sign * theta, self.sign * theta_dot
@@ -596,7 +605,11 @@ class TiltedBoundaries:
         ks = range(math.floor((x - best - hi - 1.0) / _TWO_PI),
                    math.ceil((x + best - lo + 1.0) / _TWO_PI) + 1)
         shifts = _TWO_PI * np.array(ks, np.float64)
-        d, t, w = nearest(f.pieces, shifts, float(x), float(v), math.inf)
+        d, t, w = math.inf, math.nan, math.nan
+        if near is not None:
+            d, t, w = nearest(f.pieces, shifts, float(x), float(v), _widened(near))
+        if math.isnan(t):
+            d, t, w = nearest(f.pieces, shifts, float(x), float(v), math.inf)
         return d, self.sign * t, self.sign * w
 
     def running_shock(self):
@@ -604,22 +617,28 @@ class TiltedBoundaries:
         nearest pair of a point of the cycle and a point of a basin boundary (any tongue's),
         as (distance [rad-ish], the cycle's point θ [rad], θ̇ [rad s⁻¹], the boundary's point
         θ, θ̇, error [rad-ish]); NaN where there is no running cycle (not ``bistable``). The
-        cycle is one turn from its fixed point (:attr:`cycle`) by DOP853 at rtol 1e-12, as
-        pieces; the pair is exact for the pieces (:func:`atlas.kernels.dense_curves.
+        cycle is one turn from its crossing of the section θs
+        (:func:`atlas.physics.running.cycle_section`, or :attr:`cycle` where known) by
+        DOP853 at rtol 1e-12, as pieces; the pair is exact for the pieces (:func:`atlas.kernels.dense_curves.
         nearest_between`). The error: the distance's change with the boundaries at
-        RTOL_CHECK, plus the cycle's own (its relative error times its largest speed)."""
-        from atlas.kernels.dense_curves import nearest_between
+        RTOL_CHECK, plus the cycle's own (its relative error times a bound on its speed)."""
+        from atlas.kernels.dense_curves import nearest_between, ranges
         from atlas.kernels.dop853 import EVENT, FLOW, TURN, solve
+        from atlas.physics.running import cycle_section
 
         if not self.bistable:
             return (math.nan,) * 6
-        p, cycle = self.pendulum, self.cycle
-        theta_s, v = self.sign * cycle.theta0, self.sign * float(cycle.theta_dot[0])
+        p = self.pendulum
+        if "cycle" in self.__dict__:  # given, or found already: its crossing of θs
+            cycle = self.cycle
+            theta_s, v = self.sign * cycle.theta0, self.sign * float(cycle.theta_dot[0])
+            period, cycle_error = cycle.period, cycle.error
+        else:  # only the crossing, not the sampled cycle
+            theta_s, v, period, cycle_error = cycle_section(p.alpha, p.omega0, p.torque)
         tau, rtol = abs(p.torque), 1e-12
         scale = (p.omega0**2 + tau) / (2.0 * p.alpha)
         turn = solve(FLOW, (p.alpha, p.omega0, tau, 0.0), TURN, (theta_s + _TWO_PI, 0.0),
-                     (theta_s, v), 4.0 * cycle.period, rtol,
-                     (rtol * _TWO_PI, rtol * scale), dim=2)
+                     (theta_s, v), 4.0 * period, rtol, (rtol * _TWO_PI, rtol * scale), dim=2)
         if turn.status != EVENT:
             raise RuntimeError("the running cycle did not complete a turn")
         pieces = _pieces(turn)
@@ -630,8 +649,14 @@ class TiltedBoundaries:
         # the saddle (θs, 0) is on a boundary, the cycle's point (θs, v) above it: a bound
         bound = v * (1.0 + 1e-9)
         fine = nearest_between(pieces, self._branches.pieces, shifts, bound)
-        check = nearest_between(pieces, self._branches_check.pieces, shifts, bound)
-        error = (abs(fine[0] - check[0]) + cycle.error * float(np.abs(cycle.theta_dot).max())
+        check = nearest_between(pieces, self._branches_check.pieces, shifts,
+                                _widened(fine[0]))
+        if math.isnan(check[1]):  # not within the widened distance: the whole search
+            check = nearest_between(pieces, self._branches_check.pieces, shifts, bound)
+        box = np.empty((pieces.shape[0], 2, 2))
+        ranges(pieces, box)
+        speed = float(np.abs(box[:, 1, :]).max())  # at least the cycle's largest speed
+        error = (abs(fine[0] - check[0]) + cycle_error * speed
                  + 4 * np.finfo(float).eps * max(fine[0], 1.0))
         d, a_t, a_v, b_t, b_v = (float(x) for x in fine)
         sign = self.sign
@@ -643,5 +668,5 @@ class TiltedBoundaries:
         error is the change of the distance from RTOL_CHECK (docs/design/tilted-boundaries.md).
         """
         d, t, w = self._nearest(self._branches, theta, theta_dot)
-        check, *_ = self._nearest(self._branches_check, theta, theta_dot)
+        check, *_ = self._nearest(self._branches_check, theta, theta_dot, near=d)
         return d, t, w, abs(d - check) + 4 * np.finfo(float).eps * max(d, 1.0)

@@ -414,6 +414,7 @@ def nearest(C, shifts, x, y, best):
 #: Samples per piece of :func:`nearest_between`'s first guess on a pair of pieces.
 _PAIR_SAMPLES = 9
 _PAIR_NEWTON = 12
+_BLOCK = 8  # pieces of A whose common range box is tested first
 
 
 @nb.njit(inline="always")
@@ -487,24 +488,24 @@ def nearest_between(A, B, shifts, best):
         for q in range(m):
             for c in range(2):
                 sa[i, q, c] = _horner(A[i, c], _N, q / (m - 1))
-    for i in range(nb_):
-        for q in range(m):
-            for c in range(2):
-                sb[i, q, c] = _horner(B[i, c], _N, q / (m - 1))
     # the longest gap between a piece's consecutive samples: every point of the piece lies
-    # within (a little more than) half of it from a sample
+    # within (a little more than) half of it from a sample (B's: made with its samples)
     gap_a, gap_b = np.zeros(na), np.zeros(nb_)
     for i in range(na):
         for q in range(m - 1):
             gap_a[i] = max(gap_a[i], math.hypot(sa[i, q + 1, 0] - sa[i, q, 0],
                                                 sa[i, q + 1, 1] - sa[i, q, 1]))
-    for i in range(nb_):
-        for q in range(m - 1):
-            gap_b[i] = max(gap_b[i], math.hypot(sb[i, q + 1, 0] - sb[i, q, 0],
-                                                sb[i, q + 1, 1] - sb[i, q, 1]))
+    sampled = np.zeros(nb_, np.bool_)  # B's samples are made when a piece is first near
     out = np.array([best, np.nan, np.nan, np.nan, np.nan])
     pa, pb = np.empty(6), np.empty(6)
     scratch = np.empty((4, _MAX_COEFFS))
+    # the range boxes of blocks of _BLOCK consecutive pieces of A
+    block = np.empty(((na + _BLOCK - 1) // _BLOCK, 2, 2))
+    for b in range(block.shape[0]):
+        for c in range(2):
+            block[b, c, 0] = box_a[b * _BLOCK:(b + 1) * _BLOCK, c, 0].min()
+            block[b, c, 1] = box_a[b * _BLOCK:(b + 1) * _BLOCK, c, 1].max()
+    far = False
     # A's whole range, to keep only the pieces of B that may come nearer than the best
     a_lo_t, a_hi_t = box_a[:, 0, 0].min(), box_a[:, 0, 1].max()
     a_lo_v, a_hi_v = box_a[:, 1, 0].min(), box_a[:, 1, 1].max()
@@ -517,18 +518,35 @@ def nearest_between(A, B, shifts, best):
                 gx = max(box_b[k, 0, 0] + shifts[j] - a_hi_t, 0.0,
                          a_lo_t - box_b[k, 0, 1] - shifts[j])
                 gy = max(box_b[k, 1, 0] - a_hi_v, 0.0, a_lo_v - box_b[k, 1, 1])
-                if math.hypot(gx, gy) < out[0]:
+                if gx * gx + gy * gy < out[0] * out[0]:
                     near_k[count], near_j[count] = k, j
                     count += 1
         for c in range(count):
             k, j = near_k[c], near_j[c]
             shift = shifts[j]
+            if not sampled[k]:
+                for q in range(m):
+                    for d in range(2):
+                        sb[k, q, d] = _horner(B[k, d], _N, q / (m - 1))
+                for q in range(m - 1):
+                    gap_b[k] = max(gap_b[k], math.hypot(sb[k, q + 1, 0] - sb[k, q, 0],
+                                                        sb[k, q + 1, 1] - sb[k, q, 1]))
+                sampled[k] = True
             for i in range(na):
+                if i % _BLOCK == 0:  # a block of A's pieces at once: skip it if it is far
+                    b = i // _BLOCK
+                    gx = max(box_b[k, 0, 0] + shift - block[b, 0, 1], 0.0,
+                             block[b, 0, 0] - box_b[k, 0, 1] - shift)
+                    gy = max(box_b[k, 1, 0] - block[b, 1, 1], 0.0,
+                             block[b, 1, 0] - box_b[k, 1, 1])
+                    far = gx * gx + gy * gy >= out[0] * out[0]
+                if far:
+                    continue
                 gx = max(box_b[k, 0, 0] + shift - box_a[i, 0, 1], 0.0,
                          box_a[i, 0, 0] - box_b[k, 0, 1] - shift)
                 gy = max(box_b[k, 1, 0] - box_a[i, 1, 1], 0.0,
                          box_a[i, 1, 0] - box_b[k, 1, 1])
-                if math.hypot(gx, gy) >= out[0]:
+                if gx * gx + gy * gy >= out[0] * out[0]:
                     continue
                 # the nearest sample pair
                 d2, s0, t0 = np.inf, 0.0, 0.0

@@ -28,6 +28,7 @@ from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import START_DISTANCE, Pendulum, tilt
 
 __all__ = ["running_certificate", "LimitCycle", "RunningCertificate", "BarrierCheck", "limit_cycle",
+           "cycle_section", "cycle_exists",
            "homoclinic_threshold", "running_barrier", "check_barrier", "contains",
            "rk4_allowance", "CYCLE_SAMPLES", "BARRIER_SAMPLES", "TOP_MARGIN"]
 
@@ -233,6 +234,27 @@ def cycle_exists(alpha: float, omega0: float, torque: float, *, rtol: float = 1e
                for r in (rtol, 10.0 * rtol))
 
 
+def cycle_section(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12):
+    """The running limit cycle's crossing of its Poincaré section, without sampling it:
+    (θs [rad], v [rad s⁻¹], period [s], error) in the canonical frame (τ > 0: θs the saddle's
+    angle, v > 0 the cycle's speed there; mirrored for τ < 0 by (θ, θ̇) → (−θ, −θ̇)), or None
+    where there is no cycle. ``error``: the relative change of v and of the period from
+    rtol·10 (the fixed point at rtol·10, bracketed around the first: P contracts)."""
+    _check(alpha, omega0)
+    if torque == 0.0:
+        return None
+    found = [_fixed_point(_Turn(alpha, omega0, abs(torque), rtol), omega0)]
+    if found[0] is None:
+        return None
+    found.append(_fixed_point(_Turn(alpha, omega0, abs(torque), 10.0 * rtol), omega0,
+                              near=found[0][1]))
+    if found[1] is None:
+        return None
+    (theta_s, v, period), (_, v_check, period_check) = found
+    error = float(max(abs(v - v_check) / v, abs(period - period_check) / period))
+    return theta_s, v, period, error
+
+
 def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12,
                 samples: int = CYCLE_SAMPLES) -> LimitCycle | None:
     """The running limit cycle of θ̈ = τ − ω0² sin θ − 2αθ̇, or None where there is none
@@ -244,20 +266,11 @@ def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-
     dθ̇/dθ = θ̈/θ̇, dt/dθ = 1/θ̇ (regular: θ̇ > 0 on the cycle). Accuracy: ``error`` (the
     change from rtol·10), about 1e-11 relative at the default rtol.
     """
-    _check(alpha, omega0)
-    if torque == 0.0:
+    section = cycle_section(alpha, omega0, torque, rtol=rtol)
+    if section is None:
         return None
+    theta_s, v, period, error = section
     direction = 1 if torque > 0 else -1
-    found = [_fixed_point(_Turn(alpha, omega0, abs(torque), rtol), omega0)]
-    if found[0] is None:
-        return None
-    found.append(_fixed_point(_Turn(alpha, omega0, abs(torque), 10.0 * rtol), omega0,
-                              near=found[0][1]))
-    if found[1] is None:
-        return None
-    (theta_s, v, period), (_, v_check, period_check) = found
-    error = float(max(abs(v - v_check) / v, abs(period - period_check) / period))
-
     tau = abs(torque)
     theta = theta_s + np.linspace(0.0, 2.0 * math.pi, samples + 1)
     y = _along_theta(alpha, omega0, tau, 0.0, theta, (v, 0.0), rtol,
