@@ -620,8 +620,9 @@ class TiltedBoundaries:
         cycle is one turn from its crossing of the section θs
         (:func:`atlas.physics.running.cycle_section`, or :attr:`cycle` where known) by
         DOP853 at rtol 1e-12, as pieces; the pair is exact for the pieces
-        (:func:`atlas.kernels.dense_curves.nearest_between`). The error: the distance's change with the boundaries at
-        RTOL_CHECK, plus the cycle's own (its relative error times a bound on its speed)."""
+        (:func:`atlas.kernels.dense_curves.nearest_between`). The error: the distance's
+        change with the boundaries at RTOL_CHECK, plus the cycle's own (its relative error
+        times a bound on its speed)."""
         from atlas.kernels.dense_curves import nearest_between, ranges
         from atlas.kernels.dop853 import EVENT, FLOW, TURN, solve
         from atlas.physics.running import cycle_section
