@@ -208,7 +208,7 @@ class TiltedBoundaries:
                  rtol: float = RTOL, margin: float = MARGIN, cycle=FIND_CYCLE):
         """``cycle``: :func:`atlas.physics.running.limit_cycle`'s result for this pendulum if the
         caller has it (None: there is none); found here by default."""
-        from atlas.physics.running import cycle_exists
+        from atlas.physics.running import cycle_escapes
 
         p = self.pendulum = pendulum
         if not p.alpha > 0.0:
@@ -235,8 +235,10 @@ class TiltedBoundaries:
             raise RuntimeError(f"unexpected stable branches: ends {ends} "
                                f"(rtol {rtol:g}), {check} ({RTOL_CHECK:g})")
         self.bistable = self._branches.bistable
+        self._escapes = None
         if cycle is FIND_CYCLE:  # found on first use; its existence checked now
-            exists = cycle_exists(p.alpha, p.omega0, p.torque)
+            self._escapes = cycle_escapes(p.alpha, p.omega0, p.torque)
+            exists = all(x > 0.0 for x in self._escapes)
         else:
             self.cycle = cycle
             exists = cycle is not None
@@ -635,7 +637,8 @@ class TiltedBoundaries:
             theta_s, v = self.sign * cycle.theta0, self.sign * float(cycle.theta_dot[0])
             period, cycle_error = cycle.period, cycle.error
         else:  # only the crossing, not the sampled cycle
-            theta_s, v, period, cycle_error = cycle_section(p.alpha, p.omega0, p.torque)
+            theta_s, v, period, cycle_error = cycle_section(p.alpha, p.omega0, p.torque,
+                                                            escapes=self._escapes)
         tau, rtol = abs(p.torque), 1e-12
         scale = (p.omega0**2 + tau) / (2.0 * p.alpha)
         turn = solve(FLOW, (p.alpha, p.omega0, tau, 0.0), TURN, (theta_s + _TWO_PI, 0.0),

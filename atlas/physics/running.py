@@ -28,7 +28,7 @@ from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import START_DISTANCE, Pendulum, tilt
 
 __all__ = ["running_certificate", "LimitCycle", "RunningCertificate", "BarrierCheck", "limit_cycle",
-           "cycle_section", "cycle_exists",
+           "cycle_section", "cycle_exists", "cycle_escapes",
            "homoclinic_threshold", "running_barrier", "check_barrier", "contains",
            "rk4_allowance", "CYCLE_SAMPLES", "BARRIER_SAMPLES", "TOP_MARGIN"]
 
@@ -193,12 +193,14 @@ class LimitCycle:
 _NEAR = 1e-6
 
 
-def _fixed_point(turn: _Turn, omega0: float, near: float | None = None):
+def _fixed_point(turn: _Turn, omega0: float, near: float | None = None,
+                 p0: float | None = None):
     """(θs, v, T): the fixed point v of P and the period (canonical frame), or None.
     ``near``: the fixed point found at another tolerance; P contracts, so v·(1 ∓ _NEAR)
     brackets this one too, and Brent's method needs a few turns instead of some twelve (the
-    whole bracket (0, scale) is taken where it does not)."""
-    p0 = turn.escape(omega0)
+    whole bracket (0, scale) is taken where it does not). ``p0``: ``turn.escape(omega0)``
+    if known."""
+    p0 = turn.escape(omega0) if p0 is None else p0
     if not p0 > 0.0:
         return None
     theta_s = _section(omega0, turn.torque)[0]
@@ -227,27 +229,38 @@ def cycle_exists(alpha: float, omega0: float, torque: float, *, rtol: float = 1e
     the orbit leaving the saddle forwards gets round a whole turn (P(0⁺) > 0, the module
     docstring's bracket) at ``rtol`` and at rtol·10 (two DOP853 turns instead of some
     twenty)."""
+    return all(p > 0.0 for p in cycle_escapes(alpha, omega0, torque, rtol=rtol))
+
+
+def cycle_escapes(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12
+                  ) -> tuple[float, float]:
+    """P(0⁺) of the module docstring at ``rtol`` and at rtol·10 (:meth:`_Turn.escape`): the
+    running cycle exists where both are > 0; (0, 0) without torque. Give them to
+    :func:`cycle_section` to spare it the same two turns."""
     _check(alpha, omega0)
     if torque == 0.0:
-        return False
-    return all(_Turn(alpha, omega0, abs(torque), r).escape(omega0) > 0.0
-               for r in (rtol, 10.0 * rtol))
+        return 0.0, 0.0
+    return tuple(_Turn(alpha, omega0, abs(torque), r).escape(omega0)
+                 for r in (rtol, 10.0 * rtol))
 
 
-def cycle_section(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12):
+def cycle_section(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12,
+                  escapes: tuple[float, float] | None = None):
     """The running limit cycle's crossing of its Poincaré section, without sampling it:
     (θs [rad], v [rad s⁻¹], period [s], error) in the canonical frame (τ > 0: θs the saddle's
     angle, v > 0 the cycle's speed there; mirrored for τ < 0 by (θ, θ̇) → (−θ, −θ̇)), or None
     where there is no cycle. ``error``: the relative change of v and of the period from
-    rtol·10 (the fixed point at rtol·10, bracketed around the first: P contracts)."""
+    rtol·10 (the fixed point at rtol·10, bracketed around the first: P contracts).
+    ``escapes``: :func:`cycle_escapes` at this ``rtol``, if known."""
     _check(alpha, omega0)
     if torque == 0.0:
         return None
-    found = [_fixed_point(_Turn(alpha, omega0, abs(torque), rtol), omega0)]
+    p0, p0_check = (None, None) if escapes is None else escapes
+    found = [_fixed_point(_Turn(alpha, omega0, abs(torque), rtol), omega0, p0=p0)]
     if found[0] is None:
         return None
     found.append(_fixed_point(_Turn(alpha, omega0, abs(torque), 10.0 * rtol), omega0,
-                              near=found[0][1]))
+                              near=found[0][1], p0=p0_check))
     if found[1] is None:
         return None
     (theta_s, v, period), (_, v_check, period_check) = found
