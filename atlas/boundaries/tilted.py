@@ -126,10 +126,16 @@ def _first_where(x: np.ndarray, shift: float, bound: float, side: str) -> int:
     return i
 
 
-def _widened(distance: float) -> float:
-    """A distance found at one tolerance, widened to bound the same distance at another
-    (they differ by some 1e-12): a search for it prunes at once."""
-    return distance * (1.0 + 1e-6) + 1e-9
+def _near_first(search, near: float | None, bound: float):
+    """``search(b)`` (a nearest-point search that finds nothing nearer than ``b``: NaN
+    coordinates) first within ``near`` — the same distance found at another tolerance (they
+    differ by some 1e-12) — a little widened, so that it prunes at once; then, if nothing
+    was found there, within ``bound``."""
+    if near is not None:
+        found = search(near * (1.0 + 1e-6) + 1e-9)
+        if not math.isnan(found[1]):
+            return found
+    return search(bound)
 
 
 class _Fundamental:
@@ -570,7 +576,9 @@ class TiltedBoundaries:
         """The exact area fraction of the window in each well's basin and in the running basin
         (:class:`atlas.boundaries.exact.ExactAreas`; docs/design/tilted-boundaries.md): exact
         for the dense output of the branches at rtol, their error the change from
-        RTOL_CHECK. The fractions sum to 1 (to their errors)."""
+        RTOL_CHECK plus the rounding of the coordinates at the window's scale (as
+        :func:`atlas.boundaries.manifold.basin_areas` has it for small windows). The
+        fractions sum to 1 (to their errors)."""
         window = self._canonical_window()
         (a, b), (lo, hi) = window
         ks = self._area_translates(a, b)
@@ -578,11 +586,17 @@ class TiltedBoundaries:
             ks = range(ks.start, ks.stop + 1)
         fine = self._fractions(self._branches, ks, window)
         coarse = self._fractions(self._branches_check, ks, window)
-        error = np.abs(fine - coarse) + 4 * np.finfo(float).eps
+        # the coordinates' own rounding at the window's scale (the window's edges, and the
+        # translated curves', each to an ulp, over the window's sides): the same for both
+        # tolerances, so their change does not show it (a small window's floor)
+        big_u = max(abs(a), abs(b)) + _TWO_PI * max(abs(ks.start), abs(ks.stop)) + math.pi
+        big_v = max(abs(lo), abs(hi))
+        rounding = 16 * np.finfo(float).eps * (big_u / (b - a) + big_v / (hi - lo))
+        error = np.abs(fine - coarse) + rounding
         running = running_error = 0.0
         if self.bistable:
             running = 1.0 - float(fine.sum())
-            running_error = float(abs(fine.sum() - coarse.sum()) + 4 * np.finfo(float).eps)
+            running_error = float(abs(fine.sum() - coarse.sum()) + rounding)
         keep = fine > 0.0
         k = self.sign * np.array(ks, np.int64)[keep]
         order = np.argsort(k)
@@ -607,11 +621,8 @@ class TiltedBoundaries:
         ks = range(math.floor((x - best - hi - 1.0) / _TWO_PI),
                    math.ceil((x + best - lo + 1.0) / _TWO_PI) + 1)
         shifts = _TWO_PI * np.array(ks, np.float64)
-        d, t, w = math.inf, math.nan, math.nan
-        if near is not None:
-            d, t, w = nearest(f.pieces, shifts, float(x), float(v), _widened(near))
-        if math.isnan(t):
-            d, t, w = nearest(f.pieces, shifts, float(x), float(v), math.inf)
+        d, t, w = _near_first(lambda bound: nearest(f.pieces, shifts, float(x), float(v),
+                                                    bound), near, math.inf)
         return d, self.sign * t, self.sign * w
 
     def running_shock(self):
@@ -653,10 +664,8 @@ class TiltedBoundaries:
         # the saddle (θs, 0) is on a boundary, the cycle's point (θs, v) above it: a bound
         bound = v * (1.0 + 1e-9)
         fine = nearest_between(pieces, self._branches.pieces, shifts, bound)
-        check = nearest_between(pieces, self._branches_check.pieces, shifts,
-                                _widened(fine[0]))
-        if math.isnan(check[1]):  # not within the widened distance: the whole search
-            check = nearest_between(pieces, self._branches_check.pieces, shifts, bound)
+        check = _near_first(lambda b: nearest_between(pieces, self._branches_check.pieces,
+                                                      shifts, b), fine[0], bound)
         box = np.empty((pieces.shape[0], 2, 2))
         ranges(pieces, box)
         speed = float(np.abs(box[:, 1, :]).max())  # at least the cycle's largest speed

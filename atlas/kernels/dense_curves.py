@@ -440,12 +440,12 @@ def _distance_along(A, i, s, B, k, shift, scratch):
 
 
 @nb.njit
-def _pair_by_projection(A, i, B, k, shift, s0, scratch):
+def _pair_by_projection(A, i, B, k, shift, scratch):
     """(s, t): the nearest pair of piece i of A and piece k of B (translated by ``shift``)
     where Newton's method in (s, t) does not converge (nearly parallel pieces): the
     distance from A(s) to piece k (:func:`_project`, exact) minimised over s ∈ [0, 1] by
     golden section, to rounding (one minimum: pieces far shorter than their curvature
-    radius). ``s0``: the nearest sample, unused but for the signature's sake."""
+    radius)."""
     lo, hi = 0.0, 1.0
     x1, x2 = lo + _GOLDEN * (hi - lo), hi - _GOLDEN * (hi - lo)
     f1 = _distance_along(A, i, x1, B, k, shift, scratch)
@@ -592,7 +592,7 @@ def nearest_between(A, B, shifts, best):
                         break
                 s1, t1 = s, t
                 if not converged:  # the distance to piece k along A(s), minimised in s
-                    s1, t1 = _pair_by_projection(A, i, B, k, shift, s0, scratch)
+                    s1, t1 = _pair_by_projection(A, i, B, k, shift, scratch)
                 # the nearest of Newton's end, its start and the minimisation in s
                 for s_end, t_end in ((s, t), (s0, t0), (s1, t1)):
                     a_t = _horner(A[i, 0], _N, s_end)

@@ -517,3 +517,18 @@ def test_published_torque_sweep_of_the_bstab_pendulum(torque, published):
     assert tb.bistable
     sigma = math.sqrt(published * (1 - published) / 1e4)
     assert abs(tb.areas().fraction.sum() - published) < 3 * sigma
+
+
+@pytest.mark.parametrize("half", [1e-2, 1e-3, 1e-4])
+def test_a_small_window_inside_one_basin_is_all_of_it_within_the_stated_error(half):
+    """A window of half-width ``half`` around the rest state lies wholly in well 0's basin:
+    its fraction is exactly 1 and the running basin's 0. The computed ones differ from that
+    by the rounding of the coordinates at the window's scale (about eps·|θ|/half), which the
+    fine and coarse curves share: the stated errors must cover it."""
+    p = Pendulum(0.1, 1.0, 0.5)
+    c = p.rest_angle
+    areas = TiltedBoundaries(p, (c - half, c + half), (-half, half)).areas()
+    assert list(areas.k) == [0]
+    assert abs(areas.fraction[0] - 1.0) <= areas.error[0]
+    assert abs(areas.running) <= areas.running_error
+    assert areas.error[0] < 1e-12 / half  # a bound, not a shrug: ~16 eps·|θ + 2πk| / half
