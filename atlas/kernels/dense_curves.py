@@ -294,6 +294,25 @@ def window_areas(C, shifts, a, b, lo, hi, out):
     shifted, roots = np.empty(_N), np.empty(_MAX_COEFFS)
     dt, dv = np.empty(_N - 1), np.empty(_N - 1)
     for i in range(n):
+        # a piece wholly beyond the window's θ̇ range, or beside every translate's θ range,
+        # adds nothing but its chord (which lies beyond with it): its start, uncut
+        beside = box[i, 1, 1] < lo or box[i, 1, 0] > hi
+        if not beside:
+            beside = True
+            for s in range(shifts.size):
+                if box[i, 0, 1] >= a - shifts[s] and box[i, 0, 0] <= b - shifts[s]:
+                    beside = False
+                    break
+        if beside:
+            if m_total + 1 > px.size:
+                grown = 2 * px.size + 64
+                nx, ny = np.empty(grown), np.empty(grown)
+                nx[:m_total] = px[:m_total]
+                ny[:m_total] = py[:m_total]
+                px, py = nx, ny
+            px[m_total], py[m_total] = C[i, 0, 0], C[i, 1, 0]
+            m_total += 1
+            continue
         m = 0
         cuts[m] = 0.0
         m += 1
