@@ -28,7 +28,7 @@ from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import START_DISTANCE, Pendulum, tilt
 
 __all__ = ["running_certificate", "LimitCycle", "RunningCertificate", "BarrierCheck", "limit_cycle",
-           "cycle_section", "cycle_exists", "cycle_escapes",
+           "cycle_section", "cycle_escapes",
            "homoclinic_threshold", "running_barrier", "check_barrier", "contains",
            "rk4_allowance", "CYCLE_SAMPLES", "BARRIER_SAMPLES", "TOP_MARGIN"]
 
@@ -224,18 +224,11 @@ def _fixed_point(turn: _Turn, omega0: float, near: float | None = None,
     return theta_s, float(v), float(period)
 
 
-def cycle_exists(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12) -> bool:
-    """Whether :func:`limit_cycle` finds a running limit cycle, without finding it: whether
-    the orbit leaving the saddle forwards gets round a whole turn (P(0⁺) > 0, the module
-    docstring's bracket) at ``rtol`` and at rtol·10 (two DOP853 turns instead of some
-    twenty)."""
-    return all(p > 0.0 for p in cycle_escapes(alpha, omega0, torque, rtol=rtol))
-
-
 def cycle_escapes(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12
                   ) -> tuple[float, float]:
     """P(0⁺) of the module docstring at ``rtol`` and at rtol·10 (:meth:`_Turn.escape`): the
-    running cycle exists where both are > 0; (0, 0) without torque. Give them to
+    running cycle exists (:func:`limit_cycle` finds it) where both are > 0 — two DOP853
+    turns instead of some twenty; (0, 0) without torque. Give them to
     :func:`cycle_section` to spare it the same two turns."""
     _check(alpha, omega0)
     if torque == 0.0:

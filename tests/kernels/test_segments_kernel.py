@@ -31,13 +31,7 @@ def test_nearest_is_the_brute_force_minimum():
     px, py = rng.uniform(-4, 6, 700), rng.uniform(-3, 6, 700)
     px[:5], py[:5] = runs[0][0][100:105], runs[0][1][100:105]  # on vertices: distance 0
     dist, tag = seg.nearest(px, py)
-    best = np.full(px.size, np.inf)
-    best_tag = np.zeros(px.size, np.int64)
-    for x, y, k in runs:
-        d = segment_distance(px[:, None], py[:, None], x[None, :-1], y[None, :-1],
-                             x[None, 1:], y[None, 1:]).min(axis=1)
-        best_tag = np.where(d < best, k, best_tag)
-        best = np.minimum(best, d)
+    best, best_tag = _brute_nearest(runs, px, py)
     np.testing.assert_allclose(dist, best, rtol=4e-16, atol=0)  # sqrt of squares vs hypot
     unique = np.abs(dist - best) <= 4e-16 * best
     assert np.all(tag[unique & (best > 1e-9)] == best_tag[unique & (best > 1e-9)])

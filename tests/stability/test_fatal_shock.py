@@ -19,10 +19,10 @@ from atlas.stability.shocks import minimal_fatal_shock, running_fatal_shock
 pytestmark = pytest.mark.slow  # integrates manifolds
 
 
-def _reference_distance(alpha, omega0, torque, point, speed=6.0):
-    """Distance from ``point`` to the stable manifolds of the saddles next to it, each
-    branch integrated by scipy's DOP853 (rtol = atol = 1e-12) in reversed time from 1e-8
-    along the stable eigenvector, then minimised on the dense output."""
+def _scipy_branches(alpha, omega0, torque, speed, rtol):
+    """Both stable branches of the saddle (π − arcsin τ, 0) by scipy's DOP853 (rtol = atol =
+    ``rtol``) in reversed time from 1e-8 along the stable eigenvector until |θ̇| > speed:
+    the two solutions, with dense output."""
     theta_s = math.pi - math.asin(torque / omega0**2)
     kappa = omega0**2 * math.cos(math.asin(torque / omega0**2))
     lam = -alpha - math.sqrt(alpha**2 + kappa)  # stable eigenvalue: direction (1, lam)
@@ -35,21 +35,28 @@ def _reference_distance(alpha, omega0, torque, point, speed=6.0):
         return abs(y[1]) - speed
 
     fast.terminal = True
+    return [solve_ivp(back, (0, 1e3), [theta_s + sign * 1e-8 / norm, sign * 1e-8 * lam / norm],
+                      method="DOP853", rtol=rtol, atol=rtol, dense_output=True, events=fast)
+            for sign in (-1.0, 1.0)]
+
+
+def _reference_distance(alpha, omega0, torque, point, speed=6.0):
+    """Distance from ``point`` to the stable manifolds of the saddles next to it (θs and
+    θs − 2π), each branch by :func:`_scipy_branches` at rtol 1e-12, then minimised on the
+    dense output."""
     best = math.inf
-    for shift in (0.0, -2 * math.pi):
-        for sign in (-1.0, 1.0):
-            y0 = [theta_s + shift + sign * 1e-8 / norm, sign * 1e-8 * lam / norm]
-            sol = solve_ivp(back, (0, 1e3), y0, method="DOP853", rtol=1e-12, atol=1e-12,
-                            dense_output=True, events=fast)
+    for sol in _scipy_branches(alpha, omega0, torque, speed, 1e-12):
+        for shift in (0.0, -2 * math.pi):
+            here = np.array([point[0] - shift, point[1]])  # the point, seen from the copy
             t = np.linspace(0, sol.t[-1], 20001)
             th, v = sol.sol(t)
-            i = int(np.argmin(np.hypot(th - point[0], v - point[1])))
+            i = int(np.argmin(np.hypot(th - here[0], v - here[1])))
             lo, hi = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
-            res = minimize_scalar(lambda s, f=sol.sol: np.hypot(*(f(s) - np.array(point))),
+            res = minimize_scalar(lambda s, f=sol.sol, p=here: np.hypot(*(f(s) - p)),
                                   bounds=(lo, hi), method="bounded",
                                   options={"xatol": 1e-14})
-            best = min(best, float(res.fun), float(np.hypot(th[i] - point[0],
-                                                            v[i] - point[1])))
+            best = min(best, float(res.fun), float(np.hypot(th[i] - here[0],
+                                                            v[i] - here[1])))
     return best
 
 
@@ -128,31 +135,6 @@ def _scipy_cycle(alpha, omega0, torque):
     return sol.sol(np.linspace(0.0, sol.t[-1], 20001))
 
 
-def _scipy_branches(alpha, omega0, torque, speed=12.0):
-    """Both stable branches of the saddles (π − arcsin τ + 2πj, 0), j = −1 … 2, by scipy's
-    DOP853 (rtol = atol = 1e-13) until |θ̇| > speed, densely sampled: a list of (θ, θ̇)."""
-    theta_s = math.pi - math.asin(torque / omega0**2)
-    kappa = omega0**2 * math.cos(math.asin(torque / omega0**2))
-    lam = -alpha - math.sqrt(alpha**2 + kappa)
-    norm = math.hypot(1.0, lam)
-
-    def back(_, y):
-        return [-y[1], -(torque - omega0**2 * math.sin(y[0]) - 2 * alpha * y[1])]
-
-    def fast(_, y):
-        return abs(y[1]) - speed
-
-    fast.terminal = True
-    out = []
-    for sign in (-1.0, 1.0):
-        y0 = [theta_s + sign * 1e-8 / norm, sign * 1e-8 * lam / norm]
-        sol = solve_ivp(back, (0, 1e3), y0, method="DOP853", rtol=1e-13, atol=1e-13,
-                        dense_output=True, events=fast)
-        th, v = sol.sol(np.linspace(0, sol.t[-1], 100001))
-        out += [(th + 2 * math.pi * j, v) for j in range(-1, 3)]
-    return out
-
-
 @pytest.mark.parametrize("alpha, torque", [(0.05, 0.5), (0.1, 0.5), (0.05, 0.2), (0.05, 0.136)])
 def test_the_running_cycles_shock_against_scipy(alpha, torque):
     """The running cycle's minimal fatal shock against an independent construction: the
@@ -165,8 +147,11 @@ def test_the_running_cycles_shock_against_scipy(alpha, torque):
     b = exact_boundaries(Pendulum(alpha, 1.0, torque), WINDOW)
     shock = running_fatal_shock(b)
     ct, cv = _scipy_cycle(alpha, 1.0, torque)
-    points = np.concatenate([np.column_stack(branch) for branch in _scipy_branches(
-        alpha, 1.0, torque)])
+    # both branches of the saddles j = −1 … 2, densely sampled
+    points = np.concatenate([np.column_stack((th + 2 * math.pi * j, v))
+                             for sol in _scipy_branches(alpha, 1.0, torque, 12.0, 1e-13)
+                             for th, v in [sol.sol(np.linspace(0, sol.t[-1], 100001))]
+                             for j in range(-1, 3)])
     tree = cKDTree(points)
     d, _ = tree.query(np.column_stack([ct, cv]))
     i = int(np.argmin(d))
