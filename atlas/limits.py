@@ -60,9 +60,10 @@ MIN_WINDOW_TOLS = 1000
 
 
 #: Narrowest window side [rad or rad s⁻¹] of a stability study: its fractions are exact areas
-#: of the reference curves, good to their accuracy (≈ 1e-8 with torque: the polylines' chord
-#: error), so a fraction's error is about that accuracy over the side: ≤ 1e-4 from 1e-4 on.
-#: (A grid run's zoom goes further: its labels are certified point by point.)
+#: of the reference curves, good to their accuracy (≈ 1e-12 in position: DOP853 at rtol 1e-13,
+#: and the coordinates' rounding, 16 eps·|θ|), so a fraction's error is about that accuracy
+#: over the side: ≤ 1e-8 from 1e-4 on. (A grid run's zoom goes further: its labels are
+#: certified point by point.)
 MIN_STUDY_SIDE = 1e-4
 
 
@@ -75,8 +76,8 @@ def check_study_window(theta_window, theta_dot_window) -> None:
             raise ValueError(
                 f"{axis}: a study's window {side:.3g} wide is narrower than "
                 f"{MIN_STUDY_SIDE:g}: its exact fractions would carry the boundary curves' "
-                "own error (about 1e-8) relative to the window; widen it (a grid run, "
-                "`atlas run`, zooms further)")
+                "own error (about 1e-12 in position) relative to the window; widen it (a "
+                "grid run, `atlas run`, zooms further)")
 
 
 def _round_up(x: float) -> float:

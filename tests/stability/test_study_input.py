@@ -75,7 +75,7 @@ def test_ranges_work_in_grid_configs_too(tmp_path):
 
 
 def test_a_window_too_narrow_for_exact_fractions_is_refused(tmp_path, capsys):
-    """A study's fractions are exact areas of curves good to about 1e-8: a window 1e-11 wide
+    """A study's fractions are exact areas of curves good to about 1e-12: a window 1e-11 wide
     is refused in one line naming the axis (exit 2, nothing written); 1e-3 wide is computed."""
     out = tmp_path / "n.h5"
     cfg = write_config(tmp_path / "n.yaml", BODY.format(torque="[0.0, 0.3]", output=out)
