@@ -5,8 +5,9 @@ xarray asks, for every array it wraps, whether it is a dask array, and answers b
 which takes about 0.3 s on the development machine — a tenth of ``atlas run``'s wall time,
 a third of ``atlas plot``'s. No object can be a dask array before ``dask.array`` is imported,
 so until then the honest answer is "no such type" (and likewise for xarray's check for dask
-collections, which imports ``dask.base``). :func:`install` puts that answer into
-xarray's cache of duck-array modules: the array type is looked up in ``sys.modules`` on
+collections, which imports ``dask.base``, and for the dask scheduler that ``to_netcdf`` asks
+about, which imports ``dask`` and ``distributed``: 0.3 s more). :func:`install` puts that
+answer into xarray's cache of duck-array modules: the array type is looked up in ``sys.modules`` on
 every call, and the real module (version, availability) is imported the first time anything
 else is asked. Once dask is imported (``atlas run --backend dask``, ``xr.open_dataset(...,
 chunks=...)``) xarray sees the real type, so chunked arrays behave exactly as without this.
@@ -33,6 +34,7 @@ def install() -> bool:
     except (ImportError, AttributeError):
         return False
     _defer_collection_check()
+    _defer_scheduler_check()
     if "dask" in cache:  # already looked up (real or deferred): nothing to gain or to do
         return isinstance(cache["dask"], _deferred_class(base))
     cache["dask"] = _deferred_class(base)()
@@ -56,6 +58,28 @@ def _defer_collection_check() -> None:
 
     is_dask_collection.deferred_by_atlas = True
     utils.is_dask_collection = is_dask_collection
+
+
+def _defer_scheduler_check() -> None:
+    """xarray's ``to_netcdf`` asks which dask scheduler is active
+    (``xarray.backends.locks.get_dask_scheduler``), importing ``dask`` and ``distributed``
+    (≈ 0.3 s) to answer; no scheduler can be active before ``dask`` is imported, so the answer
+    is then None. Wrapped once, where xarray defines it and where ``to_netcdf`` calls it."""
+    try:
+        from xarray.backends import locks, writers
+    except ImportError:
+        return
+    real = locks.get_dask_scheduler
+    if getattr(real, "deferred_by_atlas", False):
+        return
+
+    def get_dask_scheduler(get=None, collection=None):
+        return real(get, collection) if "dask" in sys.modules else None
+
+    get_dask_scheduler.deferred_by_atlas = True
+    for module in (locks, writers):
+        if getattr(module, "get_dask_scheduler", None) is real:
+            module.get_dask_scheduler = get_dask_scheduler
 
 
 _DEFERRED: dict[type, type] = {}

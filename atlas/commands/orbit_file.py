@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import AtlasError
 from atlas.layout import at_point, point_group, points
 from atlas.physics.barrier import RunningBarrier

@@ -12,6 +12,7 @@ from datetime import datetime, timezone
 import numpy as np
 import xarray as xr
 
+from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.defaults import BACKEND_WORDS
 from atlas.labels.trap import CHECK_EVERY
 from atlas.pipeline.config import Config, config_hash, integrator_json

@@ -24,6 +24,7 @@ from types import SimpleNamespace
 import numpy as np
 import xarray as xr
 
+from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import AtlasError
 from atlas.layout import Layout
 from atlas.pipeline import points, progress

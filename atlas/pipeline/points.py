@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.boundaries import exact
 from atlas.boundaries.certificate import certifier_for
 from atlas.errors import AtlasError

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from atlas import lazy_dask  # noqa: F401 (installs itself)
+
 __all__ = ["study_lines", "study_info_lines"]
 
 

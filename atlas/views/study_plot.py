@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.views.style import CURVE_SIZE, MAP_SIZE, PNG_OPTIONS, STYLE, basin_colours
 
 __all__ = ["plot_study"]

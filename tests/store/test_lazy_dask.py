@@ -15,7 +15,9 @@ def _run(code: str) -> str:
     return done.stdout.strip()
 
 
-def test_xarray_work_without_dask_arrays_does_not_import_dask_array(tmp_path):
+def test_xarray_work_without_dask_arrays_does_not_import_dask(tmp_path):
+    """Neither dask.array (xarray's duck-array check) nor dask itself (to_netcdf's question
+    about the active dask scheduler) is imported by writing and reading a file."""
     out = _run(f"""
         import sys
         import numpy as np
@@ -25,9 +27,23 @@ def test_xarray_work_without_dask_arrays_does_not_import_dask_array(tmp_path):
         ds.to_netcdf("{tmp_path / 'a.h5'}", engine="h5netcdf")
         back = xr.open_dataset("{tmp_path / 'a.h5'}", engine="h5netcdf").load()
         assert (back.a.values == ds.a.values).all()
-        print("dask.array" in sys.modules)
+        print("dask.array" in sys.modules, "dask" in sys.modules)
     """)
-    assert out == "False"
+    assert out == "False False"
+
+
+def test_the_active_dask_scheduler_is_seen_once_dask_is_imported():
+    """The deferred scheduler question asks dask as soon as dask is imported: to_netcdf's
+    choice of locks follows the scheduler a user set."""
+    out = _run("""
+        import atlas.store.study  # installs the deferral
+        from xarray.backends import locks, writers
+        before = writers.get_dask_scheduler()
+        import dask
+        with dask.config.set(scheduler="processes"):
+            print(before, writers.get_dask_scheduler(), locks.get_dask_scheduler())
+    """)
+    assert out == "None multiprocessing multiprocessing"
 
 
 def test_datasets_with_index_coordinates_do_not_import_dask(tmp_path):
