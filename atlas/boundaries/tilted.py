@@ -643,17 +643,18 @@ class TiltedBoundaries:
         if not self.bistable:
             return (math.nan,) * 6
         p = self.pendulum
+        tau, rtol = abs(p.torque), 1e-12
         if "cycle" in self.__dict__:  # given, or found already: its crossing of θs
             cycle = self.cycle
             theta_s, v = self.sign * cycle.theta0, self.sign * float(cycle.theta_dot[0])
             period, cycle_error = cycle.period, cycle.error
-        else:  # only the crossing, not the sampled cycle
-            theta_s, v, period, cycle_error = cycle_section(p.alpha, p.omega0, p.torque,
-                                                            escapes=self._escapes)
-        tau, rtol = abs(p.torque), 1e-12
-        scale = (p.omega0**2 + tau) / (2.0 * p.alpha)
-        turn = solve(FLOW, (p.alpha, p.omega0, tau, 0.0), TURN, (theta_s + _TWO_PI, 0.0),
-                     (theta_s, v), 4.0 * period, rtol, (rtol * _TWO_PI, rtol * scale), dim=2)
+            scale = (p.omega0**2 + tau) / (2.0 * p.alpha)
+            turn = solve(FLOW, (p.alpha, p.omega0, tau, 0.0), TURN, (theta_s + _TWO_PI, 0.0),
+                         (theta_s, v), 4.0 * period, rtol, (rtol * _TWO_PI, rtol * scale),
+                         dim=2)
+        else:  # only the crossing, not the sampled cycle, and the turn the search ended on
+            theta_s, v, period, cycle_error, turn = cycle_section(
+                p.alpha, p.omega0, p.torque, rtol=rtol, escapes=self._escapes, turn=True)
         if turn.status != EVENT:
             raise RuntimeError("the running cycle did not complete a turn")
         pieces = _pieces(turn)

@@ -121,18 +121,30 @@ class _Turn:
         self.scale = _ceiling(alpha, omega0, torque)
         self.t_max = 1e4 * (1.0 / alpha + 1.0 / omega0)
 
-    def run(self, theta, theta_dot, theta_end):
-        """Integrate from (θ, θ̇) until θ = theta_end (→ reached) or θ̇ falls to 0 (→ turned
-        back): (reached, θ, θ̇, t) at the end (compiled DOP853,
+    def solution(self, theta, theta_dot, theta_end):
+        """The DOP853 solution (:class:`atlas.kernels.dop853.Solution`, with its dense
+        output) from (θ, θ̇) until θ = theta_end or θ̇ falls to 0 (compiled,
         :func:`atlas.kernels.dop853.integrate`, scipy's method step for step)."""
-        from atlas.kernels.dop853 import EVENT, FLOW, TURN, solve
+        from atlas.kernels.dop853 import FLOW, TURN, solve
 
-        sol = solve(FLOW, (self.alpha, self.omega0, self.torque, 0.0), TURN, (theta_end,),
-                    (theta, theta_dot), self.t_max, self.rtol,
-                    (self.rtol * 2 * math.pi, self.rtol * self.scale), dim=2)
+        return solve(FLOW, (self.alpha, self.omega0, self.torque, 0.0), TURN, (theta_end,),
+                     (theta, theta_dot), self.t_max, self.rtol,
+                     (self.rtol * 2 * math.pi, self.rtol * self.scale), dim=2)
+
+    @staticmethod
+    def outcome(sol, theta_end):
+        """(reached, θ, θ̇, t) at the end of ``sol``: reached where it got to theta_end,
+        not where θ̇ fell to 0 (turned back)."""
+        from atlas.kernels.dop853 import EVENT
+
         theta, theta_dot = sol.y[-1, 0], sol.y[-1, 1]
         reached = sol.status == EVENT and theta - theta_end >= -theta_dot
         return reached, theta, theta_dot, sol.t[-1]
+
+    def run(self, theta, theta_dot, theta_end):
+        """Integrate from (θ, θ̇) until θ = theta_end (→ reached) or θ̇ falls to 0 (→ turned
+        back): (reached, θ, θ̇, t) at the end (:meth:`solution`)."""
+        return self.outcome(self.solution(theta, theta_dot, theta_end), theta_end)
 
     def escape(self, omega0: float) -> float:
         """Signed outcome of the orbit that leaves (θs, 0) in +θ, one turn later: its speed
@@ -195,7 +207,8 @@ _NEAR = 1e-6
 
 def _fixed_point(turn: _Turn, omega0: float, near: float | None = None,
                  p0: float | None = None):
-    """(θs, v, T): the fixed point v of P and the period (canonical frame), or None.
+    """(θs, v, T, turn): the fixed point v of P, the period and the DOP853 solution of the
+    turn from (θs, v) (canonical frame), or None.
     ``near``: the fixed point found at another tolerance; P contracts, so v·(1 ∓ _NEAR)
     brackets this one too, and Brent's method needs a few turns instead of some twelve (the
     whole bracket (0, scale) is taken where it does not). ``p0``: ``turn.escape(omega0)``
@@ -206,10 +219,13 @@ def _fixed_point(turn: _Turn, omega0: float, near: float | None = None,
     theta_s = _section(omega0, turn.torque)[0]
     end = theta_s + 2.0 * math.pi
 
+    turns = {}  # speed → its turn: Brent's method returns a speed it has evaluated
+
     def excess(v):  # P(v) − v; orbits that turn back (or stall) count as P = 0
         if v == 0.0:
             return p0
-        reached, _, theta_dot, _ = turn.run(theta_s, v, end)
+        turns[v] = turn.solution(theta_s, v, end)
+        reached, _, theta_dot, _ = turn.outcome(turns[v], end)
         return (theta_dot if reached else 0.0) - v
 
     lo, hi = 0.0, turn.scale
@@ -218,10 +234,11 @@ def _fixed_point(turn: _Turn, omega0: float, near: float | None = None,
         if excess(a) > 0.0 > excess(b):
             lo, hi = a, b
     v = _brentq(excess, lo, hi, xtol=1e-15 * turn.scale, rtol=1e-15)
-    reached, _, _, period = turn.run(theta_s, v, end)
+    sol = turns[v] if v in turns else turn.solution(theta_s, v, end)
+    reached, _, _, period = turn.outcome(sol, end)
     if not reached:  # cannot happen: P(v) = v > 0 means the orbit got round
         raise RuntimeError("the limit cycle's orbit did not complete a turn")
-    return theta_s, float(v), float(period)
+    return theta_s, float(v), float(period), sol
 
 
 def cycle_escapes(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12
@@ -238,13 +255,15 @@ def cycle_escapes(alpha: float, omega0: float, torque: float, *, rtol: float = 1
 
 
 def cycle_section(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12,
-                  escapes: tuple[float, float] | None = None):
+                  escapes: tuple[float, float] | None = None, turn: bool = False):
     """The running limit cycle's crossing of its Poincaré section, without sampling it:
     (θs [rad], v [rad s⁻¹], period [s], error) in the canonical frame (τ > 0: θs the saddle's
     angle, v > 0 the cycle's speed there; mirrored for τ < 0 by (θ, θ̇) → (−θ, −θ̇)), or None
     where there is no cycle. ``error``: the relative change of v and of the period from
     rtol·10 (the fixed point at rtol·10, bracketed around the first: P contracts).
-    ``escapes``: :func:`cycle_escapes` at this ``rtol``, if known."""
+    ``escapes``: :func:`cycle_escapes` at this ``rtol``, if known. ``turn``: append the
+    DOP853 solution (:class:`atlas.kernels.dop853.Solution`, dense output included) of the
+    cycle's turn from (θs, v) to θs + 2π at ``rtol``, which the fixed point ended on."""
     _check(alpha, omega0)
     if torque == 0.0:
         return None
@@ -256,9 +275,9 @@ def cycle_section(alpha: float, omega0: float, torque: float, *, rtol: float = 1
                               near=found[0][1], p0=p0_check))
     if found[1] is None:
         return None
-    (theta_s, v, period), (_, v_check, period_check) = found
+    (theta_s, v, period, sol), (_, v_check, period_check, _) = found
     error = float(max(abs(v - v_check) / v, abs(period - period_check) / period))
-    return theta_s, v, period, error
+    return (theta_s, v, period, error, sol) if turn else (theta_s, v, period, error)
 
 
 def limit_cycle(alpha: float, omega0: float, torque: float, *, rtol: float = 1e-12,

@@ -369,3 +369,9 @@ def test_the_cycles_existence_and_section_without_sampling_it(torque):
     sign = 1 if torque > 0 else -1
     assert (sign * theta_s, sign * v, period, error) == (
         cycle.theta0, float(cycle.theta_dot[0]), cycle.period, cycle.error)
+    # the turn the search ended on: from (θs, v) once round to θs + 2π, back at speed v
+    *same, turn = cycle_section(0.05, 1.0, torque, turn=True)
+    assert tuple(same) == section
+    assert (turn.y[0, 0], turn.y[0, 1], turn.t[-1]) == (theta_s, v, period)
+    assert turn.y[-1, 0] == pytest.approx(theta_s + 2 * math.pi, abs=1e-12)
+    assert turn.y[-1, 1] == pytest.approx(v, rel=1e-11 + error)

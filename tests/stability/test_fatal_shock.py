@@ -171,6 +171,21 @@ def test_the_running_cycles_shock_against_scipy(alpha, torque):
     assert shock.error < 1e-8
 
 
+@pytest.mark.parametrize("torque", [0.3, -0.7])
+def test_the_running_shock_is_the_same_with_the_sampled_cycle_given(torque):
+    """Without the sampled cycle the shock integrates no turn of its own: it takes the turn
+    the cycle's fixed-point search ended on; with the cycle given (a grid run's) it
+    integrates that turn from the cycle's crossing. The same doubles either way."""
+    from atlas.physics.running import limit_cycle
+
+    p = Pendulum(0.05, 1.0, torque)
+    alone = running_fatal_shock(exact_boundaries(p, WINDOW))
+    given = running_fatal_shock(exact_boundaries(p, WINDOW,
+                                                 cycle=limit_cycle(0.05, 1.0, torque)))
+    assert tuple(alone) == tuple(given)
+    assert math.isfinite(alone.distance)
+
+
 def test_no_running_cycle_no_running_shock():
     """Below the homoclinic torque, and without torque, there is no running cycle."""
     for torque in (0.0, 0.1):
