@@ -218,31 +218,38 @@ def bisect_across(
 def bisect_between(labels, base, normal, below, above, *, tol: float, half_width: float):
     """Vectorised bisection of labels along base + s·normal between basin ``below`` (s < 0
     side) and ``above`` (s > 0; either may be :data:`RUNNING_SIDE`), from the bracket
-    ±half_width, each end pushed out ×8 (up to ``MAX_BRACKET``) while it carries the other
-    end's basin: returns (s_lo, s_hi, ok), ``ok`` False where an end carries neither basin or
-    the bracket outgrew the limit, or a midpoint carries neither (the bracket is then left as
-    it was: its width says how far it got)."""
+    ±half_width. While an end carries the other end's basin, the boundary lies beyond it:
+    that end becomes the other end (a certified point of the other side) and is pushed out
+    ×8 (both ends ×8 while both do), up to ``MAX_BRACKET`` from the base; only the ends that
+    moved are labelled again. Returns (s_lo, s_hi, ok), ``ok`` False where an end carries
+    neither basin or the bracket outgrew the limit, or a midpoint carries neither (the
+    bracket is then left as it was: its width says how far it got)."""
     n = base.shape[0]
     lo, hi = np.full(n, -half_width), np.full(n, half_width)
+    lab_lo, lab_hi = np.full(n, NO_LABEL), np.full(n, NO_LABEL)
     ok = np.ones(n, bool)
-    pending = np.arange(n)
-    while pending.size:
-        s_ends = np.concatenate([lo[pending], hi[pending]])
-        at = np.concatenate([pending, pending])
-        lab = labels(base[at, 0] + s_ends * normal[at, 0], base[at, 1] + s_ends * normal[at, 1])
-        lab_lo, lab_hi = lab[:pending.size], lab[pending.size:]
-        lo_over = lab_lo == above[pending]  # the boundary lies further down: push lo out
-        hi_over = lab_hi == below[pending]
-        fine = (lab_lo == below[pending]) & (lab_hi == above[pending])
-        lost = ~fine & ~((lo_over | (lab_lo == below[pending]))
-                         & (hi_over | (lab_hi == above[pending])))
-        ok[pending[lost]] = False
-        lo[pending[lo_over]] *= _GROW
-        hi[pending[hi_over]] *= _GROW
-        grow = pending[~fine & ~lost]
-        too_wide = grow[(hi[grow] - lo[grow]) > 2 * MAX_BRACKET]
+    new_lo = new_hi = np.arange(n)  # the ends to label: every end first
+    while new_lo.size or new_hi.size:
+        at = np.concatenate([new_lo, new_hi])
+        s_at = np.concatenate([lo[new_lo], hi[new_hi]])
+        lab = labels(base[at, 0] + s_at * normal[at, 0], base[at, 1] + s_at * normal[at, 1])
+        lab_lo[new_lo], lab_hi[new_hi] = lab[:new_lo.size], lab[new_lo.size:]
+        i = np.union1d(new_lo, new_hi)
+        lo_over, hi_over = lab_lo[i] == above[i], lab_hi[i] == below[i]
+        lost = ~((lo_over | (lab_lo[i] == below[i])) & (hi_over | (lab_hi[i] == above[i])))
+        ok[i[lost]] = False
+        both, down, up = (i[~lost & lo_over & hi_over], i[~lost & lo_over & ~hi_over],
+                          i[~lost & hi_over & ~lo_over])
+        hi[down], lab_hi[down] = lo[down], lab_lo[down]  # lo is above's: the new hi
+        lo[up], lab_lo[up] = hi[up], lab_hi[up]
+        lo[down] = _GROW * hi[down]
+        hi[up] = _GROW * lo[up]
+        lo[both], hi[both] = _GROW * lo[both], _GROW * hi[both]
+        moved = np.concatenate([both, down, up])
+        too_wide = moved[np.maximum(-lo[moved], hi[moved]) > 2 * MAX_BRACKET]
         ok[too_wide] = False
-        pending = np.setdiff1d(grow, too_wide)
+        new_lo = np.setdiff1d(np.concatenate([both, down]), too_wide)
+        new_hi = np.setdiff1d(np.concatenate([both, up]), too_wide)
     active = ok.copy()
     while True:
         idx = np.flatnonzero(active & (hi - lo >= tol))

@@ -6,8 +6,9 @@ boundaries (:class:`atlas.boundaries.tilted.TiltedBoundaries`, DOP853), each bis
 the curve, along the normal of the vector field, on certified RK4 labels (the tilted trap
 and the running barrier) between the exact sides read at ±1e-3 (well k or the running
 basin) until narrower than ``tol`` [rad-ish] — from the exact curve's prediction, as
-without torque: every 8th vertex of a run from a bracket of a few tol around the exact
-curve, widened as needed, the others from a spline of those offsets (:func:`_locate`). The
+without torque: every 16th vertex of a run from a bracket of a few tens of tol around the
+exact curve, widened as needed, every 8th then the others from splines of the offsets
+located before them (:func:`_locate`). The
 2π shift is checked on relocated copies (``shift_error``); ``discrepancy``, the located
 points' largest distance from the exact boundaries, is the RK4 map's boundary shift (≈ 1e-9
 at dt = 0.01 s) that sets d_cert.
@@ -46,7 +47,7 @@ _FIRST_VERTEX = 1e-3  # no vertex closer [rad-ish] to its saddle: the field vani
 #: The strides of the levels of :func:`_locate` along each run of vertices, and the
 #: half-widths [tol] of the first brackets around the spline's prediction at each level
 #: (the first level has no prediction: ±FIRST_BRACKET·tol around the exact curve).
-_STRIDES, _HALF_WIDTHS = (8, 1), (FIRST_BRACKET, 0.45)
+_STRIDES, _HALF_WIDTHS = (16, 8, 1), (FIRST_BRACKET, 8.0, 0.45)
 _KNOT_TOL = 8.0  # the spline's knots are located to tol/8
 
 
@@ -143,8 +144,9 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
                 "(atlas.boundaries.tilted: "
                 "DOP853 in reversed time, rtol = atol = 1e-13), at most max_spacing apart; "
                 "each located by bisection across the curve on certified RK4 labels (tilted "
-                "trap, running barrier), from brackets around the exact curve (every 8th "
-                "vertex) or around a spline of those offsets (the others), "
+                "trap, running barrier), from brackets around the exact curve (every 16th "
+                "vertex) or around splines of the offsets located before (every 8th, then "
+                "the others), "
                 "until the bracket is narrower than tol; every copy located on its own "
                 "labels (shift_error: the 2 pi shift between copies); discrepancy = max "
                 "distance of the points to the exact boundaries"),
@@ -213,15 +215,17 @@ def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v
 
 def _locate(labels, base, normal, below, above, run, arc, tol: float):
     """Bisect across every vertex from the exact curve's prediction, level by level (as
-    :func:`atlas.boundaries.bisection.locate` without torque, one level deeper): first every
+    :func:`atlas.boundaries.bisection.locate` without torque, two levels deeper): first every
     ``_STRIDES[0]``-th vertex of each run (and its last), from the bracket ±FIRST_BRACKET·tol
     around the exact curve, widened ×8 while an end carries the other side (the RK4 map's
-    boundary lies O(dt⁴) ≈ 1e-9 from the exact one: a few widenings and ~20 halvings,
+    boundary lies O(dt⁴) ≈ 1e-9 from the exact one: a few widenings and ~17 halvings,
     instead of ~30 from ±PROBE); then, at each finer stride, a cubic spline over arc length
     of the offsets located so far predicts the new vertices, whose first bracket is
-    ±``_HALF_WIDTHS`` tol around the prediction (widened as needed) — at the last level
-    ±0.45·tol, usually final: two labels per vertex. Knots are located to tol/``_KNOT_TOL``,
-    the last level to tol. A vertex that fails is bisected again from ±PROBE. Returns
+    ±``_HALF_WIDTHS`` tol around the prediction (widened as needed): ±8·tol for every 8th
+    vertex (a spline of knots 16 apart predicts it to a few tol: some ten labels instead of
+    some seventeen), then ±0.45·tol, usually final: two labels per vertex. Knots are located
+    to tol/``_KNOT_TOL``, the last level to tol. A vertex that fails is bisected again from
+    ±PROBE. Returns
     (s_lo, s_hi, ok) along ``normal`` from ``base``, as
     :func:`atlas.boundaries.bisection.bisect_between`."""
     n = run.size

@@ -90,3 +90,42 @@ def test_certified_between_d_cert_and_ten_d_cert_is_the_exact_equations(traced):
         assert fate == stored, (theta[i], theta_dot[i], fate, stored)
     assert RUNNING_SIDE not in side[certified] or exact.running_possible
     assert math.isfinite(cert.d_cert)
+
+
+@pytest.mark.parametrize("offset", [-1000.0, -20.0, 0.3, 20.0, 5000.0])
+def test_bisect_between_on_a_known_boundary_labels_each_end_once(offset):
+    """bisect_between on its own, along lines s·(1, 0) with the boundary at a known s* (in
+    tol) between the running side below and well 2 above: every bracket holds s*, is
+    narrower than tol, ends on the two sides; an end that carried the other side became the
+    other end, so the widening labels only the end pushed out: two labels, one per widening
+    (×8 from ±32·tol), then one per halving — counted."""
+    from atlas.boundaries.bisection import FIRST_BRACKET, bisect_between
+
+    tol, n = 2.0**-40, 5  # a power of two: the brackets' widths are exact
+    star = offset * tol * (1.0 + 0.1 * np.arange(n))  # five lines, five boundaries
+    calls = []
+
+    def labels(theta, theta_dot):
+        calls.append(theta.size)
+        return np.where(theta - base_of(theta_dot) < star_of(theta_dot), RUNNING_SIDE, 2)
+
+    base = np.column_stack([np.zeros(n), np.arange(n, dtype=float)])  # line i at θ̇ = i
+
+    def base_of(theta_dot):
+        return base[np.rint(theta_dot).astype(int), 0]
+
+    def star_of(theta_dot):
+        return star[np.rint(theta_dot).astype(int)]
+
+    normal = np.tile([1.0, 0.0], (n, 1))
+    below, above = np.full(n, RUNNING_SIDE), np.full(n, 2)
+    lo, hi, ok = bisect_between(labels, base, normal, below, above, tol=tol,
+                                half_width=FIRST_BRACKET * tol)
+    assert ok.all()
+    assert np.all((lo < star) & (star <= hi)) and np.all(hi - lo < tol)
+    widenings = np.maximum(np.ceil(np.log(np.abs(star) / (FIRST_BRACKET * tol))
+                                   / np.log(8.0)), 0)
+    far = FIRST_BRACKET * tol * 8.0 ** widenings  # the far end after the widenings
+    width = np.where(widenings > 0, far * 7 / 8, 2 * FIRST_BRACKET * tol)
+    halvings = np.floor(np.log2(width / tol)) + 1  # until narrower than tol
+    assert sum(calls) == 2 * n + widenings.sum() + halvings.sum()
