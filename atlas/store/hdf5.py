@@ -8,8 +8,8 @@ chunk padded), so :meth:`HDF5.finalize` assembles the file without re-encoding:
 1. the basin-map variables are created chunked and compressed, one chunk per tile, and each
    tile's chunks are copied in as stored (memory bounded by one tile);
 2. the summary is added in one place (:func:`_write_summary`): the root variables, then the
-   groups (``/critical_points``, ``/separatrices``, …), then the attributes and
-   ``complete = 1``;
+   groups (``/critical_points``, ``/separatrices``, …: xarray's encoding, written with h5py
+   in netCDF-4's layout by :class:`_GroupStore`), then the attributes and ``complete = 1``;
 3. the file (built inside the partial folder) is fsynced and renamed onto the output, the
    folder fsynced, and only then is the partial folder removed.
 
@@ -221,17 +221,168 @@ def _write_root_vars(f: h5netcdf.File, ds: xr.Dataset, layout: Layout) -> None:
 def _write_summary(path: Path, layout: Layout, groups: dict[str, xr.Dataset],
                    root_vars: xr.Dataset, attrs: dict) -> None:
     """Everything a finished file has beyond the basin map, in one place: the root variables
-    of the summary, the groups, the attributes; ``complete`` last. Written by a forked child
-    (:func:`_in_child`)."""
+    of the summary, the groups (xarray's encoding, written by :class:`_GroupStore`), the
+    attributes; ``complete`` last. Written by a forked child (:func:`_in_child`)."""
     def write():
         with _netcdf(path, "a") as f:
             _write_root_vars(f, root_vars, layout)
             f.attrs.update({key: value for key, value in attrs.items() if value is not None})
-            for path_in_file, ds in groups.items():  # xarray's encoding, into this handle
-                ds.dump_to_store(xr.backends.H5NetCDFStore(_group(f, path_in_file), mode="a"))
+            for path_in_file, ds in groups.items():
+                ds.dump_to_store(_GroupStore(_group(f, path_in_file), mode="a"))
             f.attrs["complete"] = np.int8(1)
 
     _in_child(write)
+
+
+#: netCDF-4's NAME of a dimension scale that is no variable: netCDF-C's text, then the length
+#: in 10 characters (NetCDF-4 format specification, "Dimensions": dimension scales).
+_NOT_A_VARIABLE = b"This is a netCDF dimension but not a netCDF variable.%10d"
+#: Encodings that leave no mark in the file (xarray drops them too); any other one asks for
+#: storage (chunks, filters, a type) that only h5netcdf's path makes.
+_NO_STORAGE = frozenset({"source", "original_shape"})
+
+
+class _GroupStore(xr.backends.H5NetCDFStore):
+    """xarray's store for one new, empty group of an h5netcdf file: xarray's CF encoding (a
+    NaN ``_FillValue`` on floats, text as variable-length UTF-8, the non-dimension coordinates
+    named in ``coordinates``), then the group written with h5py, each object opened once, in
+    netCDF-4's layout (Unidata, netCDF-C documentation, "File Format Specifications": the
+    NetCDF-4 format and its dimension scales):
+
+    * a dimension is an HDF5 dimension scale: the variable of its name if it has one (its
+      coordinate), else a float32 dataset never written whose NAME says it is no variable
+      (:data:`_NOT_A_VARIABLE`); ``_Netcdf4Dimid`` numbers it, on from h5netcdf's count
+      for the file (``File._max_dim_id``, which this keeps current). A dimension that an
+      enclosing group has at the same length is that one, as xarray decides;
+    * a variable is a contiguous dataset, the scales of its dimensions attached
+      (DIMENSION_LIST, REFERENCE_LIST), with ``_Netcdf4Coordinates`` (its dimensions'
+      numbers), ``_Netcdf4Dimid`` (its first dimension's) and its ``_FillValue`` as its HDF5
+      fill value and as an attribute;
+    * a non-string scalar attribute is stored as a one-element array, as netCDF-C does;
+      datasets keep their attributes in creation order (h5netcdf's ``track_order``, on in
+      every file it creates).
+
+    These are the objects and attributes, in the same order, that h5netcdf's
+    ``create_variable`` makes (tests/store/test_hdf5.py compares the two files object by
+    object), without its bookkeeping: h5netcdf opens each dimension scale and dataset again
+    by its path from the file's root whenever it needs it, some 35 times a variable, which
+    made the summary of a sweep (hundreds of small variables) take seconds. A group this does
+    not cover (:func:`_covers`) is written through h5netcdf, as before."""
+
+    def store(self, variables, attributes, check_encoding_set=frozenset(), writer=None,
+              unlimited_dims=None):
+        encoded, attrs = self.encode(variables, attributes)
+        group = self.ds._h5group
+        if check_encoding_set or unlimited_dims or not _covers(group, encoded):
+            super().store(variables, attributes, check_encoding_set, writer, unlimited_dims)
+            return
+        _set_attrs(group, attrs)
+        dims = self._dimensions(group, encoded)
+        for name, var in encoded.items():
+            dset = _create_variable(group, name, var, dims)
+            if var.dims == (name,):  # a coordinate: its dimension's scale
+                dims[name] = (dset, dims[name][1])
+
+    def _dimensions(self, group: h5py.Group, variables: dict) -> dict:
+        """{dimension: (its scale, its number)} for every dimension of ``variables``: an
+        enclosing group's (:func:`_enclosing_scale`), else a new one, its scale made here
+        unless a variable is its coordinate (None until that variable is written)."""
+        root = self.ds._root
+        sizes = {}
+        for var in variables.values():
+            sizes |= var.sizes
+        dims = {}
+        for dim, size in sizes.items():
+            scale = _enclosing_scale(group, dim, size)
+            if scale is not None:
+                dims[dim] = (scale, int(scale.attrs["_Netcdf4Dimid"]))
+                continue
+            root._max_dim_id += 1
+            number = root._max_dim_id
+            dims[dim] = (None if dim in variables else _phony_scale(group, dim, size, number),
+                         number)
+        return dims
+
+
+def _covers(group: h5py.Group, variables: dict) -> bool:
+    """Whether :class:`_GroupStore` writes these encoded variables into ``group`` itself: not
+    if one has a dimension of length 0 (h5netcdf makes it unlimited and the variable chunked),
+    a storage encoding (chunks, filters, a type), a type other than numbers or text (or text
+    with a fill value), a slash in its name, or the name of a dimension that it is not the
+    coordinate of; nor if a coordinate comes after a variable on its dimension (h5netcdf
+    then replaces the dimension's scale by it) or is on an enclosing group's dimension."""
+    seen = set()
+    for name, var in variables.items():
+        if (0 in var.shape or set(var.encoding) - _NO_STORAGE or "/" in name
+                or var.dtype.kind not in "iufU"
+                or var.dtype.kind == "U" and "_FillValue" in var.attrs
+                or var.dims == (name,) and (
+                    name in seen or _enclosing_scale(group, name, var.size) is not None)):
+            return False
+        seen.update(var.dims)
+    coords = {name for name, var in variables.items() if var.dims == (name,)}
+    return not any(name in seen for name in set(variables) - coords)
+
+
+def _enclosing_scale(group: h5py.Group, dim: str, size: int) -> h5py.Dataset | None:
+    """The scale of dimension ``dim`` of length ``size`` that the variables of ``group`` are
+    on if ``group`` makes no such dimension: the nearest enclosing group's dimension of that
+    name, if it has that length (as xarray and h5netcdf decide)."""
+    while group.name != "/":
+        group = group.parent
+        scale = group.get(dim)
+        if isinstance(scale, h5py.Dataset) and h5py.h5ds.is_scale(scale.id):
+            return scale if scale.shape == (size,) else None
+    return None
+
+
+def _phony_scale(group: h5py.Group, dim: str, size: int, number: int) -> h5py.Dataset:
+    """The scale of dimension ``dim`` that has no variable (netCDF-4's, never written)."""
+    scale = group.create_dataset(dim, (size,), ">f4", track_order=True)
+    scale.attrs["_Netcdf4Dimid"] = np.int32(number)
+    scale.make_scale(_NOT_A_VARIABLE % size)
+    return scale
+
+
+def _create_variable(group: h5py.Group, name: str, var: xr.Variable,
+                     dims: dict) -> h5py.Dataset:
+    """The encoded variable ``var`` as the dataset ``name`` of ``group``, in netCDF-4's
+    layout (see :class:`_GroupStore`); ``dims``: {dimension: (scale, number)}, the scale None
+    for the dimension ``var`` is the coordinate of."""
+    attrs = dict(var.attrs)
+    fill = attrs.pop("_FillValue", None)
+    data = var.values
+    if data.dtype.kind == "U":  # h5py writes text from Python strings
+        data = data.astype(object)
+    dtype = h5py.string_dtype() if var.dtype.kind == "U" else var.dtype
+    dset = group.create_dataset(name, data=data, dtype=dtype, fillvalue=fill, track_order=True)
+    numbers = np.array([dims[dim][1] for dim in var.dims], np.int32)
+    if var.dims == (name,):
+        dset.attrs["_Netcdf4Dimid"] = numbers[0]
+        dset.make_scale(name)
+        dset.attrs["_Netcdf4Coordinates"] = numbers
+    elif var.dims:
+        for axis, dim in enumerate(var.dims):
+            dset.dims[axis].attach_scale(dims[dim][0])
+        dset.attrs["_Netcdf4Coordinates"] = numbers
+        dset.attrs["_Netcdf4Dimid"] = numbers[0]
+    if fill is not None:
+        attrs = {"_FillValue": var.dtype.type(fill), **attrs}
+    _set_attrs(dset, attrs)
+    return dset
+
+
+def _set_attrs(obj, attrs: dict) -> None:
+    """netCDF-4 attributes on an HDF5 object, as h5netcdf writes them: a non-string scalar
+    as a one-element array; no booleans (not a netCDF type)."""
+    for key, value in attrs.items():
+        dtype = np.asarray(value).dtype
+        if dtype.kind == "b":
+            raise h5netcdf.CompatibilityError(f"attribute {key!r}: booleans are not a "
+                                              "netCDF-4 type")
+        if np.isscalar(value) and dtype.kind not in "SU":
+            value = np.atleast_1d(value)
+        obj.attrs[key] = value
 
 
 def _group(f: h5netcdf.File, path: str):
