@@ -28,6 +28,7 @@ and a disk too small is refused anyway before anything starts
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -54,8 +55,9 @@ CONFIRM_S = 120.0
 CONFIRM_BYTES = 10**9
 #: Orbits of a calibration stretch: consecutive θ0 of one grid row, as a tile holds them.
 STRETCH = 64
-#: The calibration's sample: from FIRST_SAMPLE orbits, fourfold until one call takes CALL_S
-#: seconds or MAX_SAMPLE orbits, then as large at up to MAX_POINTS parameter points in all.
+#: The calibration's sample: from FIRST_SAMPLE orbits, grown (at most fourfold) until one call
+#: takes CALL_S seconds or MAX_SAMPLE orbits, then as large at up to MAX_POINTS parameter
+#: points in all.
 FIRST_SAMPLE, MAX_SAMPLE, CALL_S, MAX_POINTS = 1024, 65536, 0.05, 3
 
 
@@ -121,8 +123,9 @@ def measure_rate(cfg: Config, layout: Layout, barriers: list, seed: int = 0
     random grid rows (as a tile holds them), labelled with the run's kernels (``barriers``:
     the points' running barriers).
 
-    A first, untimed stretch loads (or compiles) the kernels. The sample grows fourfold from
-    :data:`FIRST_SAMPLE` orbits until one call takes :data:`CALL_S` s (or
+    A first, untimed stretch loads (or compiles) the kernels. The sample grows from
+    :data:`FIRST_SAMPLE` orbits (aimed at the rate seen, at most fourfold:
+    :func:`_next_sample`) until one call takes :data:`CALL_S` s (or
     :data:`MAX_SAMPLE` orbits), at one random parameter point, then is labelled as large at
     up to :data:`MAX_POINTS` − 1 further random points. A call's fixed cost (starting the
     threads: tens of ms on a busy machine, which a run's big tiles pay once each) is measured
@@ -155,12 +158,22 @@ def measure_rate(cfg: Config, layout: Layout, barriers: list, seed: int = 0
         spent = [seconds(points[0], first)]
         if spent[0] >= CALL_S or n >= MAX_SAMPLE:
             break
-        n *= 4
+        n = _next_sample(n, spent[0])
     spent += [seconds(p, sample(n)) for p in points[1:]]
     fixed = seconds(points[0], first, t_max=cfg.integrator.dt)
     work = sum(spent) - fixed * len(spent)
     timed = len(spent) * first[0].size
     return timed / max(work, 0.1 * sum(spent)), timed
+
+
+def _next_sample(n: int, spent: float) -> int:
+    """The calibration's next sample size after ``n`` orbits took ``spent`` s (< CALL_S):
+    aimed at a call of 1.25·CALL_S at the rate just seen (so more than 1.25·n), at most four
+    times ``n`` and MAX_SAMPLE (the sample rounds it up to whole stretches). Aimed rather
+    than fourfold, the last call takes about CALL_S instead of up to four times it, as do
+    the MAX_POINTS − 1 calls of its size that follow."""
+    aimed = n * 1.25 * CALL_S / spent if spent > 0.0 else 4.0 * n
+    return math.ceil(min(aimed, 4.0 * n, MAX_SAMPLE))
 
 
 def estimate(cfg: Config, layout: Layout, barriers: list, orbits: int, device: str,

@@ -67,6 +67,31 @@ def test_the_rate_is_the_per_orbit_cost_without_a_calls_fixed_cost(tmp_path, mon
             assert np.all(v == v[0]) and v[0] in layout.theta_dot0
 
 
+def test_the_sample_grows_to_about_one_call_of_call_s(tmp_path, monkeypatch):
+    """On a machine that labels 100 000 orbits/s (a fake clock), the sample grows until a
+    call takes CALL_S, aimed at the rate seen: every timed call of the final size takes
+    between CALL_S and 1.25·CALL_S plus one stretch (fourfold growth would take up to four
+    times CALL_S, at every point)."""
+    import atlas.labels.labelling as labelling
+
+    cfg = _small(tmp_path)
+    layout = sweep.layout_of(cfg)
+    clock, spent = [0.0], []
+
+    def fake_label(theta0, theta_dot0, *, t_max, **kw):
+        if t_max != cfg.integrator.dt:
+            spent.append(10e-6 * theta0.size)
+            clock[0] += spent[-1]
+
+    monkeypatch.setattr(labelling, "label", fake_label)
+    monkeypatch.setattr(preflight.time, "perf_counter", lambda: clock[0])
+    rate, timed = preflight.measure_rate(cfg, layout, [None])
+    assert rate == pytest.approx(100_000, rel=1e-9)
+    final = spent[-min(preflight.MAX_POINTS, layout.n_params):]
+    stretch = 10e-6 * min(preflight.STRETCH, layout.theta0.size)
+    assert all(preflight.CALL_S <= s <= 1.25 * preflight.CALL_S + stretch for s in final), spent
+
+
 def test_the_time_is_measured_only_where_the_run_may_be_big(tmp_path, monkeypatch):
     cfg = _small(tmp_path)
     layout = sweep.layout_of(cfg)
