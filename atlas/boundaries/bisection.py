@@ -215,13 +215,14 @@ def bisect_across(
     return lo, hi
 
 
-def bisect_between(labels, base, normal, below, above, *, tol: float, half_width: float):
+def bisect_between(labels, base, normal, below, above, *, tol: float, half_width: float,
+                   grow: float = _GROW):
     """Vectorised bisection of labels along base + s·normal between basin ``below`` (s < 0
     side) and ``above`` (s > 0; either may be :data:`RUNNING_SIDE`), from the bracket
     ±half_width. While an end carries the other end's basin, the boundary lies beyond it:
     that end becomes the other end (a certified point of the other side) and is pushed out
-    ×8 (both ends ×8 while both do), up to ``MAX_BRACKET`` from the base; only the ends that
-    moved are labelled again. Returns (s_lo, s_hi, ok), ``ok`` False where an end carries
+    ×``grow`` (both ends while both do), up to ``MAX_BRACKET`` from the base; only the ends
+    that moved are labelled again. Returns (s_lo, s_hi, ok), ``ok`` False where an end carries
     neither basin or the bracket outgrew the limit, or a midpoint carries neither (the
     bracket is then left as it was: its width says how far it got)."""
     n = base.shape[0]
@@ -242,9 +243,9 @@ def bisect_between(labels, base, normal, below, above, *, tol: float, half_width
                           i[~lost & hi_over & ~lo_over])
         hi[down], lab_hi[down] = lo[down], lab_lo[down]  # lo is above's: the new hi
         lo[up], lab_lo[up] = hi[up], lab_hi[up]
-        lo[down] = _GROW * hi[down]
-        hi[up] = _GROW * lo[up]
-        lo[both], hi[both] = _GROW * lo[both], _GROW * hi[both]
+        lo[down] = grow * hi[down]
+        hi[up] = grow * lo[up]
+        lo[both], hi[both] = grow * lo[both], grow * hi[both]
         moved = np.concatenate([both, down, up])
         too_wide = moved[np.maximum(-lo[moved], hi[moved]) > 2 * MAX_BRACKET]
         ok[too_wide] = False

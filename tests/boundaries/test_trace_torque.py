@@ -129,3 +129,26 @@ def test_bisect_between_on_a_known_boundary_labels_each_end_once(offset):
     width = np.where(widenings > 0, far * 7 / 8, 2 * FIRST_BRACKET * tol)
     halvings = np.floor(np.log2(width / tol)) + 1  # until narrower than tol
     assert sum(calls) == 2 * n + widenings.sum() + halvings.sum()
+
+
+def test_bisect_between_a_prediction_off_by_up_to_three_halfwidths_costs_one_label():
+    """The trace's last level: a first bracket of ±0.45·tol around the prediction, widened
+    ×3: a boundary within 1.35·tol of the prediction (but beyond 0.45·tol) is bracketed to
+    0.9·tol by one more label, and no halving."""
+    from atlas.boundaries.bisection import bisect_between
+
+    tol = 1e-12
+    star = np.array([-1.3, -0.6, 0.5, 1.0, 1.3]) * tol
+    base = np.column_stack([np.zeros(star.size), np.arange(star.size, dtype=float)])
+    calls = []
+
+    def labels(theta, theta_dot):
+        calls.append(theta.size)
+        return np.where(theta < star[np.rint(theta_dot).astype(int)], RUNNING_SIDE, 2)
+
+    lo, hi, ok = bisect_between(labels, base, np.tile([1.0, 0.0], (star.size, 1)),
+                                np.full(star.size, RUNNING_SIDE), np.full(star.size, 2),
+                                tol=tol, half_width=0.45 * tol, grow=3.0)
+    assert ok.all() and np.all((lo < star) & (star <= hi))
+    np.testing.assert_allclose(hi - lo, 0.9 * tol, rtol=1e-12)
+    assert calls == [2 * star.size, star.size]
