@@ -167,25 +167,18 @@ ENERGY, BAND, TURN, BELOW, NONE = 0, 1, 2, 3, 4
 
 
 @nb.njit
-def _rhs(kind, x, y, params, out):
-    """The right-hand side of problem ``kind`` at x (see REVERSED, FLOW, ALONG_THETA).
-    θ̈ = τ − X, X = ω0² sin θ + 2αθ̇, written so that REVERSED with τ = 0 gives the untilted
-    manifold's doubles (−(0 − X) = X exactly)."""
+def _rhs(kind, x, y, params):
+    """The right-hand side of problem ``kind`` at x (see REVERSED, FLOW, ALONG_THETA), as a
+    tuple of its three components. θ̈ = τ − X, X = ω0² sin θ + 2αθ̇, written so that REVERSED
+    with τ = 0 gives the untilted manifold's doubles (−(0 − X) = X exactly)."""
     alpha, omega0, torque = params[0], params[1], params[2]
     if kind == ALONG_THETA:
         accel = torque - (omega0 * omega0 * math.sin(x) + 2.0 * alpha * y[0])
-        out[0] = (accel - params[3]) / y[0]
-        out[1] = 1.0 / y[0]
-        out[2] = 0.0
-        return
+        return (accel - params[3]) / y[0], 1.0 / y[0], 0.0
     accel = torque - (omega0 * omega0 * math.sin(y[0]) + 2.0 * alpha * y[1])
     if kind == REVERSED:
-        out[0] = -y[1]
-        out[1] = -accel
-    else:
-        out[0] = y[1]
-        out[1] = accel
-    out[2] = y[1] * y[1]
+        return -y[1], -accel, y[1] * y[1]
+    return y[1], accel, y[1] * y[1]
 
 
 @nb.njit
@@ -224,8 +217,7 @@ def _initial_step(kind, t0, y0, f0, t_bound, rtol, atol, params, dim):
     d0, d1 = _rms(y0, scale, dim), _rms(f0, scale, dim)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, interval)
-    f1 = np.empty(3)
-    _rhs(kind, t0 + h0, y0 + h0 * f0, params, f1)
+    f1 = np.array(_rhs(kind, t0 + h0, y0 + h0 * f0, params))
     d2 = _rms(f1 - f0, scale, dim) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -234,13 +226,14 @@ def _initial_step(kind, t0, y0, f0, t_bound, rtol, atol, params, dim):
     return min(100.0 * h0, h1, interval)
 
 
-@nb.njit
-def _combine(K, weights, rows, h, y, out):
-    """out = y + h·Σ_j weights[j]·K[j] over the first ``rows`` stages."""
+@nb.njit(inline="always")
+def _stage(K, table, row, count, h, y, out):
+    """out = y + h·Σ_j table[row, j]·K[j] over the first ``count`` stages (the weights read
+    in place: no slice of ``table`` per stage)."""
     for i in range(3):
         acc = 0.0
-        for j in range(rows):
-            acc += K[j, i] * weights[j]
+        for j in range(count):
+            acc += K[j, i] * table[row, j]
         out[i] = y[i] + acc * h
 
 
@@ -316,8 +309,8 @@ def integrate(kind, params, event, event_params, y0, t0, t_bound, rtol, atol, di
     K = np.empty((16, 3))
     y = y0.copy()
     t = t0
-    f = np.empty(3)
-    _rhs(kind, t, y, params, f)
+    f = np.array(_rhs(kind, t, y, params))
+    weights = _B.reshape(1, _STAGES)  # the solution's weights as a table of one row
     h_abs = _initial_step(kind, t0, y, f, t_bound, rtol, atol, params, dim)
     g = _event(event, y, params, event_params)
     ts[0] = t
@@ -336,13 +329,13 @@ def integrate(kind, params, event, event_params, y0, t0, t_bound, rtol, atol, di
             t_new = min(t + h_abs, t_bound)
             h = t_new - t
             h_abs = abs(h)
-            K[0] = f
+            K[0, 0], K[0, 1], K[0, 2] = f[0], f[1], f[2]
             for s in range(1, _STAGES):
-                _combine(K, _A[s], s, h, y, stage)
-                _rhs(kind, t + _C[s] * h, stage, params, K[s])
-            _combine(K, _B, _STAGES, h, y, y_new)
-            _rhs(kind, t + h, y_new, params, f_new)
-            K[_STAGES] = f_new
+                _stage(K, _A, s, s, h, y, stage)
+                K[s, 0], K[s, 1], K[s, 2] = _rhs(kind, t + _C[s] * h, stage, params)
+            _stage(K, weights, 0, _STAGES, h, y, y_new)
+            K[_STAGES, 0], K[_STAGES, 1], K[_STAGES, 2] = _rhs(kind, t + h, y_new, params)
+            f_new[0], f_new[1], f_new[2] = K[_STAGES, 0], K[_STAGES, 1], K[_STAGES, 2]
             err5, err3 = 0.0, 0.0
             for i in range(dim):
                 scale = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
@@ -367,8 +360,8 @@ def integrate(kind, params, event, event_params, y0, t0, t_bound, rtol, atol, di
             rejected = True
         # dense output of the accepted step: three more stages (dop853.f's CONTD8)
         for s in range(_STAGES + 1, 16):
-            _combine(K, _A[s], s, h, y, stage)
-            _rhs(kind, t + _C[s] * h, stage, params, K[s])
+            _stage(K, _A, s, s, h, y, stage)
+            K[s, 0], K[s, 1], K[s, 2] = _rhs(kind, t + _C[s] * h, stage, params)
         F = Fs[n]
         for i in range(3):
             delta = y_new[i] - y[i]
