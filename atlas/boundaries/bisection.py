@@ -35,7 +35,8 @@ __all__ = ["NO_LABEL", "Labeller", "bisect_across", "bisect_between", "locate", 
 NO_LABEL = np.iinfo(np.int64).min
 #: Initial half-width of a bracket, in units of tol.
 FIRST_BRACKET = 32.0
-#: No bracket wider than this [rad-ish]: the predictor is far better than that.
+#: No bracket end farther than this [rad-ish] from the prediction it starts around (so no
+#: bracket wider than twice it): the predictor is far better than that.
 MAX_BRACKET = 0.1
 _GROW = 8.0  # widening factor while a bracket has equal labels at both ends
 _BATCH = 64  # below this many orbits per kernel call, add multisection points
@@ -225,6 +226,8 @@ def bisect_between(labels, base, normal, below, above, *, tol: float, half_width
     that moved are labelled again. Returns (s_lo, s_hi, ok), ``ok`` False where an end carries
     neither basin or the bracket outgrew the limit, or a midpoint carries neither (the
     bracket is then left as it was: its width says how far it got)."""
+    if not grow > 1.0:
+        raise ValueError(f"grow must be > 1, got {grow!r}")
     n = base.shape[0]
     lo, hi = np.full(n, -half_width), np.full(n, half_width)
     lab_lo, lab_hi = np.full(n, NO_LABEL), np.full(n, NO_LABEL)
@@ -247,7 +250,7 @@ def bisect_between(labels, base, normal, below, above, *, tol: float, half_width
         hi[up] = grow * lo[up]
         lo[both], hi[both] = grow * lo[both], grow * hi[both]
         moved = np.concatenate([both, down, up])
-        too_wide = moved[np.maximum(-lo[moved], hi[moved]) > 2 * MAX_BRACKET]
+        too_wide = moved[np.maximum(-lo[moved], hi[moved]) > MAX_BRACKET]
         ok[too_wide] = False
         new_lo = np.setdiff1d(np.concatenate([both, down]), too_wide)
         new_hi = np.setdiff1d(np.concatenate([both, up]), too_wide)

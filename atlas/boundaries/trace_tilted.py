@@ -219,7 +219,7 @@ def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v
 
 def _locate(labels, base, normal, below, above, run, arc, tol: float):
     """Bisect across every vertex from the exact curve's prediction, level by level (as
-    :func:`atlas.boundaries.bisection.locate` without torque, two levels deeper): first every
+    :func:`atlas.boundaries.bisection.locate` without torque, one level deeper): first every
     ``_STRIDES[0]``-th vertex of each run (and its last), from the bracket ±FIRST_BRACKET·tol
     around the exact curve, widened ×8 while an end carries the other side (the RK4 map's
     boundary lies O(dt⁴) ≈ 1e-9 from the exact one: a few widenings and ~17 halvings,

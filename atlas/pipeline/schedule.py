@@ -77,9 +77,11 @@ def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tupl
             cfg.integrator.method)
 
 
-#: Held by the thread computing a tile ahead: a sweep's tile waits for one that an interrupted
-#: sweep left computing, so two never run the kernels at once (Numba's workqueue threading
-#: layer aborts the process on concurrent parallel launches).
+#: Held by the thread computing (or labelling) a tile ahead: a sweep's tile waits for one that
+#: an interrupted sweep left computing, so two tiles are never labelled at once (Numba's
+#: workqueue threading layer aborts the process on concurrent parallel launches). A tile's
+#: certification overlaps the next tile's labelling only under a thread-safe layer
+#: (:func:`local_results`).
 _AHEAD = threading.Lock()
 
 
@@ -112,8 +114,9 @@ def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
     certifies tile i+1 while the caller writes tile i. At most one tile is ahead: memory
     holds two tiles' arrays. A tile whose computation failed raises its own exception here,
     after every tile before it has been yielded; a tile still computing when the caller stops
-    (a failed write, Ctrl-C, SIGTERM) is abandoned, its result dropped. The arrays do not
-    depend on which way: each tile is labelled, then certified, on its own."""
+    (a failed write, Ctrl-C, SIGTERM, or the certification of the tile before it failing) is
+    abandoned, its result dropped. The arrays do not depend on which way: each tile is
+    labelled, then certified, on its own."""
     import numba
 
     from atlas.kernels.threads import threadsafe_layer

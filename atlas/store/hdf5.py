@@ -227,8 +227,9 @@ def _write_summary(path: Path, layout: Layout, groups: dict[str, xr.Dataset],
         with _netcdf(path, "a") as f:
             _write_root_vars(f, root_vars, layout)
             f.attrs.update({key: value for key, value in attrs.items() if value is not None})
+            stores = _stores(groups)
             for path_in_file, ds in groups.items():
-                ds.dump_to_store(_GroupStore(_group(f, path_in_file), mode="a"))
+                ds.dump_to_store(stores[path_in_file](_group(f, path_in_file), mode="a"))
             f.attrs["complete"] = np.int8(1)
 
     _in_child(write)
@@ -240,6 +241,8 @@ _NOT_A_VARIABLE = b"This is a netCDF dimension but not a netCDF variable.%10d"
 #: Encodings that leave no mark in the file (xarray drops them too); any other one asks for
 #: storage (chunks, filters, a type) that only h5netcdf's path makes.
 _NO_STORAGE = frozenset({"source", "original_shape"})
+#: Attribute names that netCDF-4's layout uses itself (h5netcdf's list: it refuses them).
+_RESERVED = h5netcdf.attrs._HIDDEN_ATTRS
 
 
 class _GroupStore(xr.backends.H5NetCDFStore):
@@ -259,21 +262,25 @@ class _GroupStore(xr.backends.H5NetCDFStore):
       numbers), ``_Netcdf4Dimid`` (its first dimension's) and its ``_FillValue`` as its HDF5
       fill value and as an attribute;
     * a non-string scalar attribute is stored as a one-element array, as netCDF-C does;
-      datasets keep their attributes in creation order (h5netcdf's ``track_order``, on in
-      every file it creates).
+      datasets keep their attributes in creation order where their group tracks its own so
+      (h5netcdf's ``track_order``, on in every file it creates with h5py ≥ 3.7).
 
     These are the objects and attributes, in the same order, that h5netcdf's
     ``create_variable`` makes (tests/store/test_hdf5.py compares the two files object by
     object), without its bookkeeping: h5netcdf opens each dimension scale and dataset again
     by its path from the file's root whenever it needs it, some 35 times a variable, which
     made the summary of a sweep (hundreds of small variables) take seconds. A group this does
-    not cover (:func:`_covers`) is written through h5netcdf, as before."""
+    not cover (:func:`_covers`) is written through h5netcdf, as before; so is a group that
+    encloses other groups of the summary (:func:`_stores`): h5netcdf does not see
+    what this writes, and an inner group written through it would not find the enclosing
+    group's dimensions and would make its own (the per-point groups enclose none)."""
 
     def store(self, variables, attributes, check_encoding_set=frozenset(), writer=None,
               unlimited_dims=None):
         encoded, attrs = self.encode(variables, attributes)
         group = self.ds._h5group
-        if check_encoding_set or unlimited_dims or not _covers(group, encoded):
+        if (check_encoding_set or unlimited_dims or set(attrs) & _RESERVED
+                or not _covers(group, encoded)):
             super().store(variables, attributes, check_encoding_set, writer, unlimited_dims)
             return
         _set_attrs(group, attrs)
@@ -307,14 +314,17 @@ class _GroupStore(xr.backends.H5NetCDFStore):
 def _covers(group: h5py.Group, variables: dict) -> bool:
     """Whether :class:`_GroupStore` writes these encoded variables into ``group`` itself: not
     if one has a dimension of length 0 (h5netcdf makes it unlimited and the variable chunked),
-    a storage encoding (chunks, filters, a type), a type other than numbers or text (or text
-    with a fill value), a slash in its name, or the name of a dimension that it is not the
-    coordinate of; nor if a coordinate comes after a variable on its dimension (h5netcdf
-    then replaces the dimension's scale by it) or is on an enclosing group's dimension."""
+    a storage encoding (chunks, filters, a type), a type other than plain numbers or text (an
+    enum's metadata, text with a fill value), a slash in its name or its dimensions' names,
+    an attribute that netCDF-4 reserves (:data:`_RESERVED`: h5netcdf refuses it), or the name
+    of a dimension that it is not the coordinate of; nor if a coordinate comes after a
+    variable on its dimension (h5netcdf then replaces the dimension's scale by it) or is on an
+    enclosing group's dimension."""
     seen = set()
     for name, var in variables.items():
         if (0 in var.shape or set(var.encoding) - _NO_STORAGE or "/" in name
-                or var.dtype.kind not in "iufU"
+                or any("/" in dim for dim in var.dims) or set(var.attrs) & _RESERVED
+                or var.dtype.kind not in "iufU" or var.dtype.metadata
                 or var.dtype.kind == "U" and "_FillValue" in var.attrs
                 or var.dims == (name,) and (
                     name in seen or _enclosing_scale(group, name, var.size) is not None)):
@@ -338,7 +348,7 @@ def _enclosing_scale(group: h5py.Group, dim: str, size: int) -> h5py.Dataset | N
 
 def _phony_scale(group: h5py.Group, dim: str, size: int, number: int) -> h5py.Dataset:
     """The scale of dimension ``dim`` that has no variable (netCDF-4's, never written)."""
-    scale = group.create_dataset(dim, (size,), ">f4", track_order=True)
+    scale = group.create_dataset(dim, (size,), ">f4", track_order=_tracks_order(group))
     scale.attrs["_Netcdf4Dimid"] = np.int32(number)
     scale.make_scale(_NOT_A_VARIABLE % size)
     return scale
@@ -355,7 +365,8 @@ def _create_variable(group: h5py.Group, name: str, var: xr.Variable,
     if data.dtype.kind == "U":  # h5py writes text from Python strings
         data = data.astype(object)
     dtype = h5py.string_dtype() if var.dtype.kind == "U" else var.dtype
-    dset = group.create_dataset(name, data=data, dtype=dtype, fillvalue=fill, track_order=True)
+    dset = group.create_dataset(name, data=data, dtype=dtype, fillvalue=fill,
+                                track_order=_tracks_order(group))
     numbers = np.array([dims[dim][1] for dim in var.dims], np.int32)
     if var.dims == (name,):
         dset.attrs["_Netcdf4Dimid"] = numbers[0]
@@ -372,6 +383,13 @@ def _create_variable(group: h5py.Group, name: str, var: xr.Variable,
     return dset
 
 
+def _tracks_order(group: h5py.Group) -> bool:
+    """Whether ``group`` tracks and indexes its attributes' creation order: the datasets made
+    in it then keep their attributes in creation order too (h5netcdf's ``_track_order``)."""
+    order = group.id.get_create_plist().get_attr_creation_order()
+    return bool(order & h5py.h5p.CRT_ORDER_TRACKED) and bool(order & h5py.h5p.CRT_ORDER_INDEXED)
+
+
 def _set_attrs(obj, attrs: dict) -> None:
     """netCDF-4 attributes on an HDF5 object, as h5netcdf writes them: a non-string scalar
     as a one-element array; no booleans (not a netCDF type)."""
@@ -383,6 +401,16 @@ def _set_attrs(obj, attrs: dict) -> None:
         if np.isscalar(value) and dtype.kind not in "SU":
             value = np.atleast_1d(value)
         obj.attrs[key] = value
+
+
+def _stores(groups) -> dict:
+    """The xarray store class that writes each group (path → class): :class:`_GroupStore`,
+    but xarray's h5netcdf store for a group that encloses other groups of ``groups`` (their
+    dimensions may be its own, which h5netcdf then has to know: see :class:`_GroupStore`)."""
+    enclosing = {path.rsplit("/", k)[0] for path in groups
+                 for k in range(1, path.count("/") + 1)}
+    return {path: xr.backends.H5NetCDFStore if path in enclosing else _GroupStore
+            for path in groups}
 
 
 def _group(f: h5netcdf.File, path: str):

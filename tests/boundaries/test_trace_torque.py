@@ -92,7 +92,7 @@ def test_certified_between_d_cert_and_ten_d_cert_is_the_exact_equations(traced):
     assert math.isfinite(cert.d_cert)
 
 
-@pytest.mark.parametrize("offset", [-1000.0, -20.0, 0.3, 20.0, 5000.0])
+@pytest.mark.parametrize("offset", [-1000.0, -40.0, 0.3, 300.0, 5000.0])
 def test_bisect_between_on_a_known_boundary_labels_each_end_once(offset):
     """bisect_between on its own, along lines s·(1, 0) with the boundary at a known s* (in
     tol) between the running side below and well 2 above: every bracket holds s*, is
@@ -129,6 +129,14 @@ def test_bisect_between_on_a_known_boundary_labels_each_end_once(offset):
     width = np.where(widenings > 0, far * 7 / 8, 2 * FIRST_BRACKET * tol)
     halvings = np.floor(np.log2(width / tol)) + 1  # until narrower than tol
     assert sum(calls) == 2 * n + widenings.sum() + halvings.sum()
+
+
+def test_bisect_between_refuses_a_growth_that_does_not_widen():
+    from atlas.boundaries.bisection import bisect_between
+
+    with pytest.raises(ValueError, match="grow must be > 1"):
+        bisect_between(None, np.zeros((1, 2)), np.ones((1, 2)), np.zeros(1), np.ones(1),
+                       tol=1e-12, half_width=1e-12, grow=1.0)
 
 
 def test_bisect_between_a_prediction_off_by_up_to_three_halfwidths_costs_one_label():

@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 
 from atlas.store import hdf5
-from atlas.store.hdf5 import _group, _GroupStore, _netcdf
+from atlas.store.hdf5 import _group, _GroupStore, _netcdf, _stores
 
 
 def _groups() -> dict[str, xr.Dataset]:
@@ -41,17 +41,24 @@ def _groups() -> dict[str, xr.Dataset]:
     empty = xr.Dataset({"theta": ("point", np.zeros(0))})
     chunked = xr.Dataset({"v": ("s", np.arange(6.0))})
     chunked["v"].encoding["chunksizes"] = (3,)
+    parent = xr.Dataset({"p": ("x", rng.random(3))})  # a group with data and a group in it
+    inner = xr.Dataset({"c": ("x", rng.random(3))})  # on the parent's x, written by h5netcdf
+    inner["c"].encoding["chunksizes"] = (3,)
+    enum = xr.Dataset({"e": ("s", np.array([0, 1], dtype=h5py.enum_dtype(
+        {"off": 0, "on": 1}, basetype="i1")))})
     return {"critical_points/torque0": points, "separatrices/torque0": crossings,
             "limit_cycle/torque0": coordinate_last, "separatrices/torque1": shadowing,
             "limit_cycle/torque1": coordinate_first, "separatrices/torque2": empty,
             "critical_points/torque1": points, "limit_cycle/torque2": chunked,
-            "limit_cycle/torque3": enclosing}
+            "limit_cycle/torque3": enclosing, "extra": parent, "extra/inner": inner,
+            "flags/enum": enum}
 
 
 #: Groups the writer leaves to h5netcdf: a coordinate after a variable on its dimension, a
-#: dimension of length 0, a chunked variable, a coordinate on an enclosing group's dimension.
+#: dimension of length 0, a chunked variable, a coordinate on an enclosing group's dimension,
+#: a group that encloses another and the group inside it (chunked), an enum type.
 _TO_H5NETCDF = {"limit_cycle/torque0", "separatrices/torque2", "limit_cycle/torque2",
-                "limit_cycle/torque3"}
+                "limit_cycle/torque3", "extra", "extra/inner", "flags/enum"}
 
 
 def _write(path, store, groups) -> None:
@@ -62,8 +69,9 @@ def _write(path, store, groups) -> None:
         f.create_variable("torque", ("torque",), np.float64, data=[0.3, -0.4])
         f.create_variable("theta0", ("theta0",), np.float64, data=[-1.0, 0.0, 1.0])
         f.create_variable("attractor", ("torque", "theta0"), np.int16, fillvalue=-32768)
+        chosen = _stores(groups) if store is _GroupStore else dict.fromkeys(groups, store)
         for path_in_file, ds in groups.items():
-            ds.dump_to_store(store(_group(f, path_in_file), mode="a"))
+            ds.dump_to_store(chosen[path_in_file](_group(f, path_in_file), mode="a"))
 
 
 def _attr(file, value):
@@ -129,12 +137,20 @@ def test_the_group_store_writes_what_h5netcdf_writes(tmp_path, monkeypatch):
                 assert _encoding(var) == _encoding(old[name]), name
 
 
-def test_the_group_store_refuses_what_h5netcdf_refuses(tmp_path):
-    """A boolean attribute is no netCDF-4 type: refused by either writer, one error."""
-    ds = xr.Dataset({"v": ("s", np.arange(2.0), {"flag": True})})
+@pytest.mark.parametrize("ds, error, match", [
+    (xr.Dataset({"v": ("s", np.arange(2.0), {"flag": True})}), h5netcdf.CompatibilityError,
+     "boolean"),  # no netCDF-4 type
+    (xr.Dataset({"v": ("s", np.arange(2.0), {"NAME": "mine"})}), AttributeError, "NAME"),
+    (xr.Dataset({"v": ("s", np.arange(2.0))}, attrs={"_Netcdf4Dimid": 3}), AttributeError,
+     "_Netcdf4Dimid"),  # names netCDF-4's layout uses itself
+    (xr.Dataset({"v": ("a/b", np.arange(2.0))}), ValueError, "/"),
+], ids=["boolean", "reserved variable attribute", "reserved group attribute",
+        "slash in a dimension"])
+def test_the_group_store_refuses_what_h5netcdf_refuses(tmp_path, ds, error, match):
+    """What xarray's h5netcdf store refuses, the group store refuses with the same error."""
     for store in (xr.backends.H5NetCDFStore, _GroupStore):
-        with _netcdf(tmp_path / "b.h5", "w") as f, \
-                pytest.raises(h5netcdf.CompatibilityError, match="boolean"):
+        with _netcdf(tmp_path / f"{store.__name__}.h5", "w") as f, \
+                pytest.raises(error, match=match):
             ds.dump_to_store(store(_group(f, "g"), mode="a"))
 
 
