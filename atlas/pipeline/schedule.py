@@ -12,6 +12,7 @@ scheduler.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
@@ -52,23 +53,30 @@ def label_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice
                method=defaults.METHOD, backend="cpu", numba_threads=None):
     """The first half of :func:`compute_tile`: the tile's labels (the RK4 map and its
     certificates, :func:`atlas.label`), with ``numba_threads`` threads where given."""
-    if numba_threads is not None:
-        import numba
-
-        numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
+    _use_threads(numba_threads)
     p = certifier.pendulum
     return label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
                  omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
                  method=method, running=barrier)
 
 
-def certify_tile(certifier: Certifier, rows: slice, res):
+def certify_tile(certifier: Certifier, rows: slice, res, numba_threads=None):
     """The second half of :func:`compute_tile`: the labels ``res`` of :func:`label_tile`
     certified for the exact equation (status, boundary distance), as the tile's arrays and
-    tally."""
+    tally, with ``numba_threads`` threads where given."""
+    _use_threads(numba_threads)
     status, distance, tally = certifier.tile(rows, res.attractor, res.status)
     return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
             "boundary_distance": distance}, tally
+
+
+def _use_threads(numba_threads: int | None) -> None:
+    """Numba's thread count for this thread's parallel kernels (a per-thread setting): the
+    caller's ``numba_threads``, where given."""
+    if numba_threads is not None:
+        import numba
+
+        numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
 
 
 def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
@@ -85,15 +93,16 @@ def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tupl
 _AHEAD = threading.Lock()
 
 
-def _in_background(fn, *args, **kwargs) -> Future:
-    """``fn(*args, **kwargs)`` started in a daemon thread; its result, or whatever it raised
-    (Ctrl-C included), comes back through the Future. A daemon rather than a
-    ThreadPoolExecutor worker: those are joined at interpreter exit, so a run stopped by
-    Ctrl-C or SIGTERM would wait for its tile in flight before the process could end."""
+def _in_background(fn, *args, lock=_AHEAD, **kwargs) -> Future:
+    """``fn(*args, **kwargs)`` started in a daemon thread, holding ``lock`` (None: none); its
+    result, or whatever it raised (Ctrl-C included), comes back through the Future. A daemon
+    rather than a ThreadPoolExecutor worker: those are joined at interpreter exit, so a run
+    stopped by Ctrl-C or SIGTERM would wait for its tile in flight before the process could
+    end."""
     future = Future()
 
     def work():
-        with _AHEAD:
+        with lock if lock is not None else contextlib.nullcontext():
             try:
                 future.set_result(fn(*args, **kwargs))
             except BaseException as exc:  # re-raised in the caller by future.result()
@@ -106,9 +115,12 @@ def _in_background(fn, *args, **kwargs) -> Future:
 def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
                   ) -> Iterator[tuple[int, tuple]]:
     """(index, (arrays, tally)) of the tiles ``todo`` in order, each labelled one tile ahead
-    in a background thread: tile i+1 is labelled while this thread certifies tile i and the
-    caller writes it (the Numba kernels run without the GIL, and so do zlib and fsync in the
-    write; the certificate's serial parts would otherwise leave a core idle). Where Numba's
+    in a background thread: tile i+1 is labelled while tile i is certified, in a second
+    background thread, and the caller writes it (the Numba kernels run without the GIL, and
+    so do zlib and fsync in the write; the certificate's serial parts would otherwise leave a
+    core idle). This thread only waits for the tiles and yields them: Ctrl-C and SIGTERM are
+    raised here, where a wait is always interruptible (Python code run from inside a compiled
+    call, as this thread's certification would be, can lose the KeyboardInterrupt). Where Numba's
     threading layer cannot run two parallel kernels at once (``workqueue``,
     :func:`atlas.kernels.threads.threadsafe_layer`), the background thread labels and
     certifies tile i+1 while the caller writes tile i. At most one tile is ahead: memory
@@ -137,7 +149,8 @@ def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
             ahead = start(todo[position + 1])
         if staged:
             certifier, _, rows, *_ = tile_args(cfg, layout, certifiers, index)
-            result = certify_tile(certifier, rows, result)
+            result = _in_background(certify_tile, certifier, rows, result, lock=None,
+                                    numba_threads=threads).result()
         yield index, result
 
 

@@ -199,31 +199,33 @@ def test_tile_i_is_certified_while_tile_i_plus_1_is_labelled(tmp_path, monkeypat
                                                              reference):
     """Under a threading layer that runs two parallel kernels at once, the certificate of
     tile i (its serial parts would leave a core idle) runs while tile i + 1 is labelled:
-    each certification waits (5 s at most) until the next tile's labelling has started. The
-    arrays are the sequential sweep's."""
+    each certification waits (5 s at most) until the next tile's labelling has started. It
+    runs off the main thread, which only waits (where Ctrl-C is always raised). The arrays
+    are the sequential sweep's."""
     from atlas.kernels.threads import threadsafe_layer
 
     if not threadsafe_layer():
         pytest.skip("workqueue threading layer: tiles are labelled and certified together")
-    started, overlaps = {}, []
+    started, overlaps, off_main = {}, [], []
     labelling, certify = schedule.label_tile, schedule.certify_tile
 
     def labelling_spy(certifier, barrier, rows, *args, **kwargs):
         started.setdefault(rows.start // 2, threading.Event()).set()
         return labelling(certifier, barrier, rows, *args, **kwargs)
 
-    def certify_spy(certifier, rows, res):
+    def certify_spy(certifier, rows, res, **kwargs):
         index = rows.start // 2
+        off_main.append(threading.current_thread() is not threading.main_thread())
         if index + 1 < 8:
             overlaps.append(started.setdefault(index + 1, threading.Event()).wait(5.0))
-        return certify(certifier, rows, res)
+        return certify(certifier, rows, res, **kwargs)
 
     monkeypatch.setattr(schedule, "label_tile", labelling_spy)
     monkeypatch.setattr(schedule, "certify_tile", certify_spy)
     got = _arrays(atlas.run(_config(tmp_path), quiet=True))
     for name in VARIABLES:
         np.testing.assert_array_equal(got[name], reference[name], err_msg=name)
-    assert overlaps == [True] * 7
+    assert overlaps == [True] * 7 and off_main == [True] * 8
 
 
 @pytest.mark.slow
