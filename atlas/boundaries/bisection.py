@@ -28,8 +28,8 @@ from atlas.limits import MAX_STEPS
 from atlas.physics.pendulum import Pendulum
 from atlas.status import RUNNING, TRAPPED, UNRESOLVED
 
-__all__ = ["NO_LABEL", "Labeller", "bisect_across", "bisect_between", "locate", "linger",
-           "field_normal", "FIRST_BRACKET", "MAX_BRACKET"]
+__all__ = ["NO_LABEL", "Labeller", "bisect_across", "bisect_between", "locate",
+           "predict_offsets", "linger", "field_normal", "FIRST_BRACKET", "MAX_BRACKET"]
 
 #: ``attractor`` of an orbit without a certified label, as seen by the bisection.
 NO_LABEL = np.iinfo(np.int64).min
@@ -289,15 +289,28 @@ def locate(labels, base, normal, k, run, tau, tol):
     lo[coarse], hi[coarse] = bisect_across(labels, base[coarse], normal[coarse], k[coarse],
                                            tol=tol, target=tol / _COARSE_TOL,
                                            half_width=FIRST_BRACKET * tol, strict=False)
-    offset = 0.5 * (lo + hi)
-    for a, b in zip(start, stop, strict=True):
-        c = np.flatnonzero(coarse[a:b]) + a
-        f = np.flatnonzero(~coarse[a:b]) + a
-        if f.size:
-            offset[f] = not_a_knot_spline(tau[c], offset[c], tau[f])
+    offset = predict_offsets(tau, 0.5 * (lo + hi), coarse, ~coarse, start, stop)
     fine = ~coarse
     lo_f, hi_f = bisect_across(labels, base[fine] + offset[fine, None] * normal[fine],
                                normal[fine], k[fine], tol=tol, half_width=_FINE_BRACKET * tol,
                                strict=False)
     lo[fine], hi[fine] = offset[fine] + lo_f, offset[fine] + hi_f
     return lo, hi
+
+
+def predict_offsets(along, centre, known, pick, start, stop) -> np.ndarray:
+    """The offsets of the vertices ``pick`` predicted from those ``known`` (their located
+    offsets ``centre``), run by run (runs [start, stop)): a not-a-knot cubic spline over
+    ``along`` (increasing within a run) where a run has four known vertices or more, else
+    linear interpolation (and 0 where it has fewer than two)."""
+    offset = np.zeros(pick.size)
+    for a, b in zip(start, stop, strict=True):
+        have = np.flatnonzero(known[a:b]) + a
+        todo = np.flatnonzero(pick[a:b]) + a
+        if not (todo.size and have.size >= 2):
+            continue
+        if have.size >= 4 and np.all(np.diff(along[have]) > 0):
+            offset[todo] = not_a_knot_spline(along[have], centre[have], along[todo])
+        else:
+            offset[todo] = np.interp(along[todo], along[have], centre[have])
+    return offset

@@ -32,10 +32,11 @@ from atlas.boundaries.bisection import (
     bisect_between,
     field_normal,
     linger,
+    predict_offsets,
 )
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
 from atlas.boundaries.crossings import PROBE, tilted_crossings
-from atlas.boundaries.predictor import fine_spacing, not_a_knot_spline
+from atlas.boundaries.predictor import fine_spacing
 from atlas.boundaries.window import Window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
@@ -244,17 +245,11 @@ def _locate(labels, base, normal, below, above, run, arc, tol: float):
         pick = ~known & ((local % stride == 0) | last)
         offset, predicted = np.zeros(n), np.zeros(n, bool)
         if level:
-            centre = np.where(known, 0.5 * (lo + hi), 0.0)
-            for a, b in zip(start, stop):
-                have = np.flatnonzero(known[a:b] & ok[a:b]) + a
-                todo = np.flatnonzero(pick[a:b]) + a
-                if not (todo.size and have.size >= 2):
-                    continue
-                if have.size >= 4 and np.all(np.diff(arc[have]) > 0):
-                    offset[todo] = not_a_knot_spline(arc[have], centre[have], arc[todo])
-                else:
-                    offset[todo] = np.interp(arc[todo], arc[have], centre[have])
-                predicted[todo] = True
+            usable = known & ok
+            offset = predict_offsets(arc, np.where(known, 0.5 * (lo + hi), 0.0), usable, pick,
+                                     start, stop)
+            have = np.add.reduceat(usable, start) if n else np.zeros(0, int)
+            predicted = pick & np.repeat(have >= 2, stop - start)
         idx = np.flatnonzero(pick)
         width = np.where(predicted[idx], half, FIRST_BRACKET) * tol
         final = level == len(_STRIDES) - 1
