@@ -32,6 +32,12 @@ output: {output}
 #: The same orbits' window in 48 rows (48 tiles): for the faults that need many tiles and an
 #: assembled file larger than a tile, not 160 of them (each tile costs a durable write).
 TILES_48 = SLOW.replace("num: 160", "num: 48")
+#: The step [s] of a SLOW run that must still be running when the test acts on it (a signal,
+#: a second writer) after its 5th tile: at dt = 0.001 s its 160 tiles took 1.3–1.6 s in all,
+#: and a test process descheduled that long on a loaded machine (the full suite on 2 cores)
+#: saw the run finish first (exit 0 instead of 130); at 5e-5 s they take some 10 s (the test
+#: stops the run after its 5th tile, about a third of a second).
+_STILL_RUNNING_DT = 5e-5
 
 
 def _start(cfg, *extra):
@@ -145,7 +151,7 @@ def test_a_real_full_disk_mid_run(tmp_path):
                                              (signal.SIGTERM, 143, "terminated (SIGTERM)")])
 def test_ctrl_c_or_sigterm_stops_cleanly_and_keeps_finished_tiles(tmp_path, sig, code, word):
     out = tmp_path / "int.h5"
-    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.001, output=out))
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=_STILL_RUNNING_DT, output=out))
     proc = _start(cfg)
     proc.send_signal(sig)
     stderr = proc.stderr.read()
@@ -165,7 +171,7 @@ def test_ctrl_c_or_sigterm_stops_cleanly_and_keeps_finished_tiles(tmp_path, sig,
 
 def test_a_second_writer_is_refused_while_the_first_runs(tmp_path):
     out = tmp_path / "busy.h5"
-    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=0.001, output=out))
+    cfg = write_config(tmp_path / "c.yaml", SLOW.format(dt=_STILL_RUNNING_DT, output=out))
     first = _start(cfg)
     try:
         second = run_cli("run", cfg, "--quiet")
