@@ -40,12 +40,21 @@ TILES_48 = SLOW.replace("num: 160", "num: 48")
 _STILL_RUNNING_DT = 5e-5
 
 
+def _interruptible():
+    """In the child before ``exec``: SIGINT at its default disposition and not blocked, as a
+    terminal gives it, whatever the test process was left with (a test run earlier in the
+    same pytest worker can leave SIGINT ignored or blocked, and a child inherits both: in a
+    full suite such a run once ignored the SIGINT sent 8 s before it finished)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+
+
 def _start(cfg, *extra):
     """Start ``atlas run -vv`` and return the process once it has written 5 tiles."""
     env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
     proc = subprocess.Popen([sys.executable, "-m", "atlas.cli", "run", "-vv", str(cfg),
                              "--quiet", *extra], env=env, cwd=REPO, stderr=subprocess.PIPE,
-                            text=True)
+                            text=True, preexec_fn=_interruptible)
     for line in proc.stderr:
         if "tile 5 of 160 written" in line:
             return proc
