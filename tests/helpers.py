@@ -78,10 +78,12 @@ def run_cli(*args, cwd=None, env=None, timeout=300):
 
 
 def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
-    """Make the sweep's ``call``-th tile computation raise ``error`` (a crash mid-run)."""
+    """Make the sweep's ``call``-th tile computation raise ``error`` (a crash mid-run): its
+    labelling, the part of a tile that the local scheduler starts ahead (and that
+    ``compute_tile`` calls)."""
     from atlas.pipeline import schedule
 
-    real, calls = schedule.compute_tile, []
+    real, calls = schedule.label_tile, []
 
     def crashing(*args, **kwargs):
         calls.append(1)
@@ -89,7 +91,7 @@ def crash_on_tile(monkeypatch, call: int, error: BaseException) -> None:
             raise error
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(schedule, "compute_tile", crashing)
+    monkeypatch.setattr(schedule, "label_tile", crashing)
 
 
 def lock_is_free(output: Path) -> bool:

@@ -1,8 +1,9 @@
 """The tile scheduler: which tiles are computed where, and in what order they come back.
 
 A tile (grid rows of one parameter point) is labelled and certified by :func:`compute_tile`,
-a plain function of picklable arguments. The local scheduler computes one tile ahead in a
-background thread while the caller writes the previous one (:func:`local_results`); the Dask
+a plain function of picklable arguments. The local scheduler labels one tile ahead in a
+background thread while it certifies the previous one and the caller writes it
+(:func:`local_results`); the Dask
 scheduler (:mod:`atlas.pipeline.distributed`) sends tiles to workers, which for a format that
 takes parallel writes (Zarr) write them themselves (:func:`compute_tile_into_store`). Which
 device labels a tile (CPU or CUDA kernels) is the ``backend`` argument, independent of the
@@ -11,6 +12,7 @@ scheduler.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
@@ -27,7 +29,8 @@ from atlas.physics.barrier import RunningBarrier
 from atlas.pipeline.config import Config
 from atlas.store.partial import TileStore
 
-__all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "tile_args", "local_results",
+__all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "label_tile", "certify_tile",
+           "tile_args", "local_results",
            "compute_tile_into_store", "dask_tile_results"]
 
 
@@ -42,17 +45,38 @@ def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: sli
     file, the tile's tally). A plain function of picklable arguments, so it can run as a Dask
     task on another machine.
     """
+    res = label_tile(certifier, barrier, rows, dt, t_max, method, backend, numba_threads)
+    return certify_tile(certifier, rows, res)
+
+
+def label_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice, dt, t_max,
+               method=defaults.METHOD, backend="cpu", numba_threads=None):
+    """The first half of :func:`compute_tile`: the tile's labels (the RK4 map and its
+    certificates, :func:`atlas.label`), with ``numba_threads`` threads where given."""
+    _use_threads(numba_threads)
+    p = certifier.pendulum
+    return label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
+                 omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
+                 method=method, running=barrier)
+
+
+def certify_tile(certifier: Certifier, rows: slice, res, numba_threads=None):
+    """The second half of :func:`compute_tile`: the labels ``res`` of :func:`label_tile`
+    certified for the exact equation (status, boundary distance), as the tile's arrays and
+    tally, with ``numba_threads`` threads where given."""
+    _use_threads(numba_threads)
+    status, distance, tally = certifier.tile(rows, res.attractor, res.status)
+    return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
+            "boundary_distance": distance}, tally
+
+
+def _use_threads(numba_threads: int | None) -> None:
+    """Numba's thread count for this thread's parallel kernels (a per-thread setting): the
+    caller's ``numba_threads``, where given."""
     if numba_threads is not None:
         import numba
 
         numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
-    p = certifier.pendulum
-    res = label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
-                omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
-                method=method, running=barrier)
-    status, distance, tally = certifier.tile(rows, res.attractor, res.status)
-    return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
-            "boundary_distance": distance}, tally
 
 
 def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
@@ -61,21 +85,24 @@ def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tupl
             cfg.integrator.method)
 
 
-#: Held by the thread computing a tile ahead: a sweep's tile waits for one that an interrupted
-#: sweep left computing, so two never run the kernels at once (Numba's workqueue threading
-#: layer aborts the process on concurrent parallel launches).
+#: Held by the thread computing (or labelling) a tile ahead: a sweep's tile waits for one that
+#: an interrupted sweep left computing, so two tiles are never labelled at once (Numba's
+#: workqueue threading layer aborts the process on concurrent parallel launches). A tile's
+#: certification overlaps the next tile's labelling only under a thread-safe layer
+#: (:func:`local_results`).
 _AHEAD = threading.Lock()
 
 
-def _in_background(fn, *args, **kwargs) -> Future:
-    """``fn(*args, **kwargs)`` started in a daemon thread; its result, or whatever it raised
-    (Ctrl-C included), comes back through the Future. A daemon rather than a
-    ThreadPoolExecutor worker: those are joined at interpreter exit, so a run stopped by
-    Ctrl-C or SIGTERM would wait for its tile in flight before the process could end."""
+def _in_background(fn, *args, lock=_AHEAD, **kwargs) -> Future:
+    """``fn(*args, **kwargs)`` started in a daemon thread, holding ``lock`` (None: none); its
+    result, or whatever it raised (Ctrl-C included), comes back through the Future. A daemon
+    rather than a ThreadPoolExecutor worker: those are joined at interpreter exit, so a run
+    stopped by Ctrl-C or SIGTERM would wait for its tile in flight before the process could
+    end."""
     future = Future()
 
     def work():
-        with _AHEAD:
+        with lock if lock is not None else contextlib.nullcontext():
             try:
                 future.set_result(fn(*args, **kwargs))
             except BaseException as exc:  # re-raised in the caller by future.result()
@@ -87,27 +114,42 @@ def _in_background(fn, *args, **kwargs) -> Future:
 
 def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
                   ) -> Iterator[tuple[int, tuple]]:
-    """(index, (arrays, tally)) of the tiles ``todo`` in order, each computed one tile ahead
-    in a background thread, so tile i+1 is computed while the caller writes tile i (the
-    Numba kernels run without the GIL, and so do zlib and fsync in the write). At most one
-    tile is ahead: memory holds two tiles' arrays. A tile whose computation failed raises
-    its own exception here, after every tile before it has been yielded; a tile still
-    computing when the caller stops (a failed write, Ctrl-C, SIGTERM) is abandoned, its
-    result dropped."""
+    """(index, (arrays, tally)) of the tiles ``todo`` in order, each labelled one tile ahead
+    in a background thread: tile i+1 is labelled while tile i is certified, in a second
+    background thread, and the caller writes it (the Numba kernels run without the GIL, and
+    so do zlib and fsync in the write; the certificate's serial parts would otherwise leave a
+    core idle). This thread only waits for the tiles and yields them, as without the
+    overlap: Ctrl-C and SIGTERM come while it waits. Where Numba's threading layer cannot
+    run two parallel kernels at once (``workqueue``,
+    :func:`atlas.kernels.threads.threadsafe_layer`), the background thread labels and
+    certifies tile i+1 while the caller writes tile i. At most one tile is ahead: memory
+    holds two tiles' arrays. A tile whose computation failed raises its own exception here,
+    after every tile before it has been yielded; a tile still computing when the caller stops
+    (a failed write, Ctrl-C, SIGTERM, or the certification of the tile before it failing) is
+    abandoned, its result dropped. The arrays do not depend on which way: each tile is
+    labelled, then certified, on its own."""
     import numba
+
+    from atlas.kernels.threads import threadsafe_layer
 
     threads = numba.get_num_threads()  # the caller's setting: Numba's is per thread
     layout = tiles.layout
+    staged = threadsafe_layer()
 
     def start(index):
-        return _in_background(compute_tile, *tile_args(cfg, layout, certifiers, index),
-                              backend=device, numba_threads=threads)
+        return _in_background(label_tile if staged else compute_tile,
+                              *tile_args(cfg, layout, certifiers, index), backend=device,
+                              numba_threads=threads)
 
     ahead = start(todo[0]) if len(todo) else None
     for position, index in enumerate(todo):
         result = ahead.result()
         if position + 1 < len(todo):
             ahead = start(todo[position + 1])
+        if staged:
+            certifier, _, rows, *_ = tile_args(cfg, layout, certifiers, index)
+            result = _in_background(certify_tile, certifier, rows, result, lock=None,
+                                    numba_threads=threads).result()
         yield index, result
 
 

@@ -156,7 +156,7 @@ def _spy(monkeypatch):
     """Record tile computations and writes, in order; each write of tile i waits (5 s at
     most) until tile i + 1 has started computing, which only a look-ahead does."""
     events, started = [], {}
-    compute, write = schedule.compute_tile, TileStore.write
+    compute, write = schedule.label_tile, TileStore.write
 
     def computing(certifier, barrier, rows, *args, **kwargs):
         index = rows.start // 2  # 2 rows per tile, one parameter point
@@ -171,7 +171,7 @@ def _spy(monkeypatch):
         write(self, index, *args)
         events.append(("write", index))
 
-    monkeypatch.setattr(schedule, "compute_tile", computing)
+    monkeypatch.setattr(schedule, "label_tile", computing)
     monkeypatch.setattr(TileStore, "write", writing)
     return events
 
@@ -195,12 +195,46 @@ def test_the_look_ahead_writes_what_a_sequential_sweep_writes(tmp_path, monkeypa
 
 
 @pytest.mark.slow
+def test_tile_i_is_certified_while_tile_i_plus_1_is_labelled(tmp_path, monkeypatch,
+                                                             reference):
+    """Under a threading layer that runs two parallel kernels at once, the certificate of
+    tile i (its serial parts would leave a core idle) runs while tile i + 1 is labelled:
+    each certification waits (5 s at most) until the next tile's labelling has started. It
+    runs off the main thread, which only waits for tiles, as without the overlap. The arrays
+    are the sequential sweep's."""
+    from atlas.kernels.threads import threadsafe_layer
+
+    if not threadsafe_layer():
+        pytest.skip("workqueue threading layer: tiles are labelled and certified together")
+    started, overlaps, off_main = {}, [], []
+    labelling, certify = schedule.label_tile, schedule.certify_tile
+
+    def labelling_spy(certifier, barrier, rows, *args, **kwargs):
+        started.setdefault(rows.start // 2, threading.Event()).set()
+        return labelling(certifier, barrier, rows, *args, **kwargs)
+
+    def certify_spy(certifier, rows, res, **kwargs):
+        index = rows.start // 2
+        off_main.append(threading.current_thread() is not threading.main_thread())
+        if index + 1 < 8:
+            overlaps.append(started.setdefault(index + 1, threading.Event()).wait(5.0))
+        return certify(certifier, rows, res, **kwargs)
+
+    monkeypatch.setattr(schedule, "label_tile", labelling_spy)
+    monkeypatch.setattr(schedule, "certify_tile", certify_spy)
+    got = _arrays(atlas.run(_config(tmp_path), quiet=True))
+    for name in VARIABLES:
+        np.testing.assert_array_equal(got[name], reference[name], err_msg=name)
+    assert overlaps == [True] * 7 and off_main == [True] * 8
+
+
+@pytest.mark.slow
 def test_a_failure_of_the_tile_ahead_comes_after_the_tile_being_written(tmp_path,
                                                                         monkeypatch):
     """Tile 3 fails while tile 2 is being written: tile 2 is kept, then the caller gets
     tile 3's own exception."""
     failed = threading.Event()
-    compute, write = schedule.compute_tile, TileStore.write
+    compute, write = schedule.label_tile, TileStore.write
 
     def computing(certifier, barrier, rows, *args, **kwargs):
         if rows.start // 2 == 3:
@@ -213,7 +247,7 @@ def test_a_failure_of_the_tile_ahead_comes_after_the_tile_being_written(tmp_path
             assert failed.wait(5.0)
         write(self, index, *args)
 
-    monkeypatch.setattr(schedule, "compute_tile", computing)
+    monkeypatch.setattr(schedule, "label_tile", computing)
     monkeypatch.setattr(TileStore, "write", writing)
     cfg = _config(tmp_path)
     with pytest.raises(ValueError, match="^tile 3: no such orbit$"):
@@ -229,7 +263,7 @@ def test_a_failed_write_abandons_the_tile_ahead_and_the_run_resumes(tmp_path, mo
     """The write of tile 1 fails while tile 2 computes: the run raises at once (it does not
     wait for tile 2), tile 0 is kept, and the next run finishes the atlas unchanged."""
     release, state = threading.Event(), {}
-    compute, write = schedule.compute_tile, TileStore.write
+    compute, write = schedule.label_tile, TileStore.write
 
     def computing(certifier, barrier, rows, *args, **kwargs):
         if rows.start // 2 == 2:
@@ -244,7 +278,7 @@ def test_a_failed_write_abandons_the_tile_ahead_and_the_run_resumes(tmp_path, mo
 
     cfg = _config(tmp_path)
     with monkeypatch.context() as m:
-        m.setattr(schedule, "compute_tile", computing)
+        m.setattr(schedule, "label_tile", computing)
         m.setattr(TileStore, "write", writing)
         with pytest.raises(StorageError, match="No space left on device"):
             atlas.run(cfg, quiet=True)
