@@ -289,7 +289,7 @@ def locate(labels, base, normal, k, run, tau, tol):
     lo[coarse], hi[coarse] = bisect_across(labels, base[coarse], normal[coarse], k[coarse],
                                            tol=tol, target=tol / _COARSE_TOL,
                                            half_width=FIRST_BRACKET * tol, strict=False)
-    offset = predict_offsets(tau, 0.5 * (lo + hi), coarse, ~coarse, start, stop)
+    offset, _ = predict_offsets(tau, 0.5 * (lo + hi), coarse, ~coarse, start, stop)
     fine = ~coarse
     lo_f, hi_f = bisect_across(labels, base[fine] + offset[fine, None] * normal[fine],
                                normal[fine], k[fine], tol=tol, half_width=_FINE_BRACKET * tol,
@@ -298,12 +298,13 @@ def locate(labels, base, normal, k, run, tau, tol):
     return lo, hi
 
 
-def predict_offsets(along, centre, known, pick, start, stop) -> np.ndarray:
-    """The offsets of the vertices ``pick`` predicted from those ``known`` (their located
+def predict_offsets(along, centre, known, pick, start, stop):
+    """(offsets, predicted) of the vertices ``pick`` from those ``known`` (their located
     offsets ``centre``), run by run (runs [start, stop)): a not-a-knot cubic spline over
     ``along`` (increasing within a run) where a run has four known vertices or more, else
-    linear interpolation (and 0 where it has fewer than two)."""
-    offset = np.zeros(pick.size)
+    linear interpolation; where a run has fewer than two, its vertices are not predicted
+    (offset 0, ``predicted`` False)."""
+    offset, predicted = np.zeros(pick.size), np.zeros(pick.size, bool)
     for a, b in zip(start, stop, strict=True):
         have = np.flatnonzero(known[a:b]) + a
         todo = np.flatnonzero(pick[a:b]) + a
@@ -313,4 +314,5 @@ def predict_offsets(along, centre, known, pick, start, stop) -> np.ndarray:
             offset[todo] = not_a_knot_spline(along[have], centre[have], along[todo])
         else:
             offset[todo] = np.interp(along[todo], along[have], centre[have])
-    return offset
+        predicted[todo] = True
+    return offset, predicted

@@ -245,11 +245,8 @@ def _locate(labels, base, normal, below, above, run, arc, tol: float):
         pick = ~known & ((local % stride == 0) | last)
         offset, predicted = np.zeros(n), np.zeros(n, bool)
         if level:
-            usable = known & ok
-            offset = predict_offsets(arc, np.where(known, 0.5 * (lo + hi), 0.0), usable, pick,
-                                     start, stop)
-            have = np.add.reduceat(usable, start) if n else np.zeros(0, int)
-            predicted = pick & np.repeat(have >= 2, stop - start)
+            offset, predicted = predict_offsets(arc, np.where(known, 0.5 * (lo + hi), 0.0),
+                                                known & ok, pick, start, stop)
         idx = np.flatnonzero(pick)
         width = np.where(predicted[idx], half, FIRST_BRACKET) * tol
         final = level == len(_STRIDES) - 1
