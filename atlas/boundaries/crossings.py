@@ -5,7 +5,8 @@ inside it, with torque) crosses it at one initial speed θ̇0 [rad s⁻¹]. The 
 predicts that speed — without torque the exact value of L at θ = −(|n| − 1)π
 (:func:`axis_crossings`), with torque the exact polylines' crossings of θ = 0
 (:func:`tilted_crossings`) — and bisection along θ̇0 on certified RK4 labels
-(:mod:`atlas.boundaries.bisection`) locates the label change to ``tol``: the crossing of the
+(:mod:`atlas.boundaries.bisection`), or with torque a shot to the saddle
+(:mod:`atlas.boundaries.shooting`), locates the label change to ``tol``: the crossing of the
 RK4 map's boundary at step dt. Derivation: docs/design/separatrices.md.
 """
 
@@ -56,12 +57,14 @@ def axis_crossings(m: StableManifold, saddles: np.ndarray, tol: float, dt: float
     return predicted + 0.5 * (lo + hi), hi - lo, k_above, labels
 
 
-def tilted_crossings(exact, labels, window: Window, tol: float):
+def tilted_crossings(exact, labels, shooter, window: Window, tol: float):
     """With torque: where the label changes along the axis θ0 = 0 in the window — the exact
     polylines' crossings of θ = 0 (``exact``: :class:`atlas.boundaries.tilted.TiltedBoundaries`,
-    its :meth:`~atlas.boundaries.tilted.TiltedBoundaries.axis_speeds`), each bisected along θ̇
-    on the certified RK4 labels of ``labels``. Returns (θ̇0, bracket width, basin below,
-    basin above; :data:`atlas.boundaries.exact.RUNNING_SIDE` for the running basin)."""
+    its :meth:`~atlas.boundaries.tilted.TiltedBoundaries.axis_speeds`), each located along θ̇
+    by ``shooter`` (:class:`atlas.boundaries.shooting.Shooter`: a stable manifold of a saddle
+    crosses the bracket) or, where that cannot certify it, bisected on the certified RK4
+    labels of ``labels``. Returns (θ̇0, bracket width, basin below, basin above;
+    :data:`atlas.boundaries.exact.RUNNING_SIDE` for the running basin)."""
     speeds = exact.axis_speeds()
     speeds = np.sort(speeds[(window.theta_dot[0] < speeds) & (speeds < window.theta_dot[1])])
     empty = np.zeros(0)
@@ -71,12 +74,15 @@ def tilted_crossings(exact, labels, window: Window, tol: float):
     up = np.column_stack([np.zeros(speeds.size), np.ones(speeds.size)])
     below = exact.side(np.zeros(speeds.size), speeds - PROBE)
     above = exact.side(np.zeros(speeds.size), speeds + PROBE)
-    # from the exact crossing ± FIRST_BRACKET·tol, widened as needed (the RK4 map's boundary
-    # lies ≈ 1e-9 from it); a crossing that fails so is bisected again from ±PROBE
-    lo, hi, ok = bisect_between(labels, base, up, below, above, tol=tol,
-                                half_width=FIRST_BRACKET * tol)
-    again = np.flatnonzero(~ok)
-    if again.size:
-        lo[again], hi[again], _ = bisect_between(labels, base[again], up[again], below[again],
-                                                 above[again], tol=tol, half_width=PROBE)
+    # shot from the exact crossing, to whichever saddle the orbit reaches
+    lo, hi, ok, _ = shooter.refine(base, up, np.zeros(speeds.size),
+                                   np.full(speeds.size, np.nan))
+    # else from the exact crossing ± FIRST_BRACKET·tol, widened as needed (the RK4 map's
+    # boundary lies ≈ 1e-9 from it); a crossing that fails so is bisected again from ±PROBE
+    for half_width in (FIRST_BRACKET * tol, PROBE):
+        again = np.flatnonzero(~ok)
+        if again.size:
+            lo[again], hi[again], ok[again] = bisect_between(
+                labels, base[again], up[again], below[again], above[again], tol=tol,
+                half_width=half_width)
     return speeds + 0.5 * (lo + hi), hi - lo, below, above

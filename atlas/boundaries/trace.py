@@ -1,8 +1,11 @@
-"""The traced separatrices: the basin boundaries of the RK4 map, located by bisection.
+"""The traced separatrices: the basin boundaries of the RK4 map, located by shooting or bisection.
 
 :func:`trace` is the one entry point, for every torque: it locates, to ``tol`` [rad-ish],
 every basin boundary of the RK4 map at step dt (the curves that colour the basin map) that
-enters the window, on certified labels, predicted by the exact boundaries
+enters the window — by shooting each point's segment to its saddle
+(:mod:`atlas.boundaries.shooting`: a certificate that the saddle's stable manifold crosses
+it), or, where that cannot certify it or for method "rk4-trigfree", by bisection on
+certified labels (:mod:`atlas.boundaries.bisection`) — predicted by the exact boundaries
 (:func:`atlas.boundaries.exact.exact_boundaries`), and checks them against those. Without
 torque only the left branch of (π, 0) and the right branch of (−π, 0) are located and every
 other boundary is a 2π copy (here); with torque every branch in the window is located on
@@ -22,7 +25,14 @@ import numpy as np
 import xarray as xr
 
 from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
-from atlas.boundaries.bisection import Labeller, field_normal, linger, locate
+from atlas.boundaries.bisection import (
+    FIRST_BRACKET,
+    Labeller,
+    bisect_across,
+    field_normal,
+    linger,
+    locate,
+)
 from atlas.boundaries.certificate import cert_distance
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND, check, symmetry_error
 from atlas.boundaries.crossings import axis_crossings
@@ -42,6 +52,7 @@ from atlas.boundaries.predictor import (
     sources,
     window_boxes,
 )
+from atlas.boundaries.shooting import Shooter
 from atlas.boundaries.trace_tilted import trace_tilted
 from atlas.boundaries.window import Window, checked_window
 from atlas.physics.pendulum import Pendulum
@@ -86,7 +97,10 @@ def trace(
     ``crossing_bracket_width``, ``crossing_in_window``; attributes: ``alpha``, ``omega0``, the
     windows, ``tol``, ``max_spacing``, ``dt``, ``t_max``, ``n_boundaries``,
     ``symmetry_error``, ``symmetry_bound``, ``discrepancy``, ``discrepancy_bound``,
-    ``polyline_error``, ``n_orbits``, ``n_unresolved``, ``warnings`` (lines joined by "\\n",
+    ``polyline_error``, ``n_orbits`` (every orbit integrated), ``n_shots`` (those shot to a
+    saddle), ``rounding`` (the largest rounding estimate [rad-ish] of a shot that located a
+    point, :mod:`atlas.boundaries.shooting`; half the bracket plus it is within tol),
+    ``n_unresolved``, ``warnings`` (lines joined by "\\n",
     read with :func:`atlas.store.separatrices.warnings`) and ``method`` (with torque also
     ``torque``, ``shift_error``, ``shift_pairs``, ``n_skipped``, ``reference_error``).
     Raises ValueError for α = 0, a bad window, dt or settings
@@ -135,6 +149,23 @@ def unmeasured_shift(ds: xr.Dataset, window: Window, exact: ExactBoundaries) -> 
     return ds.assign_attrs(discrepancy=math.nan, warnings=warnings)
 
 
+def _locate(shooter, labels, base, normal, saddle_n, run, tau, tol: float):
+    """Locate every vertex (on the stable manifold of the saddle (nπ, 0), n = ``saddle_n``)
+    by shooting (:meth:`atlas.boundaries.shooting.Shooter.locate`), and bisect the few it
+    cannot certify on certified labels from ±FIRST_BRACKET·tol around the exact curve; for a
+    method the shots do not integrate, bisect every vertex
+    (:func:`atlas.boundaries.bisection.locate`). Returns (s_lo, s_hi) along ``normal``."""
+    k = (saddle_n + 1) // 2
+    if shooter.box is None:
+        return locate(labels, base, normal, k, run, tau, tol)
+    lo, hi, ok = shooter.locate(base, normal, saddle_n * math.pi, run, tau)
+    bad = np.flatnonzero(~ok)
+    if bad.size:
+        lo[bad], hi[bad] = bisect_across(labels, base[bad], normal[bad], k[bad], tol=tol,
+                                         half_width=FIRST_BRACKET * tol, strict=False)
+    return lo, hi
+
+
 def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: float,
                     dt: float, backend: str, method: str) -> xr.Dataset:
     """:func:`trace` without torque: the left branch L of π and the right branch R = −L of
@@ -163,8 +194,9 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
     # vertices: t_max covers their travel τ and lingering down to δ ≈ tol²; unresolved ones
     # are stuck in floating point (see Labeller), so a longer t_max would not help them
     labels = Labeller(p, dt, tau.max(initial=0.0) + linger(p, tol), backend, method)
+    shooter = Shooter(p, tol, dt=dt, t_max=labels.t_max, method=method)
     normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1]))
-    lo, hi = locate(labels, base, normal, (saddle_n + 1) // 2, run, tau, tol)
+    lo, hi = _locate(shooter, labels, base, normal, saddle_n, run, tau, tol)
     point = base + 0.5 * (lo + hi)[:, None] * normal
     symmetry = symmetry_error(branch, vertex, point)
     source, copy = place(run, point, window)
@@ -224,7 +256,9 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
             "discrepancy": checked.discrepancy,
             "discrepancy_bound": DISCREPANCY_BOUND,
             "polyline_error": checked.polyline_error,
-            "n_orbits": labels.orbits + axis_labels.orbits,
+            "n_orbits": labels.orbits + shooter.shots + axis_labels.orbits,
+            "n_shots": shooter.shots,
+            "rounding": shooter.rounding,
             "n_unresolved": labels.unresolved + axis_labels.unresolved,
             "warnings": "\n".join(problems),
             "method": (
@@ -234,8 +268,11 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
                 "along the stable "
                 "eigenvector, essay eqs. 22, 24; the right branch its point reflection), "
                 "spacing <= max_spacing and <= max_spacing/sqrt(curvature); each vertex "
-                "located by bisection/multisection across the curve on certified RK4 labels "
-                "until the bracket is narrower than tol; every other branch is a copy shifted "
+                "located across the curve to a bracket narrower than tol: by shooting its "
+                "segment to the saddle (the stable manifold of the RK4 map crosses it: cone "
+                "conditions in the saddle's box; Newton steps from the exact curve and "
+                "splines; method rk4), else by bisection/multisection on certified RK4 "
+                "labels; every other branch is a copy shifted "
                 "by a multiple of 2 pi (symmetry_error: the right branch of -pi vs the point "
                 "reflection of the left branch of pi); checked against the same DOP853 "
                 "manifold: discrepancy = max distance of the points to it, polyline_error = "

@@ -1,14 +1,14 @@
-"""The traced separatrices with torque 0 < |τ| < ω0²: every branch located on its own labels.
+"""The traced separatrices with torque 0 < |τ| < ω0²: every branch located on its own.
 
 With a torque the point reflection is gone and the branches fold, so every boundary in the
 window is located, not copied: vertices about ``max_spacing`` apart on the exact tilted
-boundaries (:class:`atlas.boundaries.tilted.TiltedBoundaries`, DOP853), each bisected across
-the curve, along the normal of the vector field, on certified RK4 labels (the tilted trap
-and the running barrier) between the exact sides read at ±1e-3 (well k or the running
-basin) until narrower than ``tol`` [rad-ish] — from the exact curve's prediction, as
-without torque: every 16th vertex of a run from a bracket of a few tens of tol around the
-exact curve, widened as needed, every 8th then the others from splines of the offsets
-located before them (:func:`_locate`). The
+boundaries (:class:`atlas.boundaries.tilted.TiltedBoundaries`, DOP853), each located across
+the curve, along the normal of the vector field, to a bracket narrower than ``tol``
+[rad-ish]: by shooting its segment to its saddle (:mod:`atlas.boundaries.shooting`: the
+saddle's stable manifold of the RK4 map crosses it; every 8th vertex of a run from the exact
+curve, the others from splines of those, with Newton steps), and where that cannot certify
+it, by bisection on certified RK4 labels (the tilted trap and the running barrier) between
+the exact sides read at ±1e-3 (well k or the running basin) (:func:`_locate`). The
 2π shift is checked on relocated copies (``shift_error``); ``discrepancy``, the located
 points' largest distance from the exact boundaries, is the RK4 map's boundary shift (≈ 1e-9
 at dt = 0.01 s) that sets d_cert.
@@ -32,11 +32,11 @@ from atlas.boundaries.bisection import (
     bisect_between,
     field_normal,
     linger,
-    predict_offsets,
 )
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
 from atlas.boundaries.crossings import PROBE, tilted_crossings
 from atlas.boundaries.predictor import fine_spacing
+from atlas.boundaries.shooting import HALF_WIDTH, Shooter
 from atlas.boundaries.window import Window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
@@ -45,15 +45,6 @@ __all__ = ["trace_tilted"]
 
 _SHIFT_STRIDE = 8  # every 8th located vertex is located again on its 2π-shifted copy
 _FIRST_VERTEX = 1e-3  # no vertex closer [rad-ish] to its saddle: the field vanishes there
-#: The strides of the levels of :func:`_locate` along each run of vertices, and the
-#: half-widths [tol] of the first brackets around the spline's prediction at each level
-#: (the first level has no prediction: ±FIRST_BRACKET·tol around the exact curve).
-_STRIDES, _HALF_WIDTHS = (16, 8, 1), (FIRST_BRACKET, 8.0, 0.45)
-#: The widening factor of each level's brackets: ×8 for the knots; ×3 at the last level, so
-#: that one widening of a prediction off by more than 0.45·tol (a sixth of them) gives a final
-#: bracket, 0.45 → 1.35 tol (0.9 tol wide), one label instead of three.
-_GROWTHS = (8.0, 8.0, 3.0)
-_KNOT_TOL = 8.0  # the spline's knots are located to tol/8
 
 
 def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
@@ -70,7 +61,7 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     + :data:`atlas.boundaries.tilted.MAX_SEGMENT`; none closer than 1e-3 to its saddle, where
     the vector field that gives the normal vanishes); vertices whose exact sides agree at
     ±1e-3 (a tongue thinner than that) are skipped and counted (``n_skipped``). Nothing is
-    copied: every branch in the window is located on its own labels, so the 2π shift, the
+    copied: every branch in the window is located on its own, so the 2π shift, the
     symmetry that holds with torque, is checked, not assumed: ``shift_error`` is the largest
     distance between a located point and the located point of the same source vertex on the
     neighbouring copy, shifted by 2π (the point reflection of the untilted pendulum does not
@@ -83,6 +74,7 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     ``reference_error`` (the exact boundaries' own error: chord + DOP853).
     """
     labels = Labeller(p, dt, t_max + linger(p, tol), backend, method, barrier)
+    shooter = Shooter(p, tol, dt=dt, t_max=labels.t_max, method=method)
     saddle_j, branch, vertex, arc, base = _vertices(exact, window, max_spacing)
     normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1])) if base.size \
         else base.copy()
@@ -96,16 +88,19 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     base, normal, below, above = base[keep], normal[keep], below[keep], above[keep]
     run = np.cumsum(np.r_[True, (np.diff(saddle_j) != 0) | (np.diff(branch) != 0)
                           | (np.diff(vertex) != 1)]) if vertex.size else vertex
-    lo, hi, ok = _locate(labels, base, normal, below, above, run, arc, tol)
+    saddle_theta = p.saddle_angle + 2.0 * math.pi * saddle_j  # exact.saddle_theta(j)
+    lo, hi, ok = _locate(shooter, labels, base, normal, below, above, saddle_theta, run, arc,
+                         tol)
     point = base + 0.5 * (lo + hi)[:, None] * normal
     dist, _ = exact.distance(point[:, 0], point[:, 1]) if point.size else (np.zeros(0), None)
     # a vertex that could not be located leaves the shift unmeasured there: NaN, so that d_cert
     # is NaN and no label is certified for the exact equation on a partial measurement
     discrepancy = float(dist.max(initial=0.0)) if ok.all() else math.nan
-    shift_error, shift_pairs = _shift_error(labels, base, normal, below, above, point, ok,
-                                            tol)
+    shift_error, shift_pairs = _shift_error(shooter, labels, base, normal, below, above,
+                                            saddle_theta, point, ok, tol)
 
-    crossing, crossing_width, k_below, k_above = tilted_crossings(exact, labels, window, tol)
+    crossing, crossing_width, k_below, k_above = tilted_crossings(exact, labels, shooter, window,
+                                                                  tol)
     problems = []
     if not ok.all():
         problems.append(f"{int((~ok).sum())} of {ok.size} vertices could not be bisected to "
@@ -118,7 +113,6 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
                         f"stable manifolds (bound {DISCREPANCY_BOUND:.0e}): lower dt")
     stored_n = (2 * saddle_j + 1).astype(np.int32)
     order = np.lexsort((vertex, branch, stored_n))
-    saddle_theta = np.array([exact.saddle_theta(int(j)) for j in saddle_j])
     return schema.node(
         theta=point[order, 0], theta_dot=point[order, 1], width=(hi - lo)[order],
         crossing=crossing, crossing_width=crossing_width, k_below=k_below, k_above=k_above,
@@ -141,19 +135,20 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
             "discrepancy": discrepancy, "discrepancy_bound": DISCREPANCY_BOUND,
             "polyline_error": exact.chord_error,
             "reference_error": exact.reference_error + exact.chord_error,
-            "n_orbits": labels.orbits, "n_unresolved": labels.unresolved,
+            "n_orbits": labels.orbits + shooter.shots, "n_shots": shooter.shots,
+            "rounding": shooter.rounding, "n_unresolved": labels.unresolved,
             "warnings": "\n".join(problems),
             "method": (
                 f"basin boundaries of the RK4 map (step dt, method {method}) with torque: "
                 "vertices on the exact stable branches of the tilted saddles "
                 "(atlas.boundaries.tilted: "
                 "DOP853 in reversed time, rtol = atol = 1e-13), at most max_spacing apart; "
-                "each located by bisection across the curve on certified RK4 labels (tilted "
-                "trap, running barrier), from brackets around the exact curve (every 16th "
-                "vertex) or around splines of the offsets located before (every 8th, then "
-                "the others), "
-                "until the bracket is narrower than tol; every copy located on its own "
-                "labels (shift_error: the 2 pi shift between copies); discrepancy = max "
+                "each located across the curve to a bracket narrower than tol: by shooting "
+                "its segment to the saddle (the stable manifold of the RK4 map crosses it: "
+                "cone conditions in the saddle's box; Newton steps from the exact curve, "
+                "every 8th vertex, and from splines, the others), else by bisection on "
+                "certified RK4 labels (tilted trap, running barrier); every copy located on "
+                "its own (shift_error: the 2 pi shift between copies); discrepancy = max "
                 "distance of the points to the exact boundaries"),
         },
     )
@@ -218,76 +213,48 @@ def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v
             np.concatenate([v, sv])[order])
 
 
-def _locate(labels, base, normal, below, above, run, arc, tol: float):
-    """Bisect across every vertex from the exact curve's prediction, level by level (as
-    :func:`atlas.boundaries.bisection.locate` without torque, one level deeper): first every
-    ``_STRIDES[0]``-th vertex of each run (and its last), from the bracket ±FIRST_BRACKET·tol
-    around the exact curve, widened ×8 while an end carries the other side (the RK4 map's
-    boundary lies O(dt⁴) ≈ 1e-9 from the exact one: a few widenings and ~17 halvings,
-    instead of ~30 from ±PROBE); then, at each finer stride, a cubic spline over arc length
-    of the offsets located so far predicts the new vertices, whose first bracket is
-    ±``_HALF_WIDTHS`` tol around the prediction (widened as needed): ±8·tol for every 8th
-    vertex (a spline of knots 16 apart predicts it to a few tol: some ten labels instead of
-    some seventeen), then ±0.45·tol, usually final: two labels per vertex. Knots are located
-    to tol/``_KNOT_TOL``, the last level to tol. A vertex that fails is bisected again from
-    ±PROBE. Returns
-    (s_lo, s_hi, ok) along ``normal`` from ``base``, as
-    :func:`atlas.boundaries.bisection.bisect_between`."""
-    n = run.size
-    lo, hi, ok = np.zeros(n), np.zeros(n), np.zeros(n, bool)
-    known = np.zeros(n, bool)
-    start = np.flatnonzero(np.diff(run, prepend=-1) != 0)
-    stop = np.append(start[1:], n)
-    local = np.arange(n) - np.repeat(start, stop - start)
-    last = np.zeros(n, bool)
-    last[stop - 1] = True
-    for level, (stride, half, grow) in enumerate(zip(_STRIDES, _HALF_WIDTHS, _GROWTHS)):
-        pick = ~known & ((local % stride == 0) | last)
-        offset, predicted = np.zeros(n), np.zeros(n, bool)
-        if level:
-            offset, predicted = predict_offsets(arc, np.where(known, 0.5 * (lo + hi), 0.0),
-                                                known & ok, pick, start, stop)
-        idx = np.flatnonzero(pick)
-        width = np.where(predicted[idx], half, FIRST_BRACKET) * tol
-        final = level == len(_STRIDES) - 1
-        for group in (predicted[idx], ~predicted[idx]):  # one bracket width per call
-            g = idx[group]
-            if not g.size:
-                continue
-            g_lo, g_hi, ok[g] = bisect_between(
-                labels, base[g] + offset[g, None] * normal[g], normal[g], below[g], above[g],
-                tol=tol if final else tol / _KNOT_TOL, half_width=float(width[group][0]),
-                grow=grow if predicted[g[0]] else _GROWTHS[0])
-            lo[g], hi[g] = offset[g] + g_lo, offset[g] + g_hi
-        known |= pick
-    again = np.flatnonzero(~ok | ~(hi - lo < tol))
+def _locate(shooter, labels, base, normal, below, above, saddle, run, arc, tol: float):
+    """Locate every vertex by shooting (:meth:`atlas.boundaries.shooting.Shooter.locate`:
+    one orbit per vertex, two for every 8th, from the exact curve and splines); the few it
+    cannot certify are bisected on certified labels from ±FIRST_BRACKET·tol around the exact
+    curve, widened ×8 while an end carries the other side (the RK4 map's boundary lies
+    O(dt⁴) ≈ 1e-9 from the exact one). Returns (s_lo, s_hi, ok) along ``normal`` from
+    ``base``, as :func:`atlas.boundaries.bisection.bisect_between`."""
+    lo, hi, ok = shooter.locate(base, normal, saddle, run, arc)
+    again = np.flatnonzero(~ok)
     if again.size:
         lo[again], hi[again], ok[again] = bisect_between(
             labels, base[again], normal[again], below[again], above[again], tol=tol,
-            half_width=PROBE)
+            half_width=FIRST_BRACKET * tol)
     return lo, hi, ok
 
 
-def _shift_error(labels, base, normal, below, above, point, ok, tol: float):
+def _shift_error(shooter, labels, base, normal, below, above, saddle, point, ok,
+                 tol: float):
     """The 2π shift: every ``_SHIFT_STRIDE``-th located vertex, shifted by 2π and located
-    again on its own labels (the next well's side), must land on the shifted point. Returns
-    (largest distance [rad-ish] plus the copy's bracket half-width, number of pairs
-    compared)."""
+    again on its own (the next saddle's stable manifold: shot from the shifted point, or, if
+    that cannot be certified, bisected on labels of the next well's side), must land on the
+    shifted point. Returns (largest distance [rad-ish] plus the copy's bracket half-width,
+    number of pairs compared)."""
     pick = np.flatnonzero(ok)[::_SHIFT_STRIDE]
     shifted = base[pick] + np.array([2.0 * math.pi, 0.0])
-
-    def next_well(side):
-        return np.where(side == RUNNING_SIDE, side, side + 1)
-
+    along = normal[pick]
     # the 2π shift predicts the copy's point (the RK4 map is 2π-periodic in θ, to
-    # rounding): its first bracket is the last level's ±0.45·tol around the located one's
-    # offset, widened ×8 as needed (a shift error shows as wider brackets, then as gap)
-    offset = np.einsum("ij,ij->i", point[pick] - base[pick], normal[pick])
-    s_lo, s_hi, s_ok = bisect_between(labels, shifted + offset[:, None] * normal[pick],
-                                      normal[pick], next_well(below[pick]),
-                                      next_well(above[pick]), tol=tol,
-                                      half_width=_HALF_WIDTHS[-1] * tol)
-    moved = shifted + (offset + 0.5 * (s_lo + s_hi))[:, None] * normal[pick]
+    # rounding): its segment is centred on the located one's offset
+    offset = np.einsum("ij,ij->i", point[pick] - base[pick], along)
+    s_lo, s_hi, s_ok, _ = shooter.refine(shifted, along, offset, saddle[pick] + 2.0 * math.pi)
+    again = np.flatnonzero(~s_ok)
+    if again.size:
+
+        def next_well(side):
+            return np.where(side == RUNNING_SIDE, side, side + 1)
+
+        g_lo, g_hi, s_ok[again] = bisect_between(
+            labels, shifted[again] + offset[again, None] * along[again], along[again],
+            next_well(below[pick[again]]), next_well(above[pick[again]]), tol=tol,
+            half_width=HALF_WIDTH * tol)
+        s_lo[again], s_hi[again] = offset[again] + g_lo, offset[again] + g_hi
+    moved = shifted + (0.5 * (s_lo + s_hi))[:, None] * along
     # the copy's midpoint may sit exactly on the prediction: its bracket's half-width is
     # the resolution of the comparison
     gap = np.hypot(*(moved - point[pick] - np.array([2.0 * math.pi, 0.0])).T) \

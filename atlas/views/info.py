@@ -136,8 +136,10 @@ def separatrix_lines(ds: xr.Dataset) -> list[str]:
     lines = [
         f"separatrices: {len(saddles)} basin boundaries (saddles n = "
         f"{', '.join(map(str, saddles)) or '-'}), {len(found)} branches, "
-        f"{ds.sizes.get('point', 0)} points; bisection tol {float(ds.attrs['tol']):.0e}, "
-        f"max spacing {float(ds.attrs['max_spacing']):g}",
+        f"{ds.sizes.get('point', 0)} points, located to tol {float(ds.attrs['tol']):.0e}"
+        + (f" (rounding estimate of the shots ≤ {float(ds.attrs['rounding']):.1e})"
+           if "rounding" in ds.attrs else "")
+        + f", max spacing {float(ds.attrs['max_spacing']):g}",
         (f"symmetry: torque breaks the point reflection; the 2 pi shift between copies, "
          f"located independently: max distance {float(ds.attrs['shift_error']):.1e} over "
          f"{int(ds.attrs.get('shift_pairs', 0))} pairs"
@@ -153,7 +155,10 @@ def separatrix_lines(ds: xr.Dataset) -> list[str]:
          "check vs DOP853 stable manifold: boundary shift not measured (see the warning); ")
         +
         f"polyline error {float(ds.attrs['polyline_error']):.1e}; "
-        f"{int(ds.attrs['n_orbits'])} orbits labelled, {int(ds.attrs['n_unresolved'])} "
+        f"{int(ds.attrs['n_orbits'])} orbits"
+        + (f" ({int(ds.attrs['n_shots'])} shot to a saddle, the rest labelled)"
+           if "n_shots" in ds.attrs else " labelled")
+        + f", {int(ds.attrs['n_unresolved'])} labels "
         "uncertified (left out, never counted as either side)",
     ]
     inside = ds["crossing_in_window"].values if "crossing_in_window" in ds else None

@@ -1,0 +1,219 @@
+"""Locating the RK4 map's separatrices by shooting to the saddle: one orbit per point.
+
+A separatrix is the stable manifold W^s(q) of a saddle q = (θs, 0) of the RK4 map F at step
+dt (a saddle of the equation is a fixed point of F: every stage is at q). Instead of labelling
+both ends of a bracket (:mod:`atlas.boundaries.bisection`: two orbits that each linger at the
+saddle ln(1/δ)/u1 and then fall into a trap), the segment [c − w·d, c + w·d] across the curve
+is followed as a whole: the orbit of its centre with its tangent and a bound on the rest
+(:mod:`atlas.kernels.shooting`). Near q its image is read in the eigen-coordinates z = (u, s)
+of DF(q) = R(dt·A) (R the RK4 stability polynomial, A = Df(q)).
+
+**The certificate** (a covering relation with cone conditions: Zgliczyński & Gidea, J.
+Differential Equations 202 (2004) 32–58). In z, F is G(z) = Λz + N(z), Λ = diag(μu, μs) =
+diag(R(dt·λu), R(dt·λs)), and on the box ‖z‖∞ ≤ r, |N(z)|∞ ≤ K‖z‖∞² (:func:`saddle_box`).
+If K·r ≤ ½·min(μu − μs, μu − 1, 1 − μs), the cones U± = {±u ≥ |s|, u ≠ 0} map into
+themselves with |u| growing, and S = {|u| < |s|} within ‖z‖∞ ≤ ρ = r/(μu + K·r) maps into S
+(|s| shrinking) or into U. So a curve inside ‖z‖∞ ≤ ρ from a point of U+ to a point of U−
+holds a point whose orbit stays in S for ever, so converges to q: a point of W^s(q). (Each
+point of the curve leaves S, if it does, into U+ or U− for good; the side is locally
+constant along the curve, so it cannot change from + to − without a point that never
+leaves.) The curve is the segment's image after k steps, enclosed in the line
+x_k + σ·w·y_k thickened by β_k; when that lies in the box with its two ends in opposite
+cones (:data:`~atlas.kernels.shooting.CROSSED`), W^s(q) crosses the segment: the point is
+located to the segment's width 2w < tol.
+
+What it takes as given, as every label of atlas does: the floating-point orbit is the RK4
+map's orbit (its rounding, pulled back to the segment, is ≈ 1e-14, a hundredth of tol), and
+the polynomial sin of the kernels is sin (≤ 1e-15); the bounds' own rounding is covered by
+the factor ½ in the cone conditions and by ``slack``.
+
+**Locating.** When both ends land in one cone (:data:`~atlas.kernels.shooting.SAME`), the
+image's line crosses the stable eigen-line at σ* = −u(x_k)/u(w·y_k): a Newton step on the
+saddle's unstable coordinate, good to the manifold's curvature over the distance the orbit
+still has to go (≈ 1e-13 from 3e-9 off). :func:`locate_by_shooting` shoots every
+``stride``-th vertex of a run from the exact curve and the others from a spline of those
+located first (:func:`atlas.boundaries.bisection.predict_offsets`), repeating Newton steps up
+to ``rounds`` times; what it cannot certify is left to the bisection on labels.
+Derivation: docs/design/separatrices.md#shooting.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from atlas import defaults
+from atlas.boundaries.bisection import predict_offsets
+from atlas.physics.pendulum import Pendulum
+
+__all__ = ["SaddleBox", "Shooter", "saddle_box", "shots_needed", "HALF_WIDTH"]
+
+#: Half-width of a shot segment [tol]: the located point's bracket is 0.9·tol wide.
+HALF_WIDTH = 0.45
+_STRIDE = 8  # every 8th vertex of a run is shot first, from the exact curve
+_ROUNDS = 4  # shots per vertex at most (each a Newton step when it does not cross)
+_R_MAX = 0.1  # the largest box [z units] an image is read in
+
+
+@dataclass(frozen=True)
+class SaddleBox:
+    """The saddles' constants for the RK4 map at step dt [s] (the module docstring's
+    notation): ``pinv`` = P⁻¹ (rows: the unstable, then the stable coordinate of a
+    displacement from q), the multipliers ``mu_u`` > 1 > ``mu_s`` > 0, ``lip`` ≥ ‖DF‖₂,
+    ``curvature`` ≥ ‖D²F‖₂, ``gain`` (|P⁻¹e|∞ ≤ gain·|e|₂), ``spread`` (|Pz|₂ ≤ spread·‖z‖∞),
+    ``sin_saddle`` = |sin θs| = |τ|/ω0², and ``r_max``, the largest box tried."""
+
+    pinv: np.ndarray
+    mu_u: float
+    mu_s: float
+    lip: float
+    curvature: float
+    gain: float
+    spread: float
+    sin_saddle: float
+    r_max: float
+
+    @property
+    def constants(self) -> tuple:
+        """The tuple the kernel reads (:func:`atlas.kernels.shooting.cone_slope`)."""
+        return (self.mu_u, self.mu_s, self.lip, self.curvature, self.gain, self.spread,
+                self.sin_saddle)
+
+    def cone(self, r: float) -> tuple[float, float]:
+        """(κ, ρ) certified in the box ‖z‖∞ ≤ r (:func:`atlas.kernels.shooting.cone_slope`)."""
+        from atlas.kernels.shooting import cone_slope
+
+        return cone_slope(float(r), self.constants)
+
+
+def _stability(x: float) -> float:
+    """RK4's stability polynomial R(x) = 1 + x + x²/2 + x³/6 + x⁴/24."""
+    return 1.0 + x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x / 24.0)))
+
+
+def saddle_box(p: Pendulum, dt: float) -> SaddleBox | None:
+    """The constants of every saddle of ``p`` (they differ by 2π shifts only) for the RK4
+    map at step ``dt`` [s], or None when no cone can be certified (no saddle, or dt so coarse
+    that R(dt·λs) ≤ 0).
+
+    Bounds, for f = (θ̇, τ − ω0² sin θ − 2αθ̇): ‖Df‖₂ ≤ L = √(1 + ω0⁴ + 4α²) (Frobenius),
+    |D²f[a, b]| = ω0²|sin θ||aθ||bθ|; the RK4 stages then give ‖DF‖₂ ≤ R(dt·L) ≤ e^{dt·L}
+    (``lip``) and ‖D²F‖₂ ≤ dt·ω0²·e^{3·dt·L} (``curvature``: each stage's second derivative
+    is at most ω0²·e^{3·dt·L}, and the weights sum to 1). P = [[1, 1], [λu, λs]] (A's
+    eigenvectors (1, λ)); ``spread`` = ‖P‖∞→2."""
+    if not p.has_rest_states:
+        return None
+    lam_u, lam_s = p.saddle_eigenvalues()
+    mu_u, mu_s = _stability(dt * lam_u), _stability(dt * lam_s)
+    if not (mu_u > 1.0 > mu_s > 0.0):
+        return None
+    big_l = math.sqrt(1.0 + p.omega0**4 + 4.0 * p.alpha**2)
+    pmat = np.array([[1.0, 1.0], [lam_u, lam_s]])
+    pinv = np.array([[lam_s, -1.0], [-lam_u, 1.0]]) / (lam_s - lam_u)
+    return SaddleBox(pinv=pinv, mu_u=mu_u, mu_s=mu_s, lip=math.exp(dt * big_l),
+                     curvature=dt * p.omega0**2 * math.exp(3.0 * dt * big_l),
+                     gain=float(np.max(np.hypot(pinv[:, 0], pinv[:, 1]))),
+                     spread=float(np.hypot(*np.abs(pmat).sum(axis=1))),
+                     sin_saddle=min(1.0, abs(p.torque) / p.omega0**2), r_max=_R_MAX)
+
+
+def shots_needed(t_max: float, dt: float) -> int:
+    """Checks of a shot at most ``t_max`` [s] long at step ``dt`` [s]."""
+    from atlas.kernels.shooting import CHECK_EVERY
+
+    return max(1, math.ceil(t_max / dt / CHECK_EVERY))
+
+
+class Shooter:
+    """Shoots segments of half-width ``HALF_WIDTH``·``tol`` across the stable manifolds of
+    the pendulum ``p``'s saddles for the RK4 map at step ``dt`` [s], each shot at most
+    ``t_max`` [s] long, with Newton steps (module docstring); counts its ``shots``. ``box``
+    is None (and nothing is certified) where no cone can be (:func:`saddle_box`) or the
+    labels' ``method`` is not "rk4" (the kernel's map)."""
+
+    def __init__(self, p: Pendulum, tol: float, *, dt: float, t_max: float,
+                 method: str = defaults.METHOD):
+        self.p, self.tol, self.dt = p, tol, dt
+        # the kernel integrates classical RK4 on (θ, θ̇): another method's map is not its map
+        self.box = saddle_box(p, dt) if method == "rk4" else None
+        self.n_checks = shots_needed(t_max, dt)
+        self.shots = 0
+        self.rounding = 0.0  # the largest rounding estimate of a certified shot [rad-ish]
+
+    def refine(self, base, normal, offset, saddle, fresh=None):
+        """Shoot the segments base + (offset ± HALF_WIDTH·tol)·normal towards the saddles
+        (``saddle`` (N,) [rad], 0), moving each centre by the Newton step while both ends
+        fall on one side, at most ``_ROUNDS`` times; a centre whose shot misses the saddle
+        (neither side: a prediction far off) starts once more from offset 0 where ``fresh``
+        is True. Returns (s_lo, s_hi, ok, estimate): where ``ok``, W^s crosses base +
+        s·normal for some s in [s_lo, s_hi]; ``estimate`` the Newton estimate of that s
+        inside the bracket (an estimate, not certified); NaN elsewhere."""
+        n = offset.size
+        lo, hi, estimate = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+        ok = np.zeros(n, bool)
+        if self.box is None:
+            return lo, hi, ok, estimate
+        from atlas.kernels.shooting import CROSSED, SAME, shoot
+
+        w = HALF_WIDTH * self.tol
+        todo, off = np.arange(n), np.asarray(offset, float).copy()
+        fresh = np.zeros(n, bool) if fresh is None else np.asarray(fresh, bool).copy()
+        box, p = self.box, self.p
+        for _ in range(_ROUNDS):
+            if not todo.size:
+                break
+            centre = base[todo] + off[:, None] * normal[todo]
+            kind, _, sigma, rounding, reached = shoot(
+                centre[:, 0], centre[:, 1], normal[todo, 0], normal[todo, 1],
+                np.full(todo.size, w), box.pinv, box.constants, r_max=box.r_max,
+                saddle0=p.saddle_angle, alpha=p.alpha, omega0=p.omega0, torque=p.torque,
+                dt=self.dt, n_checks=self.n_checks)
+            # a shot read at another saddle than the vertex's is no use to it
+            target = saddle[todo]
+            elsewhere = np.isfinite(target) & (reached != np.rint(
+                (target - p.saddle_angle) / (2.0 * math.pi)))
+            kind = np.where(elsewhere, -1, kind)
+            self.shots += todo.size
+            # certified where the segment's half-width plus the rounding estimate is within
+            # tol; a shot whose rounding is larger leaves the point to the labels
+            crossed = (kind == CROSSED) & (w + rounding <= self.tol)
+            self.rounding = max(self.rounding, float(rounding[crossed].max(initial=0.0)))
+            done = todo[crossed]
+            lo[done], hi[done], ok[done] = off[crossed] - w, off[crossed] + w, True
+            estimate[done] = off[crossed] + np.clip(np.nan_to_num(sigma[crossed]), -1, 1) * w
+            # a Newton step where both ends fell on one side; a centre whose shot missed the
+            # saddle (a spline's prediction far off) starts again from the exact curve
+            step = (kind == SAME) & np.isfinite(sigma)
+            lost = ~crossed & ~step & fresh[todo]
+            again = step | lost
+            off = np.where(step, off + np.nan_to_num(sigma) * w, 0.0)[again]
+            fresh[todo[lost]] = False
+            todo = todo[again]
+        return lo, hi, ok, estimate
+
+    def locate(self, base, normal, saddle, run, along):
+        """Locate every vertex (``base`` (N, 2) on the exact curve, unit ``normal`` (N, 2),
+        on the stable manifold of the saddle (``saddle`` (N,) [rad], 0)): every
+        ``_STRIDE``-th vertex of each run (consecutive vertices with one ``run`` value,
+        ordered by ``along``) and its last from the exact curve, the others from a spline
+        of the Newton estimates of those (:func:`atlas.boundaries.bisection.predict_offsets`).
+        Returns (s_lo, s_hi, ok) as :meth:`refine`."""
+        n = run.size
+        lo, hi, ok = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, bool)
+        if not n:
+            return lo, hi, ok
+        start = np.flatnonzero(np.diff(run, prepend=-1) != 0)
+        stop = np.append(start[1:], n)
+        local = np.arange(n) - np.repeat(start, stop - start)
+        first = local % _STRIDE == 0
+        first[stop - 1] = True
+        estimate = np.zeros(n)
+        for pick in (first, ~first):
+            offset, predicted = predict_offsets(along, estimate, ok, pick, start, stop)
+            i = np.flatnonzero(pick)
+            lo[i], hi[i], ok[i], est = self.refine(base[i], normal[i], offset[i], saddle[i],
+                                                   fresh=predicted[i])
+            estimate[i] = np.nan_to_num(est)
+        return lo, hi, ok

@@ -1,0 +1,332 @@
+"""Shooting a short segment to a saddle: the RK4 map's orbit of its centre, with its tangent.
+
+For the segment {c + σ·w·d : |σ| ≤ 1} (centre c = (θ, θ̇), unit direction d, half-width w),
+:func:`shoot` follows x_k = F^k(c) for the RK4 map F of θ̈ = τ − ω0² sin θ − 2αθ̇ at step dt
+and y_k = DF^k(c)·d, the RK4 map's exact Jacobian applied to d (the RK4 stages of the
+variational equation are the derivatives of the stages: Hairer, Nørsett & Wanner, *Solving
+ODEs I*, §II.3), with β_k, a bound on how far the true image F^k(c + σwd) lies from the line
+x_k + σ·w·y_k:
+
+    β_{k+1} = lip·β_k + ½·curvature·(w·|y_k| + β_k)²,   β_0 = 0,
+
+``lip`` ≥ ‖DF‖ and ``curvature`` ≥ ‖D²F‖ (2-norms) everywhere (Taylor's theorem with the
+remainder; :func:`atlas.boundaries.shooting.saddle_box` derives both). Every ``CHECK_EVERY``
+steps the image is read in the saddle's eigen-coordinates z = (u, s) = P⁻¹(x − q) (``pinv``
+= P⁻¹; u along the unstable eigenvector, s the stable one), with the enclosure's error
+``gain``·β + ``slack`` in each coordinate, and the orbit ends when the whole image lies in the
+box ‖z‖∞ ≤ ``rho`` with each end in a cone |u| ≥ |s| (the certificate and its proof:
+:mod:`atlas.boundaries.shooting`):
+
+* ``CROSSED``: the ends in opposite cones (u > 0 and u < 0): the stable manifold of the saddle
+  crosses the segment;
+* ``SAME``: both ends in one cone: it does not cross there (a Newton step is read off);
+* ``ESCAPED``: the centre was in the box and left it undecided; ``UNDECIDED``: ``n_checks``
+  checks passed; ``NONFINITE``: NaN/inf met.
+
+``sigma`` is the linear estimate of where the stable manifold crosses, in units of w from
+the centre: −u(x_k)/u(w·y_k) at the decision (the stable eigen-line's crossing; NaN if never
+decided). Orbits are dealt to lane blocks of ``LANES`` that advance in lockstep (as
+:mod:`atlas.kernels.lanes`), with the sin and cos of :mod:`atlas.kernels.fastsin`; the result
+of an orbit does not depend on the threads, chunks or the other orbits.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from atlas.kernels import cached_njit
+from atlas.kernels.fastsin import SIN_FASTMATH, sin_cos_vers
+
+__all__ = ["shoot", "tangent_step", "UNDECIDED", "CROSSED", "SAME", "ESCAPED", "NONFINITE",
+           "CHECK_EVERY"]
+
+#: Outcomes of :func:`shoot` (``kind``).
+UNDECIDED, CROSSED, SAME, ESCAPED, NONFINITE = 0, 1, 2, 3, 4
+#: Steps between two readings of the image in the saddle's coordinates.
+CHECK_EVERY = 8
+#: Orbits per lane block.
+LANES = 32
+TWO_PI = 2.0 * math.pi
+EPS = 2.0**-52
+#: The rounding of one RK4 step relative to |θ| + |θ̇|: u = eps/2 for the last addition of
+#: each component, and 10 % for the stages before it (each weighted by dt).
+ROUNDING = 0.55 * EPS
+#: The enclosure's allowance for the rounding of a saddle's angle and of the coordinates, in
+#: units of eps·(|θs| + 2π) [rad] (the angle is within a few ulp; so is P⁻¹(x − q)).
+SLACK_ULPS = 16.0
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def tangent_step(th, v, yt, yv, alpha, omega0, torque, dt):
+    """One RK4 step [dt s] of (θ, θ̇) and of the tangent (yθ, yθ̇) it carries: returns
+    (θ, θ̇, yθ, yθ̇) after the step; the tangent's stages are the state's stages'
+    derivatives, so (yθ, yθ̇) becomes DF(θ, θ̇)·(yθ, yθ̇) exactly (up to rounding)."""
+    w2 = omega0 * omega0
+    a2 = 2.0 * alpha
+    h2 = 0.5 * dt
+    s1, c1, _ = sin_cos_vers(th)
+    k1t = v
+    k1v = torque - w2 * s1 - a2 * v
+    j1t = yv
+    j1v = -(w2 * c1) * yt - a2 * yv
+    t2 = th + h2 * k1t
+    v2 = v + h2 * k1v
+    y2t = yt + h2 * j1t
+    y2v = yv + h2 * j1v
+    s2, c2, _ = sin_cos_vers(t2)
+    k2t = v2
+    k2v = torque - w2 * s2 - a2 * v2
+    j2t = y2v
+    j2v = -(w2 * c2) * y2t - a2 * y2v
+    t3 = th + h2 * k2t
+    v3 = v + h2 * k2v
+    y3t = yt + h2 * j2t
+    y3v = yv + h2 * j2v
+    s3, c3, _ = sin_cos_vers(t3)
+    k3t = v3
+    k3v = torque - w2 * s3 - a2 * v3
+    j3t = y3v
+    j3v = -(w2 * c3) * y3t - a2 * y3v
+    t4 = th + dt * k3t
+    v4 = v + dt * k3v
+    y4t = yt + dt * j3t
+    y4v = yv + dt * j3v
+    s4, c4, _ = sin_cos_vers(t4)
+    k4t = v4
+    k4v = torque - w2 * s4 - a2 * v4
+    j4t = y4v
+    j4v = -(w2 * c4) * y4t - a2 * y4v
+    h6 = dt / 6.0
+    return (th + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
+            v + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
+            yt + h6 * (j1t + 2.0 * (j2t + j3t) + j4t),
+            yv + h6 * (j1v + 2.0 * (j2v + j3v) + j4v))
+
+
+@nb.njit(fastmath=SIN_FASTMATH)
+def cone_slope(r, box):
+    """The slope κ ≤ 1 of the cones |u| ≥ κ|s| that the saddle's ``box`` certifies in the box
+    ‖z‖∞ ≤ r, and ρ(r), the box the image must lie in; κ = inf when r is too large. ``box``
+    = (μu, μs, lip, curvature, gain, spread, |sin θs|) (:mod:`atlas.boundaries.shooting`):
+    on ‖z‖∞ ≤ r the stages stay within lip·spread·r of the saddle, where |D²f| ≤
+    ω0²(|sin θs| + lip·spread·r), so |N(z)|∞ ≤ K(r)·‖z‖∞² with
+    K(r) = ½·gain·spread²·curvature·min(1, |sin θs| + lip·spread·r); then κ is the least
+    slope with K·r·(1 + 1/κ) ≤ ½(μu − μs) and K·r/κ ≤ ½(μu − 1), and K·r ≤ ½(1 − μs)."""
+    mu_u, mu_s, lip, curvature, gain, spread, sin_s = box
+    k = 0.5 * gain * spread * spread * curvature * min(1.0, sin_s + lip * spread * r)
+    kr = k * r
+    rho = r / (mu_u + kr)
+    room = 0.5 * (mu_u - mu_s) - kr
+    if not (room > 0.0 and kr <= 0.5 * (1.0 - mu_s)):
+        return math.inf, rho
+    slope = max(kr / room, 2.0 * kr / (mu_u - 1.0))
+    return (slope if slope <= 1.0 else math.inf), rho
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _read(th, v, yt, yv, beta, w, q, pinv, box, r_max):
+    """(outcome, centre inside the box, σ estimate) of the image at one check, relative to
+    the saddle (q, 0)."""
+    dx = th - q
+    u = pinv[0, 0] * dx + pinv[0, 1] * v
+    s = pinv[1, 0] * dx + pinv[1, 1] * v
+    uy = w * (pinv[0, 0] * yt + pinv[0, 1] * yv)
+    sy = w * (pinv[1, 0] * yt + pinv[1, 1] * yv)
+    gain = box[4]
+    # the enclosure's error: β, and the rounding of the saddle's angle and of z (a few ulp)
+    m = gain * (beta + SLACK_ULPS * EPS * (abs(q) + TWO_PI))
+    if not (math.isfinite(u) and math.isfinite(s) and math.isfinite(uy)
+            and math.isfinite(sy) and math.isfinite(m)):
+        return NONFINITE, False, math.nan
+    centre_in = max(abs(u), abs(s)) <= r_max
+    extent = max(abs(u) + abs(uy), abs(s) + abs(sy)) + m
+    if extent > r_max:
+        return UNDECIDED, centre_in, math.nan
+    # the least box whose ρ holds the image: ρ(r) ≥ extent for r = 1.01·μu·extent
+    r = 1.01 * box[0] * extent
+    slope, rho = cone_slope(r, box)
+    if not (rho >= extent and slope <= 1.0):
+        return UNDECIDED, centre_in, math.nan
+    sigma = -u / uy if uy != 0.0 else math.nan
+    need = (1.0 + slope) * m
+    up_plus = (u + uy) - slope * abs(s + sy) > need
+    down_plus = -(u + uy) - slope * abs(s + sy) > need
+    up_minus = (u - uy) - slope * abs(s - sy) > need
+    down_minus = -(u - uy) - slope * abs(s - sy) > need
+    if (up_plus and down_minus) or (down_plus and up_minus):
+        return CROSSED, True, sigma
+    # a Newton step is read off later, where both ends are in the cones |u| ≥ |s| (its
+    # error, the manifold's curvature over the orbit's distance |s| to go, is then small)
+    if (up_plus and up_minus) or (down_plus and down_minus):
+        near = max(abs(s + sy), abs(s - sy)) + m
+        if min(abs(u + uy), abs(u - uy)) - m >= near:
+            return SAME, True, sigma
+    return UNDECIDED, True, sigma
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _stage(t, v, yt, yv, w2, a2, torque):
+    """(k_θ, k_θ̇, j_θ, j_θ̇): the field and the tangent's field at one stage."""
+    s, c, _ = sin_cos_vers(t)
+    return v, torque - w2 * s - a2 * v, yv, -(w2 * c) * yt - a2 * yv
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt, ayv, lip,
+             half_curvature, alpha, omega0, torque, dt):
+    """One step of :func:`tangent_step` (and of β) for every lane, stage by stage: each stage
+    is one short loop over the lanes, whose iterations are independent, so the processor
+    overlaps them (a whole step per lane is one long chain of dependent operations)."""
+    w2 = omega0 * omega0
+    a2 = 2.0 * alpha
+    h2 = 0.5 * dt
+    for lane in range(LANES):
+        seg = w[lane] * math.sqrt(yt[lane] * yt[lane] + yv[lane] * yv[lane]) + beta[lane]
+        beta[lane] = lip * beta[lane] + half_curvature * seg * seg
+        # the rounding pulled back along the tangent, with 1/|y| from the last check (a
+        # division here would cost as much as the step)
+        drift[lane] += (abs(th[lane]) + abs(v[lane])) * pull[lane]
+        kt, kv, jt, jv = _stage(th[lane], v[lane], yt[lane], yv[lane], w2, a2, torque)
+        at[lane], av[lane], ayt[lane], ayv[lane] = kt, kv, jt, jv
+        st[lane], sv[lane] = th[lane] + h2 * kt, v[lane] + h2 * kv
+        syt[lane], syv[lane] = yt[lane] + h2 * jt, yv[lane] + h2 * jv
+    for lane in range(LANES):
+        kt, kv, jt, jv = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
+        at[lane] += 2.0 * kt
+        av[lane] += 2.0 * kv
+        ayt[lane] += 2.0 * jt
+        ayv[lane] += 2.0 * jv
+        st[lane], sv[lane] = th[lane] + h2 * kt, v[lane] + h2 * kv
+        syt[lane], syv[lane] = yt[lane] + h2 * jt, yv[lane] + h2 * jv
+    for lane in range(LANES):
+        kt, kv, jt, jv = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
+        at[lane] += 2.0 * kt
+        av[lane] += 2.0 * kv
+        ayt[lane] += 2.0 * jt
+        ayv[lane] += 2.0 * jv
+        st[lane], sv[lane] = th[lane] + dt * kt, v[lane] + dt * kv
+        syt[lane], syv[lane] = yt[lane] + dt * jt, yv[lane] + dt * jv
+    h6 = dt / 6.0
+    for lane in range(LANES):
+        kt, kv, jt, jv = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
+        th[lane] += h6 * (at[lane] + kt)
+        v[lane] += h6 * (av[lane] + kv)
+        yt[lane] += h6 * (ayt[lane] + jt)
+        yv[lane] += h6 * (ayv[lane] + jv)
+
+
+@nb.njit(nogil=True, fastmath=SIN_FASTMATH)
+def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width, pinv, box,
+                 r_max, saddle0, alpha, omega0, torque, dt, n_checks, kind, n_steps, sigma,
+                 rounding, reached):
+    n = theta.size
+    th = np.zeros(LANES)
+    v = np.zeros(LANES)
+    yt = np.zeros(LANES)
+    yv = np.zeros(LANES)
+    beta = np.zeros(LANES)
+    drift = np.zeros(LANES)
+    pull = np.zeros(LANES)  # ROUNDING/|y| at the last check, times lip^(2·CHECK_EVERY)
+    turns = np.zeros(LANES)
+    w = np.zeros(LANES)
+    orbit = np.full(LANES, -1, np.int64)
+    check = np.zeros(LANES, np.int64)
+    was_in = np.zeros(LANES, np.bool_)
+    st, sv, syt, syv = np.zeros(LANES), np.zeros(LANES), np.zeros(LANES), np.zeros(LANES)
+    at, av, ayt, ayv = np.zeros(LANES), np.zeros(LANES), np.zeros(LANES), np.zeros(LANES)
+    lip, half_curvature = box[2], 0.5 * box[3]
+    lip_check = lip ** (2 * CHECK_EVERY)
+    nxt = b
+    while True:
+        active = 0
+        for lane in range(LANES):
+            while True:
+                i = orbit[lane]
+                if i >= 0:
+                    # θ back to within π of the saddle saddle0 (exact but for one rounding,
+                    # counted in the drift): the orbit's rounding stays that of |θ| ≤ 2π
+                    turn = math.floor((th[lane] - saddle0) / TWO_PI + 0.5)
+                    if turn != 0.0:
+                        th[lane] -= TWO_PI * turn
+                        turns[lane] += turn
+                        drift[lane] += abs(th[lane]) * pull[lane]
+                    code, centre_in, sg = _read(th[lane], v[lane], yt[lane], yv[lane],
+                                                beta[lane], w[lane], saddle0, pinv, box,
+                                                r_max)
+                    if code == UNDECIDED and was_in[lane] and not centre_in:
+                        code = ESCAPED
+                    was_in[lane] = was_in[lane] or centre_in
+                    if code == UNDECIDED and check[lane] < n_checks:
+                        active += 1
+                        break
+                    kind[i] = code
+                    n_steps[i] = check[lane] * CHECK_EVERY
+                    sigma[i] = sg if code == CROSSED or code == SAME else math.nan
+                    rounding[i] = drift[lane]
+                    reached[i] = np.int64(turns[lane])
+                    orbit[lane] = -1
+                if nxt >= n:  # nothing left: the lane idles at rest
+                    th[lane] = v[lane] = beta[lane] = w[lane] = drift[lane] = 0.0
+                    yt[lane], yv[lane] = 1.0, 0.0
+                    break
+                i = nxt
+                nxt += n_chunks
+                orbit[lane] = i
+                th[lane], v[lane] = theta[i], theta_dot[i]
+                yt[lane], yv[lane] = d_theta[i], d_theta_dot[i]
+                beta[lane], w[lane], drift[lane], turns[lane] = 0.0, half_width[i], 0.0, 0.0
+                pull[lane] = ROUNDING * lip_check / math.sqrt(yt[lane] * yt[lane]
+                                                            + yv[lane] * yv[lane])
+                check[lane] = 0
+                was_in[lane] = False
+        if active == 0:
+            return
+        for lane in range(LANES):  # |y| shrinks by at most lip per step, forwards or back
+            pull[lane] = ROUNDING * lip_check / math.sqrt(yt[lane] * yt[lane]
+                                                        + yv[lane] * yv[lane])
+        for _ in range(CHECK_EVERY):
+            _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt, ayv, lip,
+                     half_curvature, alpha, omega0, torque, dt)
+        for lane in range(LANES):
+            check[lane] += 1
+
+
+@cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
+def _shoot(theta, theta_dot, d_theta, d_theta_dot, half_width, pinv, box, r_max, saddle0,
+           alpha, omega0, torque, dt, n_checks, kind, n_steps, sigma, rounding, reached,
+           n_chunks):
+    for b in nb.prange(n_chunks):
+        _shoot_chunk(np.int64(b), n_chunks, theta, theta_dot, d_theta, d_theta_dot,
+                     half_width, pinv, box, r_max, saddle0, alpha, omega0, torque, dt,
+                     n_checks, kind, n_steps, sigma, rounding, reached)
+
+
+def shoot(theta, theta_dot, d_theta, d_theta_dot, half_width, pinv, box, *, r_max, saddle0,
+          alpha, omega0, torque, dt, n_checks):
+    """Shoot every segment (centres ``theta``, ``theta_dot`` [rad, rad s⁻¹], unit directions
+    ``d_theta``, ``d_theta_dot``, ``half_width`` [rad-ish]) to the saddles
+    (``saddle0`` + 2πj, 0) [rad], as the module docstring says, for at most ``n_checks`` ·
+    CHECK_EVERY steps; ``pinv``, ``box``, ``r_max``: the saddles' constants
+    (:class:`atlas.boundaries.shooting.SaddleBox`). Returns, one per segment: kind (int8),
+    the step of the decision (int32), sigma, the rounding estimate [rad-ish] (the rounding
+    of the orbit, ε_k = ROUNDING·(|θ| + |θ̇|) at every step, each pulled back to the segment as
+    ε_k/|y_k| and summed: how far it could move the crossing, at the worst, not a bound), and
+    the j of the saddle the orbit was read at (int64)."""
+    arrays = [np.ascontiguousarray(a, dtype=np.float64)
+              for a in (theta, theta_dot, d_theta, d_theta_dot, half_width)]
+    n = arrays[0].size
+    kind = np.zeros(n, np.int8)
+    n_steps = np.zeros(n, np.int32)
+    sigma = np.full(n, np.nan)
+    rounding = np.zeros(n)
+    reached = np.zeros(n, np.int64)
+    if n:
+        chunks = max(1, min(n // LANES, 16 * nb.get_num_threads()))
+        box = tuple(float(x) for x in box)
+        _shoot(*arrays, np.ascontiguousarray(pinv, dtype=np.float64), box, float(r_max),
+               float(saddle0), float(alpha), float(omega0), float(torque), float(dt),
+               int(n_checks), kind, n_steps, sigma, rounding, reached, chunks)
+    return kind, n_steps, sigma, rounding, reached
