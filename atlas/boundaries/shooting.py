@@ -4,17 +4,18 @@ A separatrix is the stable manifold W^s(q) of a saddle q = (θs, 0) of the RK4 m
 dt (a saddle of the equation is a fixed point of F: every stage is at q). Instead of labelling
 both ends of a bracket (:mod:`atlas.boundaries.bisection`: two orbits that each linger at the
 saddle ln(1/δ)/u1 and then fall into a trap), the segment [c − w·d, c + w·d] across the curve
-is followed as a whole: the orbit of its centre with its tangent and a bound on the rest
+is followed as a whole: the orbit of its centre with its tangent and a bound β on the rest
 (:mod:`atlas.kernels.shooting`). Near q its image is read in the eigen-coordinates z = (u, s)
 of DF(q) = R(dt·A) (R the RK4 stability polynomial, A = Df(q)).
 
 **The certificate** (a covering relation with cone conditions: Zgliczyński & Gidea, J.
 Differential Equations 202 (2004) 32–58). In z, F is G(z) = Λz + N(z), Λ = diag(μu, μs) =
-diag(R(dt·λu), R(dt·λs)), and on the box ‖z‖∞ ≤ r, |N(z)|∞ ≤ K‖z‖∞² (:func:`saddle_box`).
-If K·r ≤ ½·min(μu − μs, μu − 1, 1 − μs), the cones U± = {±u ≥ |s|, u ≠ 0} map into
-themselves with |u| growing, and S = {|u| < |s|} within ‖z‖∞ ≤ ρ = r/(μu + K·r) maps into S
-(|s| shrinking) or into U. So a curve inside ‖z‖∞ ≤ ρ from a point of U+ to a point of U−
-holds a point whose orbit stays in S for ever, so converges to q: a point of W^s(q). (Each
+diag(R(dt·λu), R(dt·λs)), and on the box ‖z‖∞ ≤ r, |N(z)|∞ ≤ K(r)·‖z‖∞²
+(:func:`saddle_box`, :func:`atlas.kernels.shooting.cone_slope`). If K·r·(1 + 1/κ) ≤
+½(μu − μs), K·r/κ ≤ ½(μu − 1) and K·r ≤ ½(1 − μs), the cones U± = {±u ≥ κ|s|, u ≠ 0} map
+into themselves with |u| growing, and S = {|u| < κ|s|} within ‖z‖∞ ≤ ρ = r/(μu + K·r) maps
+into S (|s| shrinking) or into U. So a curve inside ‖z‖∞ ≤ ρ from a point of U+ to a point of
+U− holds a point whose orbit stays in S for ever, so converges to q: a point of W^s(q). (Each
 point of the curve leaves S, if it does, into U+ or U− for good; the side is locally
 constant along the curve, so it cannot change from + to − without a point that never
 leaves.) The curve is the segment's image after k steps, enclosed in the line
@@ -23,18 +24,20 @@ cones (:data:`~atlas.kernels.shooting.CROSSED`), W^s(q) crosses the segment: the
 located to the segment's width 2w < tol.
 
 What it takes as given, as every label of atlas does: the floating-point orbit is the RK4
-map's orbit (its rounding, pulled back to the segment, is ≈ 1e-14, a hundredth of tol), and
-the polynomial sin of the kernels is sin (≤ 1e-15); the bounds' own rounding is covered by
-the factor ½ in the cone conditions and by ``slack``.
+map's orbit, and the polynomial sin of the kernels is sin (≤ 1e-15); the bounds' own rounding
+is covered by the factor ½ in the cone conditions and a few ulp in the enclosure. How far the
+orbit's rounding could move the crossing is estimated along each shot (pulled back along the
+tangent, summed with one sign: pessimistic, not a bound); a point is certified only where
+half its bracket plus that estimate is within tol.
 
 **Locating.** When both ends land in one cone (:data:`~atlas.kernels.shooting.SAME`), the
 image's line crosses the stable eigen-line at σ* = −u(x_k)/u(w·y_k): a Newton step on the
 saddle's unstable coordinate, good to the manifold's curvature over the distance the orbit
-still has to go (≈ 1e-13 from 3e-9 off). :func:`locate_by_shooting` shoots every
-``stride``-th vertex of a run from the exact curve and the others from a spline of those
-located first (:func:`atlas.boundaries.bisection.predict_offsets`), repeating Newton steps up
-to ``rounds`` times; what it cannot certify is left to the bisection on labels.
-Derivation: docs/design/separatrices.md#shooting.
+still has to go (≈ 1e-13 from 3e-9 off). :meth:`Shooter.locate` shoots every
+``_STRIDE``-th vertex of a run from the exact curve and the others from a spline of those
+located first (:func:`atlas.boundaries.bisection.predict_offsets`), with Newton steps, up to
+``_ROUNDS`` shots a point (:meth:`Shooter.refine`); what it cannot certify is left to the
+bisection on labels. Derivation: docs/design/separatrices.md#shooting.
 """
 
 from __future__ import annotations
@@ -54,6 +57,7 @@ __all__ = ["SaddleBox", "Shooter", "saddle_box", "shots_needed", "HALF_WIDTH"]
 HALF_WIDTH = 0.45
 _STRIDE = 8  # every 8th vertex of a run is shot first, from the exact curve
 _ROUNDS = 4  # shots per vertex at most (each a Newton step when it does not cross)
+_NARROWEST = 0.05  # no segment narrower than this [tol]: its orbit's rounding is too large
 _R_MAX = 0.1  # the largest box [z units] an image is read in
 
 
@@ -93,12 +97,21 @@ def _stability(x: float) -> float:
     return 1.0 + x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x / 24.0)))
 
 
+def _field_norm(c: float, alpha: float) -> float:
+    """The spectral norm of [[0, 1], [c, −2α]]: √ of the larger eigenvalue of its Gram
+    matrix [[c², −2αc], [−2αc, 1 + 4α²]], rounded up by a relative 1e-12."""
+    trace, det = c * c + 1.0 + 4.0 * alpha * alpha, c * c
+    return math.sqrt(0.5 * (trace + math.sqrt(trace * trace - 4.0 * det))) * (1.0 + 1e-12)
+
+
 def saddle_box(p: Pendulum, dt: float) -> SaddleBox | None:
     """The constants of every saddle of ``p`` (they differ by 2π shifts only) for the RK4
     map at step ``dt`` [s], or None when no cone can be certified (no saddle, or dt so coarse
     that R(dt·λs) ≤ 0).
 
-    Bounds, for f = (θ̇, τ − ω0² sin θ − 2αθ̇): ‖Df‖₂ ≤ L = √(1 + ω0⁴ + 4α²) (Frobenius),
+    Bounds, for f = (θ̇, τ − ω0² sin θ − 2αθ̇): ‖Df‖₂ ≤ L, the largest singular value of
+    [[0, 1], [c, −2α]] over |c| ≤ ω0² (:func:`_field_norm`; at |c| = ω0², the norm being
+    convex in c),
     |D²f[a, b]| = ω0²|sin θ||aθ||bθ|; the RK4 stages then give ‖DF‖₂ ≤ R(dt·L) ≤ e^{dt·L}
     (``lip``) and ‖D²F‖₂ ≤ dt·ω0²·e^{3·dt·L} (``curvature``: each stage's second derivative
     is at most ω0²·e^{3·dt·L}, and the weights sum to 1). P = [[1, 1], [λu, λs]] (A's
@@ -109,7 +122,7 @@ def saddle_box(p: Pendulum, dt: float) -> SaddleBox | None:
     mu_u, mu_s = _stability(dt * lam_u), _stability(dt * lam_s)
     if not (mu_u > 1.0 > mu_s > 0.0):
         return None
-    big_l = math.sqrt(1.0 + p.omega0**4 + 4.0 * p.alpha**2)
+    big_l = _field_norm(p.omega0**2, p.alpha)
     pmat = np.array([[1.0, 1.0], [lam_u, lam_s]])
     pinv = np.array([[lam_s, -1.0], [-lam_u, 1.0]]) / (lam_s - lam_u)
     return SaddleBox(pinv=pinv, mu_u=mu_u, mu_s=mu_s, lip=math.exp(dt * big_l),
@@ -145,11 +158,14 @@ class Shooter:
     def refine(self, base, normal, offset, saddle, fresh=None):
         """Shoot the segments base + (offset ± HALF_WIDTH·tol)·normal towards the saddles
         (``saddle`` (N,) [rad], 0), moving each centre by the Newton step while both ends
-        fall on one side, at most ``_ROUNDS`` times; a centre whose shot misses the saddle
+        fall on one side, at most ``_ROUNDS`` times; a segment that is crossed but whose
+        orbit's rounding estimate R leaves half its width plus R above tol is shot again,
+        0.9·(tol − R) wide, around the Newton estimate; a centre whose shot misses the saddle
         (neither side: a prediction far off) starts once more from offset 0 where ``fresh``
         is True. Returns (s_lo, s_hi, ok, estimate): where ``ok``, W^s crosses base +
-        s·normal for some s in [s_lo, s_hi]; ``estimate`` the Newton estimate of that s
-        inside the bracket (an estimate, not certified); NaN elsewhere."""
+        s·normal for some s in [s_lo, s_hi] (NaN elsewhere); ``estimate`` the last Newton
+        estimate of that s (inside the bracket where ``ok``; not certified), NaN where no
+        shot reached the saddle."""
         n = offset.size
         lo, hi, estimate = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
         ok = np.zeros(n, bool)
@@ -157,19 +173,20 @@ class Shooter:
             return lo, hi, ok, estimate
         from atlas.kernels.shooting import CROSSED, SAME, shoot
 
-        w = HALF_WIDTH * self.tol
+        tol = self.tol
         todo, off = np.arange(n), np.asarray(offset, float).copy()
+        half = np.full(n, HALF_WIDTH * tol)
         fresh = np.zeros(n, bool) if fresh is None else np.asarray(fresh, bool).copy()
         box, p = self.box, self.p
         for _ in range(_ROUNDS):
             if not todo.size:
                 break
+            w = half[todo]
             centre = base[todo] + off[:, None] * normal[todo]
             kind, _, sigma, rounding, reached = shoot(
-                centre[:, 0], centre[:, 1], normal[todo, 0], normal[todo, 1],
-                np.full(todo.size, w), box.pinv, box.constants, r_max=box.r_max,
-                saddle0=p.saddle_angle, alpha=p.alpha, omega0=p.omega0, torque=p.torque,
-                dt=self.dt, n_checks=self.n_checks)
+                centre[:, 0], centre[:, 1], normal[todo, 0], normal[todo, 1], w, box.pinv,
+                box.constants, r_max=box.r_max, saddle0=p.saddle_angle, alpha=p.alpha,
+                omega0=p.omega0, torque=p.torque, dt=self.dt, n_checks=self.n_checks)
             # a shot read at another saddle than the vertex's is no use to it
             target = saddle[todo]
             elsewhere = np.isfinite(target) & (reached != np.rint(
@@ -177,18 +194,28 @@ class Shooter:
             kind = np.where(elsewhere, -1, kind)
             self.shots += todo.size
             # certified where the segment's half-width plus the rounding estimate is within
-            # tol; a shot whose rounding is larger leaves the point to the labels
-            crossed = (kind == CROSSED) & (w + rounding <= self.tol)
+            # tol; where the rounding is larger, a narrower segment is shot around the
+            # Newton estimate (its rounding is the same: the orbit is), if one is left
+            across = kind == CROSSED
+            crossed = across & (w + rounding <= tol)
+            narrower = 0.9 * (tol - rounding)
+            narrow = across & ~crossed & (narrower >= _NARROWEST * tol)
             self.rounding = max(self.rounding, float(rounding[crossed].max(initial=0.0)))
             done = todo[crossed]
-            lo[done], hi[done], ok[done] = off[crossed] - w, off[crossed] + w, True
-            estimate[done] = off[crossed] + np.clip(np.nan_to_num(sigma[crossed]), -1, 1) * w
+            lo[done], hi[done] = off[crossed] - w[crossed], off[crossed] + w[crossed]
+            ok[done] = True
+            # the Newton estimate, certified or not (a CROSSED shot's lies in its segment)
+            read = (across | (kind == SAME)) & np.isfinite(sigma)
+            moved = off + np.where(across, np.clip(np.nan_to_num(sigma), -1, 1),
+                                   np.nan_to_num(sigma)) * w
+            estimate[todo[read]] = moved[read]
             # a Newton step where both ends fell on one side; a centre whose shot missed the
             # saddle (a spline's prediction far off) starts again from the exact curve
             step = (kind == SAME) & np.isfinite(sigma)
-            lost = ~crossed & ~step & fresh[todo]
-            again = step | lost
-            off = np.where(step, off + np.nan_to_num(sigma) * w, 0.0)[again]
+            lost = ~across & ~step & fresh[todo]
+            again = step | lost | narrow
+            half[todo[narrow]] = narrower[narrow]
+            off = np.where(step | narrow, moved, 0.0)[again]
             fresh[todo[lost]] = False
             todo = todo[again]
         return lo, hi, ok, estimate
@@ -199,11 +226,12 @@ class Shooter:
         ``_STRIDE``-th vertex of each run (consecutive vertices with one ``run`` value,
         ordered by ``along``) and its last from the exact curve, the others from a spline
         of the Newton estimates of those (:func:`atlas.boundaries.bisection.predict_offsets`).
-        Returns (s_lo, s_hi, ok) as :meth:`refine`."""
+        Returns (s_lo, s_hi, ok, estimate) as :meth:`refine`."""
         n = run.size
         lo, hi, ok = np.full(n, np.nan), np.full(n, np.nan), np.zeros(n, bool)
+        best = np.full(n, np.nan)
         if not n:
-            return lo, hi, ok
+            return lo, hi, ok, best
         start = np.flatnonzero(np.diff(run, prepend=-1) != 0)
         stop = np.append(start[1:], n)
         local = np.arange(n) - np.repeat(start, stop - start)
@@ -213,7 +241,7 @@ class Shooter:
         for pick in (first, ~first):
             offset, predicted = predict_offsets(along, estimate, ok, pick, start, stop)
             i = np.flatnonzero(pick)
-            lo[i], hi[i], ok[i], est = self.refine(base[i], normal[i], offset[i], saddle[i],
-                                                   fresh=predicted[i])
-            estimate[i] = np.nan_to_num(est)
-        return lo, hi, ok
+            lo[i], hi[i], ok[i], best[i] = self.refine(base[i], normal[i], offset[i],
+                                                       saddle[i], fresh=predicted[i])
+            estimate[i] = np.where(ok[i], best[i], 0.0)
+        return lo, hi, ok, best

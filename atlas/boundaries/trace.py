@@ -52,7 +52,7 @@ from atlas.boundaries.predictor import (
     sources,
     window_boxes,
 )
-from atlas.boundaries.shooting import Shooter
+from atlas.boundaries.shooting import HALF_WIDTH, Shooter
 from atlas.boundaries.trace_tilted import trace_tilted
 from atlas.boundaries.window import Window, checked_window
 from atlas.physics.pendulum import Pendulum
@@ -151,18 +151,24 @@ def unmeasured_shift(ds: xr.Dataset, window: Window, exact: ExactBoundaries) -> 
 
 def _locate(shooter, labels, base, normal, saddle_n, run, tau, tol: float):
     """Locate every vertex (on the stable manifold of the saddle (nπ, 0), n = ``saddle_n``)
-    by shooting (:meth:`atlas.boundaries.shooting.Shooter.locate`), and bisect the few it
-    cannot certify on certified labels from ±FIRST_BRACKET·tol around the exact curve; for a
+    by shooting (:meth:`atlas.boundaries.shooting.Shooter.locate`), and bisect those it
+    cannot certify on certified labels, from ±HALF_WIDTH·tol around a shot's Newton
+    estimate, else from ±FIRST_BRACKET·tol around the exact curve; for a
     method the shots do not integrate, bisect every vertex
     (:func:`atlas.boundaries.bisection.locate`). Returns (s_lo, s_hi) along ``normal``."""
     k = (saddle_n + 1) // 2
     if shooter.box is None:
         return locate(labels, base, normal, k, run, tau, tol)
-    lo, hi, ok = shooter.locate(base, normal, saddle_n * math.pi, run, tau)
-    bad = np.flatnonzero(~ok)
-    if bad.size:
-        lo[bad], hi[bad] = bisect_across(labels, base[bad], normal[bad], k[bad], tol=tol,
-                                         half_width=FIRST_BRACKET * tol, strict=False)
+    lo, hi, ok, estimate = shooter.locate(base, normal, saddle_n * math.pi, run, tau)
+    for guessed in (True, False):  # around a shot's Newton estimate, else the exact curve
+        bad = np.flatnonzero(~ok & (np.isfinite(estimate) == guessed))
+        if not bad.size:
+            continue
+        centre = np.nan_to_num(estimate[bad]) if guessed else np.zeros(bad.size)
+        b_lo, b_hi = bisect_across(labels, base[bad] + centre[:, None] * normal[bad],
+                                   normal[bad], k[bad], tol=tol, strict=False,
+                                   half_width=(HALF_WIDTH if guessed else FIRST_BRACKET) * tol)
+        lo[bad], hi[bad] = centre + b_lo, centre + b_hi
     return lo, hi
 
 

@@ -215,17 +215,23 @@ def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v
 
 def _locate(shooter, labels, base, normal, below, above, saddle, run, arc, tol: float):
     """Locate every vertex by shooting (:meth:`atlas.boundaries.shooting.Shooter.locate`:
-    one orbit per vertex, two for every 8th, from the exact curve and splines); the few it
-    cannot certify are bisected on certified labels from ±FIRST_BRACKET·tol around the exact
-    curve, widened ×8 while an end carries the other side (the RK4 map's boundary lies
-    O(dt⁴) ≈ 1e-9 from the exact one). Returns (s_lo, s_hi, ok) along ``normal`` from
+    one orbit per vertex, two for every 8th, from the exact curve and splines); those it
+    cannot certify are bisected on certified labels, from ±HALF_WIDTH·tol around a shot's
+    Newton estimate, else from ±FIRST_BRACKET·tol around the exact curve, widened ×8 while
+    an end carries the other side (the RK4 map's boundary lies O(dt⁴) ≈ 1e-9 from the exact
+    one). Returns (s_lo, s_hi, ok) along ``normal`` from
     ``base``, as :func:`atlas.boundaries.bisection.bisect_between`."""
-    lo, hi, ok = shooter.locate(base, normal, saddle, run, arc)
-    again = np.flatnonzero(~ok)
-    if again.size:
-        lo[again], hi[again], ok[again] = bisect_between(
-            labels, base[again], normal[again], below[again], above[again], tol=tol,
-            half_width=FIRST_BRACKET * tol)
+    lo, hi, ok, estimate = shooter.locate(base, normal, saddle, run, arc)
+    for guessed in (True, False):  # around a shot's Newton estimate, else the exact curve
+        again = np.flatnonzero(~ok & (np.isfinite(estimate) == guessed))
+        if not again.size:
+            continue
+        centre = np.nan_to_num(estimate[again]) if guessed else np.zeros(again.size)
+        g_lo, g_hi, ok[again] = bisect_between(
+            labels, base[again] + centre[:, None] * normal[again], normal[again],
+            below[again], above[again], tol=tol,
+            half_width=(HALF_WIDTH if guessed else FIRST_BRACKET) * tol)
+        lo[again], hi[again] = centre + g_lo, centre + g_hi
     return lo, hi, ok
 
 

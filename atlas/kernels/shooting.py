@@ -11,11 +11,13 @@ x_k + σ·w·y_k:
 
 ``lip`` ≥ ‖DF‖ and ``curvature`` ≥ ‖D²F‖ (2-norms) everywhere (Taylor's theorem with the
 remainder; :func:`atlas.boundaries.shooting.saddle_box` derives both). Every ``CHECK_EVERY``
-steps the image is read in the saddle's eigen-coordinates z = (u, s) = P⁻¹(x − q) (``pinv``
-= P⁻¹; u along the unstable eigenvector, s the stable one), with the enclosure's error
-``gain``·β + ``slack`` in each coordinate, and the orbit ends when the whole image lies in the
-box ‖z‖∞ ≤ ``rho`` with each end in a cone |u| ≥ |s| (the certificate and its proof:
-:mod:`atlas.boundaries.shooting`):
+steps θ is brought back within π of the saddle q = ``saddle0`` (its count of turns says
+which saddle (saddle0 + 2πj, 0) the orbit came to) and the image is read in the saddle's
+eigen-coordinates z = (u, s) = P⁻¹(x − q) (``pinv`` = P⁻¹; u along the unstable
+eigenvector, s the stable one), with the enclosure's error gain·β (and a few ulp) in each
+coordinate; the orbit ends when the whole image lies in the smallest box ‖z‖∞ ≤ ρ that holds
+it, with its ends in cones |u| ≥ κ|s| of that box (:func:`cone_slope`; the certificate and
+its proof: :mod:`atlas.boundaries.shooting`):
 
 * ``CROSSED``: the ends in opposite cones (u > 0 and u < 0): the stable manifold of the saddle
   crosses the segment;
