@@ -155,11 +155,15 @@ def _locate(shooter, labels, base, normal, saddle_n, run, tau, tol: float):
     cannot certify on certified labels, from ±HALF_WIDTH·tol around a shot's Newton
     estimate, else from ±FIRST_BRACKET·tol around the exact curve; for a
     method the shots do not integrate, bisect every vertex
-    (:func:`atlas.boundaries.bisection.locate`). Returns (s_lo, s_hi) along ``normal``."""
+    (:func:`atlas.boundaries.bisection.locate`). Returns (s_lo, s_hi, s) along ``normal``:
+    the bracket, and the point in it (a certified shot's Newton estimate — within its
+    bracket, more accurate than its midpoint —, else the midpoint)."""
     k = (saddle_n + 1) // 2
     if shooter.box is None:
-        return locate(labels, base, normal, k, run, tau, tol)
+        lo, hi = locate(labels, base, normal, k, run, tau, tol)
+        return lo, hi, 0.5 * (lo + hi)
     lo, hi, ok, estimate = shooter.locate(base, normal, saddle_n * math.pi, run, tau)
+    at = np.where(ok, estimate, np.nan)
     for guessed in (True, False):  # around a shot's Newton estimate, else the exact curve
         bad = np.flatnonzero(~ok & (np.isfinite(estimate) == guessed))
         if not bad.size:
@@ -169,7 +173,7 @@ def _locate(shooter, labels, base, normal, saddle_n, run, tau, tol: float):
                                    normal[bad], k[bad], tol=tol, strict=False,
                                    half_width=(HALF_WIDTH if guessed else FIRST_BRACKET) * tol)
         lo[bad], hi[bad] = centre + b_lo, centre + b_hi
-    return lo, hi
+    return lo, hi, np.where(ok, at, 0.5 * (lo + hi))
 
 
 def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: float,
@@ -202,8 +206,8 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
     labels = Labeller(p, dt, tau.max(initial=0.0) + linger(p, tol), backend, method)
     shooter = Shooter(p, tol, dt=dt, t_max=labels.t_max, method=method)
     normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1]))
-    lo, hi = _locate(shooter, labels, base, normal, saddle_n, run, tau, tol)
-    point = base + 0.5 * (lo + hi)[:, None] * normal
+    lo, hi, at = _locate(shooter, labels, base, normal, saddle_n, run, tau, tol)
+    point = base + at[:, None] * normal
     symmetry = symmetry_error(branch, vertex, point)
     source, copy = place(run, point, window)
     stored_n = (saddle_n[source] + 2 * copy).astype(np.int32)

@@ -89,9 +89,9 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     run = np.cumsum(np.r_[True, (np.diff(saddle_j) != 0) | (np.diff(branch) != 0)
                           | (np.diff(vertex) != 1)]) if vertex.size else vertex
     saddle_theta = p.saddle_angle + 2.0 * math.pi * saddle_j  # exact.saddle_theta(j)
-    lo, hi, ok = _locate(shooter, labels, base, normal, below, above, saddle_theta, run, arc,
-                         tol)
-    point = base + 0.5 * (lo + hi)[:, None] * normal
+    lo, hi, ok, at = _locate(shooter, labels, base, normal, below, above, saddle_theta, run,
+                             arc, tol)
+    point = base + at[:, None] * normal
     dist, _ = exact.distance(point[:, 0], point[:, 1]) if point.size else (np.zeros(0), None)
     # a vertex that could not be located leaves the shift unmeasured there: NaN, so that d_cert
     # is NaN and no label is certified for the exact equation on a partial measurement
@@ -219,9 +219,12 @@ def _locate(shooter, labels, base, normal, below, above, saddle, run, arc, tol: 
     cannot certify are bisected on certified labels, from ±HALF_WIDTH·tol around a shot's
     Newton estimate, else from ±FIRST_BRACKET·tol around the exact curve, widened ×8 while
     an end carries the other side (the RK4 map's boundary lies O(dt⁴) ≈ 1e-9 from the exact
-    one). Returns (s_lo, s_hi, ok) along ``normal`` from
-    ``base``, as :func:`atlas.boundaries.bisection.bisect_between`."""
+    one). Returns (s_lo, s_hi, ok, s) along ``normal`` from ``base``: the bracket as
+    :func:`atlas.boundaries.bisection.bisect_between`, and the point in it (a certified
+    shot's Newton estimate — within its bracket, more accurate than its midpoint —, else
+    the midpoint)."""
     lo, hi, ok, estimate = shooter.locate(base, normal, saddle, run, arc)
+    at = np.where(ok, estimate, np.nan)
     for guessed in (True, False):  # around a shot's Newton estimate, else the exact curve
         again = np.flatnonzero(~ok & (np.isfinite(estimate) == guessed))
         if not again.size:
@@ -232,7 +235,7 @@ def _locate(shooter, labels, base, normal, below, above, saddle, run, arc, tol: 
             below[again], above[again], tol=tol,
             half_width=(HALF_WIDTH if guessed else FIRST_BRACKET) * tol)
         lo[again], hi[again] = centre + g_lo, centre + g_hi
-    return lo, hi, ok
+    return lo, hi, ok, np.where(np.isnan(at), 0.5 * (lo + hi), at)
 
 
 def _shift_error(shooter, labels, base, normal, below, above, saddle, point, ok,
@@ -248,7 +251,9 @@ def _shift_error(shooter, labels, base, normal, below, above, saddle, point, ok,
     # the 2π shift predicts the copy's point (the RK4 map is 2π-periodic in θ, to
     # rounding): its segment is centred on the located one's offset
     offset = np.einsum("ij,ij->i", point[pick] - base[pick], along)
-    s_lo, s_hi, s_ok, _ = shooter.refine(shifted, along, offset, saddle[pick] + 2.0 * math.pi)
+    s_lo, s_hi, s_ok, s_at = shooter.refine(shifted, along, offset,
+                                            saddle[pick] + 2.0 * math.pi)
+    s_at = np.where(s_ok, s_at, np.nan)
     again = np.flatnonzero(~s_ok)
     if again.size:
 
@@ -260,7 +265,7 @@ def _shift_error(shooter, labels, base, normal, below, above, saddle, point, ok,
             next_well(below[pick[again]]), next_well(above[pick[again]]), tol=tol,
             half_width=HALF_WIDTH * tol)
         s_lo[again], s_hi[again] = offset[again] + g_lo, offset[again] + g_hi
-    moved = shifted + (0.5 * (s_lo + s_hi))[:, None] * along
+    moved = shifted + np.where(np.isnan(s_at), 0.5 * (s_lo + s_hi), s_at)[:, None] * along
     # the copy's midpoint may sit exactly on the prediction: its bracket's half-width is
     # the resolution of the comparison
     gap = np.hypot(*(moved - point[pick] - np.array([2.0 * math.pi, 0.0])).T) \

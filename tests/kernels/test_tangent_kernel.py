@@ -144,3 +144,31 @@ def test_a_box_too_large_certifies_no_cone():
     assert math.isinf(box.cone(5.0)[0])
     slope, _ = box.cone(0.05)
     assert not _on_cone_edge(box, p, slope / 1000.0, 0.05).all()
+
+
+def test_shots_do_not_depend_on_the_threads():
+    """The same segments shot on one thread and on every thread: the same arrays (each orbit
+    is integrated on its own; chunks only deal them out)."""
+    import numba
+
+    from atlas.kernels.shooting import shoot
+
+    p = Pendulum(0.05, 1.0, 0.5)
+    box = saddle_box(p, DT)
+    rng = np.random.default_rng(5)
+    n = 300
+    theta, speed = rng.uniform(-2.0, 3.0, n), rng.uniform(-1.0, 2.0, n)
+    args = (theta, speed, np.full(n, 0.6), np.full(n, 0.8), np.full(n, 1e-9), box.pinv,
+            box.constants)
+    kw = dict(r_max=box.r_max, saddle0=p.saddle_angle, alpha=p.alpha, omega0=p.omega0,
+              torque=p.torque, dt=DT, n_checks=2000)
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = shoot(*args, **kw)
+    finally:
+        numba.set_num_threads(threads)
+    every = shoot(*args, **kw)
+    for a, b in zip(one, every, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert np.isin(one[0], (1, 2)).sum() > 0  # some reached a saddle and were read
