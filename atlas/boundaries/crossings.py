@@ -61,8 +61,9 @@ def tilted_crossings(exact, labels, shooter, window: Window, tol: float):
     """With torque: where the label changes along the axis θ0 = 0 in the window — the exact
     polylines' crossings of θ = 0 (``exact``: :class:`atlas.boundaries.tilted.TiltedBoundaries`,
     its :meth:`~atlas.boundaries.tilted.TiltedBoundaries.axis_speeds`), each located along θ̇
-    by ``shooter`` (:class:`atlas.boundaries.shooting.Shooter`: a stable manifold of a saddle
-    crosses the bracket) or, where that cannot certify it, bisected on the certified RK4
+    by ``shooter`` (:class:`atlas.boundaries.shooting.Shooter`: the stable manifold of
+    whichever saddle the shot reaches crosses the bracket; the crossing is its Newton
+    estimate, inside the bracket) or, where that cannot certify it, bisected on the certified RK4
     labels of ``labels``. Returns (θ̇0, bracket width, basin below, basin above;
     :data:`atlas.boundaries.exact.RUNNING_SIDE` for the running basin)."""
     speeds = exact.axis_speeds()
@@ -74,9 +75,11 @@ def tilted_crossings(exact, labels, shooter, window: Window, tol: float):
     up = np.column_stack([np.zeros(speeds.size), np.ones(speeds.size)])
     below = exact.side(np.zeros(speeds.size), speeds - PROBE)
     above = exact.side(np.zeros(speeds.size), speeds + PROBE)
-    # shot from the exact crossing, to whichever saddle the orbit reaches
-    lo, hi, ok, _ = shooter.refine(base, up, np.zeros(speeds.size),
-                                   np.full(speeds.size, np.nan))
+    # shot from the exact crossing, to whichever saddle the orbit reaches (each saddle's
+    # stable manifold is a basin boundary)
+    lo, hi, ok, at = shooter.refine(base, up, np.zeros(speeds.size),
+                                    np.full(speeds.size, np.nan))
+    at = np.where(ok, at, np.nan)
     # else from the exact crossing ± FIRST_BRACKET·tol, widened as needed (the RK4 map's
     # boundary lies ≈ 1e-9 from it); a crossing that fails so is bisected again from ±PROBE
     for half_width in (FIRST_BRACKET * tol, PROBE):
@@ -85,4 +88,4 @@ def tilted_crossings(exact, labels, shooter, window: Window, tol: float):
             lo[again], hi[again], ok[again] = bisect_between(
                 labels, base[again], up[again], below[again], above[again], tol=tol,
                 half_width=half_width)
-    return speeds + 0.5 * (lo + hi), hi - lo, below, above
+    return speeds + np.where(np.isnan(at), 0.5 * (lo + hi), at), hi - lo, below, above

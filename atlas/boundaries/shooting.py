@@ -16,9 +16,10 @@ diag(R(dt·λu), R(dt·λs)), and on the box ‖z‖∞ ≤ r, |N(z)|∞ ≤ K(r
 into themselves with |u| growing, and S = {|u| < κ|s|} within ‖z‖∞ ≤ ρ = r/(μu + K·r) maps
 into S (|s| shrinking) or into U. So a curve inside ‖z‖∞ ≤ ρ from a point of U+ to a point of
 U− holds a point whose orbit stays in S for ever, so converges to q: a point of W^s(q). (Each
-point of the curve leaves S, if it does, into U+ or U− for good; the side is locally
-constant along the curve, so it cannot change from + to − without a point that never
-leaves.) The curve is the segment's image after k steps, enclosed in the line
+point of the curve that leaves S within the box leaves it into U+ or U−; the side where it
+first does is locally constant along the curve — an image in U± stays in U± while in the
+box, strictly inside by the factor ½ —, so it cannot change from + to − without a point that
+never leaves.) The curve is the segment's image after k steps, enclosed in the line
 x_k + σ·w·y_k thickened by β_k; when that lies in the box with its two ends in opposite
 cones (:data:`~atlas.kernels.shooting.CROSSED`), W^s(q) crosses the segment: the point is
 located to the segment's width 2w < tol.
@@ -28,7 +29,9 @@ map's orbit, and the polynomial sin of the kernels is sin (≤ 1e-15); the bound
 is covered by the factor ½ in the cone conditions and a few ulp in the enclosure. How far the
 orbit's rounding could move the crossing is estimated along each shot (pulled back along the
 tangent, summed with one sign: pessimistic, not a bound); a point is certified only where
-half its bracket plus that estimate is within tol.
+half its bracket plus that estimate is within tol. The stored bracket is the certified
+segment: like a label's bracket, it does not include that rounding (the attribute
+``rounding`` of a trace reports its largest estimate).
 
 **Locating.** When both ends land in one cone (:data:`~atlas.kernels.shooting.SAME`), the
 image's line crosses the stable eigen-line at σ* = −u(x_k)/u(w·y_k): a Newton step on the
@@ -155,17 +158,19 @@ class Shooter:
         self.shots = 0
         self.rounding = 0.0  # the largest rounding estimate of a certified shot [rad-ish]
 
-    def refine(self, base, normal, offset, saddle, fresh=None):
+    def refine(self, base, normal, offset, saddle, fresh=None, frame: int = 0):
         """Shoot the segments base + (offset ± HALF_WIDTH·tol)·normal towards the saddles
         (``saddle`` (N,) [rad], 0), moving each centre by the Newton step while both ends
         fall on one side, at most ``_ROUNDS`` times; a segment that is crossed but whose
         orbit's rounding estimate R leaves half its width plus R above tol is shot again,
-        0.9·(tol − R) wide, around the Newton estimate; a centre whose shot misses the saddle
-        (neither side: a prediction far off) starts once more from offset 0 where ``fresh``
-        is True. Returns (s_lo, s_hi, ok, estimate): where ``ok``, W^s crosses base +
-        s·normal for some s in [s_lo, s_hi] (NaN elsewhere); ``estimate`` the last Newton
+        with the half-width 0.9·(tol − R), around the Newton estimate; a centre whose shot
+        misses the saddle (neither side: a prediction far off) starts once more from offset 0
+        where ``fresh`` is True. Returns (s_lo, s_hi, ok, estimate): where ``ok``, W^s crosses
+        base + s·normal for some s in [s_lo, s_hi] (NaN elsewhere); ``estimate`` the last Newton
         estimate of that s (inside the bracket where ``ok``; not certified), NaN where no
-        shot reached the saddle."""
+        shot reached the saddle. ``frame``: the
+        orbits are kept within π of the saddle θs + 2π·frame, so that a copy shifted by
+        2π·frame is computed with other roundings (the shift check)."""
         n = offset.size
         lo, hi, estimate = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
         ok = np.zeros(n, bool)
@@ -178,6 +183,7 @@ class Shooter:
         half = np.full(n, HALF_WIDTH * tol)
         fresh = np.zeros(n, bool) if fresh is None else np.asarray(fresh, bool).copy()
         box, p = self.box, self.p
+        centre_saddle = p.saddle_angle + 2.0 * math.pi * frame
         for _ in range(_ROUNDS):
             if not todo.size:
                 break
@@ -185,12 +191,12 @@ class Shooter:
             centre = base[todo] + off[:, None] * normal[todo]
             kind, _, sigma, rounding, reached = shoot(
                 centre[:, 0], centre[:, 1], normal[todo, 0], normal[todo, 1], w, box.pinv,
-                box.constants, r_max=box.r_max, saddle0=p.saddle_angle, alpha=p.alpha,
+                box.constants, r_max=box.r_max, saddle0=centre_saddle, alpha=p.alpha,
                 omega0=p.omega0, torque=p.torque, dt=self.dt, n_checks=self.n_checks)
             # a shot read at another saddle than the vertex's is no use to it
             target = saddle[todo]
             elsewhere = np.isfinite(target) & (reached != np.rint(
-                (target - p.saddle_angle) / (2.0 * math.pi)))
+                (target - centre_saddle) / (2.0 * math.pi)))
             kind = np.where(elsewhere, -1, kind)
             self.shots += todo.size
             # certified where the segment's half-width plus the rounding estimate is within
@@ -217,6 +223,7 @@ class Shooter:
             half[todo[narrow]] = narrower[narrow]
             off = np.where(step | narrow, moved, 0.0)[again]
             fresh[todo[lost]] = False
+            half[todo[lost]] = HALF_WIDTH * tol
             todo = todo[again]
         return lo, hi, ok, estimate
 

@@ -251,8 +251,10 @@ def _shift_error(shooter, labels, base, normal, below, above, saddle, point, ok,
     # the 2π shift predicts the copy's point (the RK4 map is 2π-periodic in θ, to
     # rounding): its segment is centred on the located one's offset
     offset = np.einsum("ij,ij->i", point[pick] - base[pick], along)
+    # shot in the next saddle's frame: θ kept within π of it, so the copy's orbits round
+    # differently from the located ones (in one frame the copy would be the same orbit)
     s_lo, s_hi, s_ok, s_at = shooter.refine(shifted, along, offset,
-                                            saddle[pick] + 2.0 * math.pi)
+                                            saddle[pick] + 2.0 * math.pi, frame=1)
     s_at = np.where(s_ok, s_at, np.nan)
     again = np.flatnonzero(~s_ok)
     if again.size:

@@ -15,13 +15,14 @@ steps θ is brought back within π of the saddle q = ``saddle0`` (its count of t
 which saddle (saddle0 + 2πj, 0) the orbit came to) and the image is read in the saddle's
 eigen-coordinates z = (u, s) = P⁻¹(x − q) (``pinv`` = P⁻¹; u along the unstable
 eigenvector, s the stable one), with the enclosure's error gain·β (and a few ulp) in each
-coordinate; the orbit ends when the whole image lies in the smallest box ‖z‖∞ ≤ ρ that holds
-it, with its ends in cones |u| ≥ κ|s| of that box (:func:`cone_slope`; the certificate and
-its proof: :mod:`atlas.boundaries.shooting`):
+coordinate; the orbit ends when the whole image lies in the box ‖z‖∞ ≤ ρ(r), r = 1.01·μu
+times the image's extent, with its ends in cones |u| ≥ κ|s| of that box (:func:`cone_slope`;
+the certificate and its proof: :mod:`atlas.boundaries.shooting`):
 
 * ``CROSSED``: the ends in opposite cones (u > 0 and u < 0): the stable manifold of the saddle
   crosses the segment;
-* ``SAME``: both ends in one cone: it does not cross there (a Newton step is read off);
+* ``SAME``: both ends in one cone |u| ≥ |s| (not certified either way: a Newton step is
+  read off);
 * ``ESCAPED``: the centre was in the box and left it undecided; ``UNDECIDED``: ``n_checks``
   checks passed; ``NONFINITE``: NaN/inf met.
 
@@ -56,6 +57,9 @@ EPS = 2.0**-52
 #: The rounding of one RK4 step relative to |θ| + |θ̇|: u = eps/2 for the last addition of
 #: each component, and 10 % for the stages before it (each weighted by dt).
 ROUNDING = 0.55 * EPS
+#: |fl(2π) − 2π| ≈ 2.45e-16 [rad], in units of ROUNDING: what shifting θ by TWO_PI·turn
+#: instead of 2π·turn adds to the orbit's rounding, per turn.
+TURN_ERROR = 2.5e-16 / ROUNDING
 #: The enclosure's allowance for the rounding of a saddle's angle and of the coordinates, in
 #: units of eps·(|θs| + 2π) [rad] (the angle is within a few ulp; so is P⁻¹(x − q)).
 SLACK_ULPS = 16.0
@@ -254,7 +258,8 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
                     if turn != 0.0:
                         th[lane] -= TWO_PI * turn
                         turns[lane] += turn
-                        drift[lane] += abs(th[lane]) * pull[lane]
+                        # the subtraction's rounding, and fl(2π)'s own error per turn
+                        drift[lane] += (abs(th[lane]) + abs(turn) * TURN_ERROR) * pull[lane]
                     code, centre_in, sg = _read(th[lane], v[lane], yt[lane], yv[lane],
                                                 beta[lane], w[lane], saddle0, pinv, box,
                                                 r_max)
