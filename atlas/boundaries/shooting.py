@@ -70,7 +70,10 @@ class SaddleBox:
     notation): ``pinv`` = P⁻¹ (rows: the unstable, then the stable coordinate of a
     displacement from q), the multipliers ``mu_u`` > 1 > ``mu_s`` > 0, ``lip`` ≥ ‖DF‖₂,
     ``curvature`` ≥ ‖D²F‖₂, ``gain`` (|P⁻¹e|∞ ≤ gain·|e|₂), ``spread`` (|Pz|₂ ≤ spread·‖z‖∞),
-    ``sin_saddle`` = |sin θs| = |τ|/ω0², and ``r_max``, the largest box tried."""
+    ``sin_saddle`` = |sin θs| = |τ|/ω0², ``r_max``, the largest box tried; and for β, in the
+    norm |v|_W = √(ω0²vθ² + vθ̇²): ``gain_w`` (|P⁻¹e|∞ ≤ gain_w·|e|_W), ``curvature_w`` ≥
+    ‖D²F‖_W, ``step_base`` = 1 + ½(dt·L_W)² + ½(dt·L_W)²(1 + dt·L_W), the part of
+    :func:`atlas.kernels.shooting.step_norm`'s bound that does not follow the orbit."""
 
     pinv: np.ndarray
     mu_u: float
@@ -81,12 +84,16 @@ class SaddleBox:
     spread: float
     sin_saddle: float
     r_max: float
+    gain_w: float
+    curvature_w: float
+    step_base: float
 
     @property
     def constants(self) -> tuple:
-        """The tuple the kernel reads (:func:`atlas.kernels.shooting.cone_slope`)."""
+        """The tuple the kernel reads (:func:`atlas.kernels.shooting.cone_slope`,
+        :func:`~atlas.kernels.shooting.step_norm`)."""
         return (self.mu_u, self.mu_s, self.lip, self.curvature, self.gain, self.spread,
-                self.sin_saddle)
+                self.sin_saddle, self.gain_w, self.curvature_w, self.step_base)
 
     def cone(self, r: float) -> tuple[float, float]:
         """(κ, ρ) certified in the box ‖z‖∞ ≤ r (:func:`atlas.kernels.shooting.cone_slope`)."""
@@ -100,10 +107,11 @@ def _stability(x: float) -> float:
     return 1.0 + x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x / 24.0)))
 
 
-def _field_norm(c: float, alpha: float) -> float:
-    """The spectral norm of [[0, 1], [c, −2α]]: √ of the larger eigenvalue of its Gram
-    matrix [[c², −2αc], [−2αc, 1 + 4α²]], rounded up by a relative 1e-12."""
-    trace, det = c * c + 1.0 + 4.0 * alpha * alpha, c * c
+def _field_norm(a: float, c: float, alpha: float) -> float:
+    """The spectral norm of [[0, a], [c, −2α]]: √ of the larger eigenvalue of its Gram
+    matrix, whose trace is a² + c² + 4α² and determinant (ac)², rounded up by a relative
+    1e-12."""
+    trace, det = a * a + c * c + 4.0 * alpha * alpha, (a * c) ** 2
     return math.sqrt(0.5 * (trace + math.sqrt(trace * trace - 4.0 * det))) * (1.0 + 1e-12)
 
 
@@ -114,25 +122,33 @@ def saddle_box(p: Pendulum, dt: float) -> SaddleBox | None:
 
     Bounds, for f = (θ̇, τ − ω0² sin θ − 2αθ̇): ‖Df‖₂ ≤ L, the largest singular value of
     [[0, 1], [c, −2α]] over |c| ≤ ω0² (:func:`_field_norm`; at |c| = ω0², the norm being
-    convex in c),
+    convex in c; in |·|_W the same with [[0, ω0], [−ω0 c, −2α]], |c| ≤ 1, L_W),
     |D²f[a, b]| = ω0²|sin θ||aθ||bθ|; the RK4 stages then give ‖DF‖₂ ≤ R(dt·L) ≤ e^{dt·L}
     (``lip``) and ‖D²F‖₂ ≤ dt·ω0²·e^{3·dt·L} (``curvature``: each stage's second derivative
     is at most ω0²·e^{3·dt·L}, and the weights sum to 1). P = [[1, 1], [λu, λs]] (A's
-    eigenvectors (1, λ)); ``spread`` = ‖P‖∞→2."""
+    eigenvectors (1, λ)); ``spread`` = ‖P‖∞→2. In |·|_W: ‖D²F‖_W ≤ dt·e^{3·dt·L_W}, and
+    the stages' own Jacobians add at most dt·E with ‖dt·E‖_W ≤ ½(dt·L_W)²(1 + dt·L_W) to
+    DF = I + dt·J̄ + dt·E (DY_i − I is dt/2, dt/2, dt times the previous stage's Jacobian)."""
     if not p.has_rest_states:
         return None
     lam_u, lam_s = p.saddle_eigenvalues()
     mu_u, mu_s = _stability(dt * lam_u), _stability(dt * lam_s)
     if not (mu_u > 1.0 > mu_s > 0.0):
         return None
-    big_l = _field_norm(p.omega0**2, p.alpha)
+    big_l = _field_norm(1.0, p.omega0**2, p.alpha)
+    # in |·|_W, W = diag(ω0, 1): W·Df·W⁻¹ = [[0, ω0], [−ω0 cos θ, −2α]], and
+    # |D²f[a, b]|_W ≤ |sin θ|·|a|_W·|b|_W
+    norm_w = _field_norm(p.omega0, p.omega0, p.alpha)
     pmat = np.array([[1.0, 1.0], [lam_u, lam_s]])
     pinv = np.array([[lam_s, -1.0], [-lam_u, 1.0]]) / (lam_s - lam_u)
     return SaddleBox(pinv=pinv, mu_u=mu_u, mu_s=mu_s, lip=math.exp(dt * big_l),
                      curvature=dt * p.omega0**2 * math.exp(3.0 * dt * big_l),
                      gain=float(np.max(np.hypot(pinv[:, 0], pinv[:, 1]))),
                      spread=float(np.hypot(*np.abs(pmat).sum(axis=1))),
-                     sin_saddle=min(1.0, abs(p.torque) / p.omega0**2), r_max=_R_MAX)
+                     sin_saddle=min(1.0, abs(p.torque) / p.omega0**2), r_max=_R_MAX,
+                     gain_w=float(np.max(np.hypot(pinv[:, 0] / p.omega0, pinv[:, 1]))),
+                     curvature_w=dt * math.exp(3.0 * dt * norm_w),
+                     step_base=1.0 + 0.5 * (dt * norm_w) ** 2 * (2.0 + dt * norm_w))
 
 
 def shots_needed(t_max: float, dt: float) -> int:

@@ -5,12 +5,13 @@ For the segment {c + σ·w·d : |σ| ≤ 1} (centre c = (θ, θ̇), unit directi
 and y_k = DF^k(c)·d, the RK4 map's exact Jacobian applied to d (the RK4 stages of the
 variational equation are the derivatives of the stages: Hairer, Nørsett & Wanner, *Solving
 ODEs I*, §II.3), with β_k, a bound on how far the true image F^k(c + σwd) lies from the line
-x_k + σ·w·y_k:
+x_k + σ·w·y_k, in the norm |v|_W = √(ω0²vθ² + vθ̇²):
 
-    β_{k+1} = lip·β_k + ½·curvature·(w·|y_k| + β_k)²,   β_0 = 0,
+    β_{k+1} = ‖DF(x_k)‖_W·β_k + ½·M_W·(w·|y_k|_W + β_k)²,   β_0 = 0,
 
-``lip`` ≥ ‖DF‖ and ``curvature`` ≥ ‖D²F‖ (2-norms) everywhere (Taylor's theorem with the
-remainder; :func:`atlas.boundaries.shooting.saddle_box` derives both). Every ``CHECK_EVERY``
+with the bound on ‖DF(x_k)‖_W of :func:`step_norm` at the orbit's own stages, and
+M_W ≥ ‖D²F‖_W everywhere (Taylor's theorem with the remainder;
+:func:`atlas.boundaries.shooting.saddle_box` derives the constants). Every ``CHECK_EVERY``
 steps θ is brought back within π of the saddle q = ``saddle0`` (its count of turns says
 which saddle (saddle0 + 2πj, 0) the orbit came to) and the image is read in the saddle's
 eigen-coordinates z = (u, s) = P⁻¹(x − q) (``pinv`` = P⁻¹; u along the unstable
@@ -116,12 +117,14 @@ def tangent_step(th, v, yt, yv, alpha, omega0, torque, dt):
 def cone_slope(r, box):
     """The slope κ ≤ 1 of the cones |u| ≥ κ|s| that the saddle's ``box`` certifies in the box
     ‖z‖∞ ≤ r, and ρ(r), the box the image must lie in; κ = inf when r is too large. ``box``
-    = (μu, μs, lip, curvature, gain, spread, |sin θs|) (:mod:`atlas.boundaries.shooting`):
+    = (μu, μs, lip, curvature, gain, spread, |sin θs|, …) (:class:`atlas.boundaries.shooting.
+    SaddleBox`'s ``constants``):
     on ‖z‖∞ ≤ r the stages stay within lip·spread·r of the saddle, where |D²f| ≤
     ω0²(|sin θs| + lip·spread·r), so |N(z)|∞ ≤ K(r)·‖z‖∞² with
     K(r) = ½·gain·spread²·curvature·min(1, |sin θs| + lip·spread·r); then κ is the least
     slope with K·r·(1 + 1/κ) ≤ ½(μu − μs) and K·r/κ ≤ ½(μu − 1), and K·r ≤ ½(1 − μs)."""
-    mu_u, mu_s, lip, curvature, gain, spread, sin_s = box
+    mu_u, mu_s, lip, curvature, gain, spread, sin_s = box[0], box[1], box[2], box[3], box[4], \
+        box[5], box[6]
     k = 0.5 * gain * spread * spread * curvature * min(1.0, sin_s + lip * spread * r)
     kr = k * r
     rho = r / (mu_u + kr)
@@ -141,9 +144,8 @@ def _read(th, v, yt, yv, beta, w, q, pinv, box, r_max):
     s = pinv[1, 0] * dx + pinv[1, 1] * v
     uy = w * (pinv[0, 0] * yt + pinv[0, 1] * yv)
     sy = w * (pinv[1, 0] * yt + pinv[1, 1] * yv)
-    gain = box[4]
-    # the enclosure's error: β, and the rounding of the saddle's angle and of z (a few ulp)
-    m = gain * (beta + SLACK_ULPS * EPS * (abs(q) + TWO_PI))
+    # the enclosure's error: β (in |·|_W), and the rounding of the saddle's angle and of z
+    m = box[7] * beta + box[4] * SLACK_ULPS * EPS * (abs(q) + TWO_PI)
     if not (math.isfinite(u) and math.isfinite(s) and math.isfinite(uy)
             and math.isfinite(sy) and math.isfinite(m)):
         return NONFINITE, False, math.nan
@@ -175,53 +177,76 @@ def _read(th, v, yt, yv, beta, w, q, pinv, box, r_max):
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
 def _stage(t, v, yt, yv, w2, a2, torque):
-    """(k_θ, k_θ̇, j_θ, j_θ̇): the field and the tangent's field at one stage."""
+    """(k_θ, k_θ̇, j_θ, j_θ̇, cos θ): the field and the tangent's field at one stage."""
     s, c, _ = sin_cos_vers(t)
-    return v, torque - w2 * s - a2 * v, yv, -(w2 * c) * yt - a2 * yv
+    return v, torque - w2 * s - a2 * v, yv, -(w2 * c) * yt - a2 * yv, c
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt, ayv, lip,
-             half_curvature, alpha, omega0, torque, dt):
-    """One step of :func:`tangent_step` (and of β) for every lane, stage by stage: each stage
-    is one short loop over the lanes, whose iterations are independent, so the processor
-    overlaps them (a whole step per lane is one long chain of dependent operations)."""
+def step_norm(mean_cos, omega0, dt, base):
+    """A bound on ‖DF(x)‖_W, the RK4 step's Jacobian in the norm |v|_W = √(ω0²vθ² + vθ̇²),
+    from the weighted mean c̄ = (c1 + 2c2 + 2c3 + c4)/6 of cos θ at its stages: DF =
+    I + dt·J̄ + dt·E with J̄ = Df at cos θ = c̄, and ‖I + dt·J̄‖_W ≤ √(1 + 2dt·μ + dt²L_W²)
+    ≤ 1 + dt·μ + ½dt²L_W², with μ the log-norm of W·J̄·W⁻¹ = [[0, ω0], [−ω0 c̄, −2α]],
+    −α + √(α² + ω0²(1 − c̄)²/4) ≤ ω0(1 − c̄)/2. ``base`` = 1 + ½dt²L_W² + ‖dt·E‖_W's bound
+    (:func:`atlas.boundaries.shooting.saddle_box`). Near the bottom of a well this is ≈ 1,
+    near a saddle ≈ 1 + dt·ω0: a bound that follows the orbit, where one constant would
+    grow like e^{‖Df‖·t} along the whole approach (no square root: a step's cost)."""
+    return base + 0.5 * dt * omega0 * (1.0 - mean_cos)
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt, ayv, cb, sg,
+             half_curvature, extra, alpha, omega0, torque, dt):
+    """One step of :func:`tangent_step` (and of β, in the norm |·|_W of :func:`step_norm`)
+    for every lane, stage by stage: each stage is one short loop over the lanes, whose
+    iterations are independent, so the processor overlaps them (a whole step per lane is
+    one long chain of dependent operations)."""
     w2 = omega0 * omega0
     a2 = 2.0 * alpha
     h2 = 0.5 * dt
+    # (loops over few arrays each: LLVM vectorises a loop only while the runtime checks that
+    # its arrays do not overlap stay few)
     for lane in range(LANES):
-        seg = w[lane] * math.sqrt(yt[lane] * yt[lane] + yv[lane] * yv[lane]) + beta[lane]
-        beta[lane] = lip * beta[lane] + half_curvature * seg * seg
+        sg[lane] = w[lane] * math.sqrt(w2 * yt[lane] * yt[lane] + yv[lane] * yv[lane]) \
+            + beta[lane]
         # the rounding pulled back along the tangent, with 1/|y| from the last check (a
         # division here would cost as much as the step)
         drift[lane] += (abs(th[lane]) + abs(v[lane])) * pull[lane]
-        kt, kv, jt, jv = _stage(th[lane], v[lane], yt[lane], yv[lane], w2, a2, torque)
-        at[lane], av[lane], ayt[lane], ayv[lane] = kt, kv, jt, jv
+    for lane in range(LANES):
+        kt, kv, jt, jv, c = _stage(th[lane], v[lane], yt[lane], yv[lane], w2, a2, torque)
+        at[lane], av[lane], ayt[lane], ayv[lane], cb[lane] = kt, kv, jt, jv, c
         st[lane], sv[lane] = th[lane] + h2 * kt, v[lane] + h2 * kv
         syt[lane], syv[lane] = yt[lane] + h2 * jt, yv[lane] + h2 * jv
     for lane in range(LANES):
-        kt, kv, jt, jv = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
+        kt, kv, jt, jv, c = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
         at[lane] += 2.0 * kt
         av[lane] += 2.0 * kv
         ayt[lane] += 2.0 * jt
         ayv[lane] += 2.0 * jv
+        cb[lane] += 2.0 * c
         st[lane], sv[lane] = th[lane] + h2 * kt, v[lane] + h2 * kv
         syt[lane], syv[lane] = yt[lane] + h2 * jt, yv[lane] + h2 * jv
     for lane in range(LANES):
-        kt, kv, jt, jv = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
+        kt, kv, jt, jv, c = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
         at[lane] += 2.0 * kt
         av[lane] += 2.0 * kv
         ayt[lane] += 2.0 * jt
         ayv[lane] += 2.0 * jv
+        cb[lane] += 2.0 * c
         st[lane], sv[lane] = th[lane] + dt * kt, v[lane] + dt * kv
         syt[lane], syv[lane] = yt[lane] + dt * jt, yv[lane] + dt * jv
     h6 = dt / 6.0
     for lane in range(LANES):
-        kt, kv, jt, jv = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
+        kt, kv, jt, jv, c = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
         th[lane] += h6 * (at[lane] + kt)
         v[lane] += h6 * (av[lane] + kv)
         yt[lane] += h6 * (ayt[lane] + jt)
         yv[lane] += h6 * (ayv[lane] + jv)
+        cb[lane] += c
+    for lane in range(LANES):
+        lip = step_norm(cb[lane] / 6.0, omega0, dt, extra)
+        beta[lane] = lip * beta[lane] + half_curvature * sg[lane] * sg[lane]
 
 
 @nb.njit(nogil=True, fastmath=SIN_FASTMATH)
@@ -243,7 +268,8 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
     was_in = np.zeros(LANES, np.bool_)
     st, sv, syt, syv = np.zeros(LANES), np.zeros(LANES), np.zeros(LANES), np.zeros(LANES)
     at, av, ayt, ayv = np.zeros(LANES), np.zeros(LANES), np.zeros(LANES), np.zeros(LANES)
-    lip, half_curvature = box[2], 0.5 * box[3]
+    cb, seg = np.zeros(LANES), np.zeros(LANES)
+    lip, half_curvature, extra = box[2], 0.5 * box[8], box[9]
     lip_check = lip ** (2 * CHECK_EVERY)
     nxt = b
     while True:
@@ -295,8 +321,8 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
             pull[lane] = ROUNDING * lip_check / math.sqrt(yt[lane] * yt[lane]
                                                         + yv[lane] * yv[lane])
         for _ in range(CHECK_EVERY):
-            _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt, ayv, lip,
-                     half_curvature, alpha, omega0, torque, dt)
+            _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt, ayv, cb,
+                     seg, half_curvature, extra, alpha, omega0, torque, dt)
         for lane in range(LANES):
             check[lane] += 1
 

@@ -50,32 +50,72 @@ def test_tangent_is_the_jacobian_of_the_rk4_step(torque):
                                    atol=1e-14)
 
 
+@pytest.mark.parametrize("torque,omega0,alpha", [(0.0, 1.0, 0.05), (0.5, 1.3, 0.1),
+                                                (-0.2, 0.7, 1.5)])
+def test_step_norm_bounds_the_jacobian_of_a_step(torque, omega0, alpha):
+    """step_norm, from the weighted mean of cos θ at a step's stages, is at least ‖DF‖_W of
+    that step (the Jacobian by complex steps along both axes, then its largest singular
+    value in |·|_W), at 300 random states; and not loosely: within dt·ω0 plus the part
+    that does not follow the orbit."""
+    from atlas.kernels.shooting import step_norm
+
+    p = Pendulum(alpha, omega0, torque)
+    box = saddle_box(p, DT)
+    rng = np.random.default_rng(11)
+    worst = 0.0
+    for _ in range(300):
+        x, v = rng.uniform(-7, 7), rng.uniform(-6, 6)
+        columns = []
+        for e in ((1.0, 0.0), (0.0, 1.0)):
+            fx, fv = rk4(complex(x, 1e-30 * e[0]), complex(v, 1e-30 * e[1]), alpha, omega0,
+                         torque, sin=cmath.sin)
+            columns.append((fx.imag / 1e-30, fv.imag / 1e-30))
+        jac = np.array(columns).T
+        weight = np.diag([omega0, 1.0])
+        exact = np.linalg.norm(weight @ jac @ np.linalg.inv(weight), 2)
+        k1 = v, torque - omega0**2 * math.sin(x) - 2 * alpha * v
+        stages = [x, x + 0.5 * DT * k1[0]]
+        k2v = v + 0.5 * DT * k1[1]
+        k2 = k2v, torque - omega0**2 * math.sin(stages[1]) - 2 * alpha * k2v
+        stages.append(x + 0.5 * DT * k2[0])
+        k3v = v + 0.5 * DT * k2[1]
+        k3 = k3v, torque - omega0**2 * math.sin(stages[2]) - 2 * alpha * k3v
+        stages.append(x + DT * k3[0])
+        cos = np.cos(stages)
+        bound = step_norm((cos[0] + 2 * cos[1] + 2 * cos[2] + cos[3]) / 6, omega0, DT,
+                          box.step_base)
+        assert bound >= exact, (x, v, bound, exact)
+        worst = max(worst, bound - exact)
+    assert worst < DT * omega0 + (box.step_base - 1.0)
+
+
 def _lanes(*values):
     return [np.full(LANES, float(value)) for value in values]
 
 
-@pytest.mark.parametrize("torque", [0.0, 0.5])
-def test_beta_holds_the_true_image_of_a_segment(torque):
+@pytest.mark.parametrize("torque,omega0", [(0.0, 1.0), (0.5, 1.0), (0.3, 1.3)])
+def test_beta_holds_the_true_image_of_a_segment(torque, omega0):
     """A segment wide enough (w = 3e-3) for its image to bend visibly: after every 50 of
     300 steps of _advance, each of 41 points c + σ·w·d, integrated on its own by the plain RK4
-    step, lies within β of the line x + σ·w·y; and the bend is there (a few % of β at the
-    least), so a β without its quadratic term would fail."""
-    p = Pendulum(0.05, 1.0, torque)
+    step, lies within β (in |v|_W = √(ω0²vθ² + vθ̇²)) of the line x + σ·w·y; and the bend is
+    there (a few % of β at the least), so a β without its quadratic term would fail."""
+    p = Pendulum(0.05, omega0, torque)
     box = saddle_box(p, DT)
     c, d, w = (2.0, 1.0), (0.6, 0.8), 3e-3
     th, v, yt, yv = _lanes(c[0], c[1], d[0], d[1])
     beta, drift, pull, width = _lanes(0.0, 0.0, 0.0, w)
-    scratch = _lanes(*[0.0] * 8)
+    scratch = _lanes(*[0.0] * 10)
     sigma = np.linspace(-1.0, 1.0, 41)
     points = [(c[0] + s * w * d[0], c[1] + s * w * d[1]) for s in sigma]
     largest = 0.0
     for step in range(1, 301):
-        _advance(th, v, yt, yv, beta, drift, pull, width, *scratch, box.lip,
-                 0.5 * box.curvature, p.alpha, p.omega0, p.torque, DT)
+        _advance(th, v, yt, yv, beta, drift, pull, width, *scratch, 0.5 * box.curvature_w,
+                 box.step_base, p.alpha, p.omega0, p.torque, DT)
         points = [rk4(x, u, p.alpha, p.omega0, p.torque) for x, u in points]
         if step % 50 == 0:
             line = np.array([(th[0] + s * w * yt[0], v[0] + s * w * yv[0]) for s in sigma])
-            off = np.hypot(*(np.array(points) - line).T).max()
+            gap = np.array(points) - line
+            off = np.hypot(omega0 * gap[:, 0], gap[:, 1]).max()
             assert off <= beta[0] + 1e-13, (step, off, beta[0])
             largest = max(largest, off / beta[0])
     assert largest > 0.02
