@@ -51,10 +51,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from atlas import defaults
-from atlas.boundaries.bisection import predict_offsets
+from atlas.boundaries.bisection import FIRST_BRACKET, predict_offsets
 from atlas.physics.pendulum import Pendulum
 
-__all__ = ["SaddleBox", "Shooter", "saddle_box", "shots_needed", "HALF_WIDTH"]
+__all__ = ["SaddleBox", "Shooter", "saddle_box", "shots_needed", "left_to_labels",
+           "HALF_WIDTH"]
 
 #: Half-width of a shot segment [tol]: the located point's bracket is 0.9·tol wide.
 HALF_WIDTH = 0.45
@@ -268,3 +269,17 @@ class Shooter:
                                                        saddle[i], fresh=predicted[i])
             estimate[i] = np.where(ok[i], best[i], 0.0)
         return lo, hi, ok, best
+
+
+def left_to_labels(ok, estimate, tol: float) -> list[tuple]:
+    """The points the shots did not certify (``ok`` False), grouped for the bisection on
+    labels: (indices, centre offsets, first half-width [rad-ish]) — around a shot's Newton
+    estimate (±HALF_WIDTH·tol) where a shot reached the saddle, else around the exact curve
+    (±FIRST_BRACKET·tol)."""
+    groups = []
+    for guessed in (True, False):
+        i = np.flatnonzero(~ok & (np.isfinite(estimate) == guessed))
+        if i.size:
+            groups.append((i, np.nan_to_num(estimate[i]) if guessed else np.zeros(i.size),
+                           (HALF_WIDTH if guessed else FIRST_BRACKET) * tol))
+    return groups

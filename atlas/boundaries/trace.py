@@ -26,7 +26,6 @@ import xarray as xr
 
 from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.boundaries.bisection import (
-    FIRST_BRACKET,
     Labeller,
     bisect_across,
     field_normal,
@@ -52,7 +51,7 @@ from atlas.boundaries.predictor import (
     sources,
     window_boxes,
 )
-from atlas.boundaries.shooting import HALF_WIDTH, Shooter
+from atlas.boundaries.shooting import Shooter, left_to_labels
 from atlas.boundaries.trace_tilted import trace_tilted
 from atlas.boundaries.window import Window, checked_window
 from atlas.physics.pendulum import Pendulum
@@ -163,17 +162,12 @@ def _locate(shooter, labels, base, normal, saddle_n, run, tau, tol: float):
         lo, hi = locate(labels, base, normal, k, run, tau, tol)
         return lo, hi, 0.5 * (lo + hi)
     lo, hi, ok, estimate = shooter.locate(base, normal, saddle_n * math.pi, run, tau)
-    at = np.where(ok, estimate, np.nan)
-    for guessed in (True, False):  # around a shot's Newton estimate, else the exact curve
-        bad = np.flatnonzero(~ok & (np.isfinite(estimate) == guessed))
-        if not bad.size:
-            continue
-        centre = np.nan_to_num(estimate[bad]) if guessed else np.zeros(bad.size)
+    for bad, centre, half_width in left_to_labels(ok, estimate, tol):
         b_lo, b_hi = bisect_across(labels, base[bad] + centre[:, None] * normal[bad],
                                    normal[bad], k[bad], tol=tol, strict=False,
-                                   half_width=(HALF_WIDTH if guessed else FIRST_BRACKET) * tol)
+                                   half_width=half_width)
         lo[bad], hi[bad] = centre + b_lo, centre + b_hi
-    return lo, hi, np.where(ok, at, 0.5 * (lo + hi))
+    return lo, hi, np.where(ok, estimate, 0.5 * (lo + hi))
 
 
 def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: float,

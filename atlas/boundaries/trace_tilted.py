@@ -26,7 +26,6 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.boundaries.basins import RUNNING_SIDE
 from atlas.boundaries.bisection import (
-    FIRST_BRACKET,
     MAX_BRACKET,
     Labeller,
     bisect_between,
@@ -36,7 +35,7 @@ from atlas.boundaries.bisection import (
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
 from atlas.boundaries.crossings import PROBE, tilted_crossings
 from atlas.boundaries.predictor import fine_spacing
-from atlas.boundaries.shooting import HALF_WIDTH, Shooter
+from atlas.boundaries.shooting import HALF_WIDTH, Shooter, left_to_labels
 from atlas.boundaries.window import Window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
@@ -224,18 +223,13 @@ def _locate(shooter, labels, base, normal, below, above, saddle, run, arc, tol: 
     shot's Newton estimate — within its bracket, more accurate than its midpoint —, else
     the midpoint)."""
     lo, hi, ok, estimate = shooter.locate(base, normal, saddle, run, arc)
-    at = np.where(ok, estimate, np.nan)
-    for guessed in (True, False):  # around a shot's Newton estimate, else the exact curve
-        again = np.flatnonzero(~ok & (np.isfinite(estimate) == guessed))
-        if not again.size:
-            continue
-        centre = np.nan_to_num(estimate[again]) if guessed else np.zeros(again.size)
+    shot = ok.copy()
+    for again, centre, half_width in left_to_labels(shot, estimate, tol):
         g_lo, g_hi, ok[again] = bisect_between(
             labels, base[again] + centre[:, None] * normal[again], normal[again],
-            below[again], above[again], tol=tol,
-            half_width=(HALF_WIDTH if guessed else FIRST_BRACKET) * tol)
+            below[again], above[again], tol=tol, half_width=half_width)
         lo[again], hi[again] = centre + g_lo, centre + g_hi
-    return lo, hi, ok, np.where(np.isnan(at), 0.5 * (lo + hi), at)
+    return lo, hi, ok, np.where(shot, estimate, 0.5 * (lo + hi))
 
 
 def _shift_error(shooter, labels, base, normal, below, above, saddle, point, ok,

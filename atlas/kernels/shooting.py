@@ -44,8 +44,8 @@ import numpy as np
 from atlas.kernels import cached_njit
 from atlas.kernels.fastsin import SIN_FASTMATH, sin_cos_vers
 
-__all__ = ["shoot", "tangent_step", "UNDECIDED", "CROSSED", "SAME", "ESCAPED", "NONFINITE",
-           "CHECK_EVERY"]
+__all__ = ["shoot", "cone_slope", "step_norm", "UNDECIDED", "CROSSED", "SAME", "ESCAPED",
+           "NONFINITE", "CHECK_EVERY"]
 
 #: Outcomes of :func:`shoot` (``kind``).
 UNDECIDED, CROSSED, SAME, ESCAPED, NONFINITE = 0, 1, 2, 3, 4
@@ -64,53 +64,6 @@ TURN_ERROR = 2.5e-16 / ROUNDING
 #: The enclosure's allowance for the rounding of a saddle's angle and of the coordinates, in
 #: units of eps·(|θs| + 2π) [rad] (the angle is within a few ulp; so is P⁻¹(x − q)).
 SLACK_ULPS = 16.0
-
-
-@nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def tangent_step(th, v, yt, yv, alpha, omega0, torque, dt):
-    """One RK4 step [dt s] of (θ, θ̇) and of the tangent (yθ, yθ̇) it carries: returns
-    (θ, θ̇, yθ, yθ̇) after the step; the tangent's stages are the state's stages'
-    derivatives, so (yθ, yθ̇) becomes DF(θ, θ̇)·(yθ, yθ̇) exactly (up to rounding)."""
-    w2 = omega0 * omega0
-    a2 = 2.0 * alpha
-    h2 = 0.5 * dt
-    s1, c1, _ = sin_cos_vers(th)
-    k1t = v
-    k1v = torque - w2 * s1 - a2 * v
-    j1t = yv
-    j1v = -(w2 * c1) * yt - a2 * yv
-    t2 = th + h2 * k1t
-    v2 = v + h2 * k1v
-    y2t = yt + h2 * j1t
-    y2v = yv + h2 * j1v
-    s2, c2, _ = sin_cos_vers(t2)
-    k2t = v2
-    k2v = torque - w2 * s2 - a2 * v2
-    j2t = y2v
-    j2v = -(w2 * c2) * y2t - a2 * y2v
-    t3 = th + h2 * k2t
-    v3 = v + h2 * k2v
-    y3t = yt + h2 * j2t
-    y3v = yv + h2 * j2v
-    s3, c3, _ = sin_cos_vers(t3)
-    k3t = v3
-    k3v = torque - w2 * s3 - a2 * v3
-    j3t = y3v
-    j3v = -(w2 * c3) * y3t - a2 * y3v
-    t4 = th + dt * k3t
-    v4 = v + dt * k3v
-    y4t = yt + dt * j3t
-    y4v = yv + dt * j3v
-    s4, c4, _ = sin_cos_vers(t4)
-    k4t = v4
-    k4v = torque - w2 * s4 - a2 * v4
-    j4t = y4v
-    j4v = -(w2 * c4) * y4t - a2 * y4v
-    h6 = dt / 6.0
-    return (th + h6 * (k1t + 2.0 * (k2t + k3t) + k4t),
-            v + h6 * (k1v + 2.0 * (k2v + k3v) + k4v),
-            yt + h6 * (j1t + 2.0 * (j2t + j3t) + j4t),
-            yv + h6 * (j1v + 2.0 * (j2v + j3v) + j4v))
 
 
 @nb.njit(fastmath=SIN_FASTMATH)
@@ -196,10 +149,28 @@ def step_norm(mean_cos, omega0, dt, base):
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+def _middle_stage(th, v, yt, yv, st, sv, syt, syv, at, av, ayt, ayv, cb, reach, w2, a2,
+                  torque):
+    """RK4's second or third stage for every lane: its field added twice to the sums, and
+    the next stage's point ``reach`` [s] (dt/2, then dt) along it."""
+    for lane in range(LANES):
+        kt, kv, jt, jv, c = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
+        at[lane] += 2.0 * kt
+        av[lane] += 2.0 * kv
+        ayt[lane] += 2.0 * jt
+        ayv[lane] += 2.0 * jv
+        cb[lane] += 2.0 * c
+        st[lane], sv[lane] = th[lane] + reach * kt, v[lane] + reach * kv
+        syt[lane], syv[lane] = yt[lane] + reach * jt, yv[lane] + reach * jv
+
+
+@nb.njit(inline="always", fastmath=SIN_FASTMATH)
 def _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt, ayv, cb, sg,
              half_curvature, extra, alpha, omega0, torque, dt):
-    """One step of :func:`tangent_step` (and of β, in the norm |·|_W of :func:`step_norm`)
-    for every lane, stage by stage: each stage is one short loop over the lanes, whose
+    """One RK4 step [dt s] of (θ, θ̇) and of the tangent (yθ, yθ̇) it carries — the tangent's
+    stages are the state's stages' derivatives, so (yθ, yθ̇) becomes DF(θ, θ̇)·(yθ, yθ̇)
+    exactly, up to rounding — and of β, in the norm |·|_W of :func:`step_norm`, for every
+    lane, stage by stage: each stage is one short loop over the lanes, whose
     iterations are independent, so the processor overlaps them (a whole step per lane is
     one long chain of dependent operations)."""
     w2 = omega0 * omega0
@@ -218,24 +189,8 @@ def _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt,
         at[lane], av[lane], ayt[lane], ayv[lane], cb[lane] = kt, kv, jt, jv, c
         st[lane], sv[lane] = th[lane] + h2 * kt, v[lane] + h2 * kv
         syt[lane], syv[lane] = yt[lane] + h2 * jt, yv[lane] + h2 * jv
-    for lane in range(LANES):
-        kt, kv, jt, jv, c = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
-        at[lane] += 2.0 * kt
-        av[lane] += 2.0 * kv
-        ayt[lane] += 2.0 * jt
-        ayv[lane] += 2.0 * jv
-        cb[lane] += 2.0 * c
-        st[lane], sv[lane] = th[lane] + h2 * kt, v[lane] + h2 * kv
-        syt[lane], syv[lane] = yt[lane] + h2 * jt, yv[lane] + h2 * jv
-    for lane in range(LANES):
-        kt, kv, jt, jv, c = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)
-        at[lane] += 2.0 * kt
-        av[lane] += 2.0 * kv
-        ayt[lane] += 2.0 * jt
-        ayv[lane] += 2.0 * jv
-        cb[lane] += 2.0 * c
-        st[lane], sv[lane] = th[lane] + dt * kt, v[lane] + dt * kv
-        syt[lane], syv[lane] = yt[lane] + dt * jt, yv[lane] + dt * jv
+    _middle_stage(th, v, yt, yv, st, sv, syt, syv, at, av, ayt, ayv, cb, h2, w2, a2, torque)
+    _middle_stage(th, v, yt, yv, st, sv, syt, syv, at, av, ayt, ayv, cb, dt, w2, a2, torque)
     h6 = dt / 6.0
     for lane in range(LANES):
         kt, kv, jt, jv, c = _stage(st[lane], sv[lane], syt[lane], syv[lane], w2, a2, torque)

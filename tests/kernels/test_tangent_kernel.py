@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from atlas.boundaries.shooting import saddle_box
-from atlas.kernels.shooting import LANES, _advance, tangent_step
+from atlas.kernels.shooting import LANES, _advance
 from atlas.physics.pendulum import Pendulum
 
 DT = 0.01
@@ -33,20 +33,24 @@ def rk4(x, v, alpha, omega0, torque, dt=DT, sin=math.sin):
 
 
 @pytest.mark.parametrize("torque", [0.0, 0.5, -0.8])
-def test_tangent_is_the_jacobian_of_the_rk4_step(torque):
-    """(yθ, yθ̇) after tangent_step = DF·(yθ, yθ̇), DF by the complex step
-    Im F(x + i·h·y)/h (exact to rounding, no cancellation), at random states and
-    directions; the state itself is the plain RK4 step's."""
+def test_the_tangent_is_the_jacobian_of_the_rk4_step(torque):
+    """(yθ, yθ̇) after one step of the kernel's _advance = DF·(yθ, yθ̇), DF by the complex
+    step Im F(x + i·h·y)/h (exact to rounding, no cancellation), for 32 lanes of random
+    states and directions; the state itself is the plain RK4 step's."""
     rng = np.random.default_rng(3)
-    for _ in range(50):
-        x, v = rng.uniform(-7, 7), rng.uniform(-4, 4)
-        yt, yv = rng.normal(size=2)
-        h = 1e-30
-        fx, fv = rk4(complex(x, h * yt), complex(v, h * yv), 0.05, 1.1, torque, sin=cmath.sin)
-        got = tangent_step(x, v, yt, yv, 0.05, 1.1, torque, DT)
-        np.testing.assert_allclose(got[2:], [fx.imag / h, fv.imag / h], rtol=1e-13,
-                                   atol=1e-15 * math.hypot(yt, yv))
-        np.testing.assert_allclose(got[:2], rk4(x, v, 0.05, 1.1, torque), rtol=0,
+    x, v = rng.uniform(-7, 7, LANES), rng.uniform(-4, 4, LANES)
+    yt, yv = rng.normal(size=(2, LANES))
+    th, speed, tt, tv = x.copy(), v.copy(), yt.copy(), yv.copy()
+    _advance(th, speed, tt, tv, *_lanes(*[0.0] * 4), *_lanes(*[0.0] * 10), 0.0, 1.0, 0.05,
+             1.1, torque, DT)
+    h = 1e-30
+    for lane in range(LANES):
+        fx, fv = rk4(complex(x[lane], h * yt[lane]), complex(v[lane], h * yv[lane]), 0.05,
+                     1.1, torque, sin=cmath.sin)
+        np.testing.assert_allclose([tt[lane], tv[lane]], [fx.imag / h, fv.imag / h],
+                                   rtol=1e-13, atol=1e-15 * math.hypot(yt[lane], yv[lane]))
+        np.testing.assert_allclose([th[lane], speed[lane]],
+                                   rk4(x[lane], v[lane], 0.05, 1.1, torque), rtol=0,
                                    atol=1e-14)
 
 
