@@ -52,10 +52,10 @@ import numpy as np
 
 from atlas import defaults
 from atlas.boundaries.bisection import FIRST_BRACKET, predict_offsets
+from atlas.labels.trap import n_checks_for
 from atlas.physics.pendulum import Pendulum
 
-__all__ = ["SaddleBox", "Shooter", "saddle_box", "shots_needed", "left_to_labels",
-           "HALF_WIDTH"]
+__all__ = ["SaddleBox", "Shooter", "saddle_box", "left_to_labels", "HALF_WIDTH"]
 
 #: Half-width of a shot segment [tol]: the located point's bracket is 0.9·tol wide.
 HALF_WIDTH = 0.45
@@ -152,13 +152,6 @@ def saddle_box(p: Pendulum, dt: float) -> SaddleBox | None:
                      step_base=1.0 + 0.5 * (dt * norm_w) ** 2 * (2.0 + dt * norm_w))
 
 
-def shots_needed(t_max: float, dt: float) -> int:
-    """Checks of a shot at most ``t_max`` [s] long at step ``dt`` [s]."""
-    from atlas.kernels.shooting import CHECK_EVERY
-
-    return max(1, math.ceil(t_max / dt / CHECK_EVERY))
-
-
 class Shooter:
     """Shoots segments of half-width ``HALF_WIDTH``·``tol`` across the stable manifolds of
     the pendulum ``p``'s saddles for the RK4 map at step ``dt`` [s], each shot at most
@@ -171,7 +164,9 @@ class Shooter:
         self.p, self.tol, self.dt = p, tol, dt
         # the kernel integrates classical RK4 on (θ, θ̇): another method's map is not its map
         self.box = saddle_box(p, dt) if method == "rk4" else None
-        self.n_checks = shots_needed(t_max, dt)
+        from atlas.kernels.shooting import CHECK_EVERY
+
+        self.n_checks = n_checks_for(t_max, dt, CHECK_EVERY)  # checks of a shot
         self.shots = 0
         self.rounding = 0.0  # the largest rounding estimate of a certified shot [rad-ish]
 
@@ -261,13 +256,11 @@ class Shooter:
         local = np.arange(n) - np.repeat(start, stop - start)
         first = local % _STRIDE == 0
         first[stop - 1] = True
-        estimate = np.zeros(n)
-        for pick in (first, ~first):
-            offset, predicted = predict_offsets(along, estimate, ok, pick, start, stop)
+        for pick in (first, ~first):  # the spline reads the certified points' estimates only
+            offset, predicted = predict_offsets(along, best, ok, pick, start, stop)
             i = np.flatnonzero(pick)
             lo[i], hi[i], ok[i], best[i] = self.refine(base[i], normal[i], offset[i],
                                                        saddle[i], fresh=predicted[i])
-            estimate[i] = np.where(ok[i], best[i], 0.0)
         return lo, hi, ok, best
 
 
