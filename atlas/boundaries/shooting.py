@@ -40,7 +40,15 @@ still has to go (≈ 1e-13 from 3e-9 off). :meth:`Shooter.locate` shoots every
 ``_STRIDE``-th vertex of a run from the exact curve and the others from a spline of those
 located first (:func:`atlas.boundaries.bisection.predict_offsets`), with Newton steps, up to
 ``_ROUNDS`` shots a point (:meth:`Shooter.refine`); what it cannot certify is left to the
-bisection on labels. Derivation: docs/design/separatrices.md#shooting.
+bisection on labels.
+
+**A wide segment, a narrow bracket.** The enclosure holds for every σ ∈ [−1, 1] at once, so
+a part of the segment is read as a segment of its own (its centre x_k + c·w·y_k, its
+half-width h·w, the same β). A spline's prediction is shot ``PREDICTED_WIDTH`` times wider
+than the bracket it needs; once the whole is crossed the orbit goes on, reading the part
+of half-width HALF_WIDTH·tol around its latest Newton estimate until that part is crossed
+too (:func:`atlas.kernels.shooting.shoot`'s ``target``): a few checks more instead of a
+second orbit where the prediction was off by more than the bracket. Derivation: docs/design/separatrices.md#shooting.
 """
 
 from __future__ import annotations
@@ -59,10 +67,16 @@ __all__ = ["SaddleBox", "Shooter", "saddle_box", "left_to_labels", "HALF_WIDTH"]
 
 #: Half-width of a shot segment [tol]: the located point's bracket is 0.9·tol wide.
 HALF_WIDTH = 0.45
-_STRIDE = 8  # every 8th vertex of a run is shot first, from the exact curve
+_STRIDE = 16  # every 16th vertex of a run is shot first, from the exact curve
 _ROUNDS = 4  # shots per vertex at most (each a Newton step when it does not cross)
 _NARROWEST = 0.05  # no segment narrower than this [tol]: its orbit's rounding is too large
 _R_MAX = 0.1  # the largest box [z units] an image is read in
+#: Half-width [HALF_WIDTH·tol] of a segment shot around a spline's prediction: it covers the
+#: prediction's error, and the orbit goes on until a part of it as narrow as HALF_WIDTH·tol
+#: around the Newton estimate is crossed (a few more steps, instead of a second orbit).
+PREDICTED_WIDTH = 128.0
+EXACT_WIDTH = 1.0
+_AFTER_NEWTON = 2.0  # the half-width [HALF_WIDTH·tol] of a segment around a Newton estimate
 
 
 @dataclass(frozen=True)
@@ -170,19 +184,23 @@ class Shooter:
         self.shots = 0
         self.rounding = 0.0  # the largest rounding estimate of a certified shot [rad-ish]
 
-    def refine(self, base, normal, offset, saddle, fresh=None, frame: int = 0):
-        """Shoot the segments base + (offset ± HALF_WIDTH·tol)·normal towards the saddles
-        (``saddle`` (N,) [rad], 0), moving each centre by the Newton step while both ends
-        fall on one side, at most ``_ROUNDS`` times; a segment that is crossed but whose
-        orbit's rounding estimate R leaves half its width plus R above tol is shot again,
-        with the half-width 0.9·(tol − R), around the Newton estimate; a centre whose shot
-        misses the saddle (neither side: a prediction far off) starts once more from offset 0
-        where ``fresh`` is True. Returns (s_lo, s_hi, ok, estimate): where ``ok``, W^s crosses
-        base + s·normal for some s in [s_lo, s_hi] (NaN elsewhere); ``estimate`` the last Newton
-        estimate of that s (inside the bracket where ``ok``; not certified), NaN where no
-        shot reached the saddle. ``frame``: the
-        orbits are kept within π of the saddle θs + 2π·frame, so that a copy shifted by
-        2π·frame is computed with other roundings (the shift check)."""
+    def refine(self, base, normal, offset, saddle, fresh=None, frame: int = 0, wide=None):
+        """Shoot the segments base + (offset ± w)·normal towards the saddles (``saddle`` (N,)
+        [rad], 0), w = ``wide`` (N,) [HALF_WIDTH·tol] times HALF_WIDTH·tol (1 by default),
+        certifying a part of half-width ≤ HALF_WIDTH·tol whose half-width plus the orbit's
+        rounding estimate R is within tol (:func:`atlas.kernels.shooting.shoot`'s ``target``
+        and ``budget``: one orbit, where a wide segment is crossed, locates the point to its
+        narrow bracket); moving each centre by the Newton step while both ends fall on one
+        side (then w = ``_AFTER_NEWTON``·HALF_WIDTH·tol), at most ``_ROUNDS`` shots; a crossed
+        segment left wider than that (its part undecided) is shot again, with the half-width
+        0.9·(tol − R), around the Newton estimate; a centre whose shot misses the saddle
+        (neither side: a prediction far off) starts once more from offset 0 where ``fresh``
+        is True. Returns (s_lo, s_hi, ok, estimate): where ``ok``, W^s crosses
+        base + s·normal for some s in [s_lo, s_hi] (NaN elsewhere); ``estimate`` the last
+        Newton estimate of that s (inside the bracket where ``ok``; not certified), NaN where
+        no shot reached the saddle. ``frame``: the orbits are kept within π of the saddle
+        θs + 2π·frame, so that a copy shifted by 2π·frame is computed with other roundings
+        (the shift check)."""
         n = offset.size
         lo, hi, estimate = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
         ok = np.zeros(n, bool)
@@ -191,8 +209,9 @@ class Shooter:
         from atlas.kernels.shooting import CROSSED, SAME, shoot
 
         tol = self.tol
+        narrow_half = HALF_WIDTH * tol
         todo, off = np.arange(n), np.asarray(offset, float).copy()
-        half = np.full(n, HALF_WIDTH * tol)
+        half = narrow_half * (np.ones(n) if wide is None else np.asarray(wide, float))
         fresh = np.zeros(n, bool) if fresh is None else np.asarray(fresh, bool).copy()
         box, p = self.box, self.p
         centre_saddle = p.saddle_angle + 2.0 * math.pi * frame
@@ -201,31 +220,34 @@ class Shooter:
                 break
             w = half[todo]
             centre = base[todo] + off[:, None] * normal[todo]
-            kind, _, sigma, rounding, reached = shoot(
+            kind, _, sigma, rounding, reached, part = shoot(
                 centre[:, 0], centre[:, 1], normal[todo, 0], normal[todo, 1], w, box.pinv,
                 box.constants, r_max=box.r_max, saddle0=centre_saddle, alpha=p.alpha,
-                omega0=p.omega0, torque=p.torque, dt=self.dt, n_checks=self.n_checks)
+                omega0=p.omega0, torque=p.torque, dt=self.dt, n_checks=self.n_checks,
+                target=narrow_half, budget=tol)
             # a shot read at another saddle than the vertex's is no use to it
             target = saddle[todo]
             elsewhere = np.isfinite(target) & (reached != np.rint(
                 (target - centre_saddle) / (2.0 * math.pi)))
             kind = np.where(elsewhere, -1, kind)
             self.shots += todo.size
-            # certified where the segment's half-width plus the rounding estimate is within
-            # tol; where the rounding is larger, a narrower segment is shot around the
+            # the certified part: narrower than tol, and half of it plus the rounding
+            # estimate within tol; where it is not, a narrower segment is shot around the
             # Newton estimate (its rounding is the same: the orbit is), if one is left
             across = kind == CROSSED
-            crossed = across & (w + rounding <= tol)
+            s_lo, s_hi = off + part[:, 0] * w, off + part[:, 1] * w
+            width = s_hi - s_lo
+            crossed = across & (width < tol) & (0.5 * width + rounding <= tol)
             narrower = 0.9 * (tol - rounding)
             narrow = across & ~crossed & (narrower >= _NARROWEST * tol)
             self.rounding = max(self.rounding, float(rounding[crossed].max(initial=0.0)))
             done = todo[crossed]
-            lo[done], hi[done] = off[crossed] - w[crossed], off[crossed] + w[crossed]
+            lo[done], hi[done] = s_lo[crossed], s_hi[crossed]
             ok[done] = True
-            # the Newton estimate, certified or not (a CROSSED shot's lies in its segment)
+            # the Newton estimate, certified or not (a CROSSED shot's lies in its part)
             read = (across | (kind == SAME)) & np.isfinite(sigma)
-            moved = off + np.where(across, np.clip(np.nan_to_num(sigma), -1, 1),
-                                   np.nan_to_num(sigma)) * w
+            moved = off + np.where(across, np.clip(np.nan_to_num(sigma), part[:, 0],
+                                                   part[:, 1]), np.nan_to_num(sigma)) * w
             estimate[todo[read]] = moved[read]
             # a Newton step where both ends fell on one side; a centre whose shot missed the
             # saddle (a spline's prediction far off) starts again from the exact curve
@@ -233,9 +255,10 @@ class Shooter:
             lost = ~across & ~step & fresh[todo]
             again = step | lost | narrow
             half[todo[narrow]] = narrower[narrow]
+            half[todo[step]] = _AFTER_NEWTON * narrow_half
             off = np.where(step | narrow, moved, 0.0)[again]
             fresh[todo[lost]] = False
-            half[todo[lost]] = HALF_WIDTH * tol
+            half[todo[lost]] = narrow_half
             todo = todo[again]
         return lo, hi, ok, estimate
 
@@ -259,8 +282,9 @@ class Shooter:
         for pick in (first, ~first):  # the spline reads the certified points' estimates only
             offset, predicted = predict_offsets(along, best, ok, pick, start, stop)
             i = np.flatnonzero(pick)
-            lo[i], hi[i], ok[i], best[i] = self.refine(base[i], normal[i], offset[i],
-                                                       saddle[i], fresh=predicted[i])
+            lo[i], hi[i], ok[i], best[i] = self.refine(
+                base[i], normal[i], offset[i], saddle[i], fresh=predicted[i],
+                wide=np.where(predicted[i], PREDICTED_WIDTH, EXACT_WIDTH))
         return lo, hi, ok, best
 
 

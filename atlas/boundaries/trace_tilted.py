@@ -5,8 +5,8 @@ window is located, not copied: vertices about ``max_spacing`` apart on the exact
 boundaries (:class:`atlas.boundaries.tilted.TiltedBoundaries`, DOP853), each located across
 the curve, along the normal of the vector field, to a bracket narrower than ``tol``
 [rad-ish]: by shooting its segment to its saddle (:mod:`atlas.boundaries.shooting`: the
-saddle's stable manifold of the RK4 map crosses it; every 8th vertex of a run from the exact
-curve, the others from splines of those, with Newton steps), and where that cannot certify
+saddle's stable manifold of the RK4 map crosses it; every 16th vertex of a run from the
+exact curve, the others from splines of those, with Newton steps), and where that cannot certify
 it, by bisection on certified RK4 labels (the tilted trap and the running barrier) between
 the exact sides read at ±1e-3 (well k or the running basin) (:func:`_locate`). The
 2π shift is checked on relocated copies (``shift_error``); ``discrepancy``, the located
@@ -145,7 +145,7 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
                 "each located across the curve to a bracket narrower than tol: by shooting "
                 "its segment to the saddle (the stable manifold of the RK4 map crosses it: "
                 "cone conditions in the saddle's box; Newton steps from the exact curve, "
-                "every 8th vertex, and from splines, the others), else by bisection on "
+                "every 16th vertex, and from splines, the others), else by bisection on "
                 "certified RK4 labels (tilted trap, running barrier); every copy located on "
                 "its own (shift_error: the 2 pi shift between copies); discrepancy = max "
                 "distance of the points to the exact boundaries"),
@@ -214,7 +214,7 @@ def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v
 
 def _locate(shooter, labels, base, normal, below, above, saddle, run, arc, tol: float):
     """Locate every vertex by shooting (:meth:`atlas.boundaries.shooting.Shooter.locate`:
-    one orbit per vertex, two for every 8th, from the exact curve and splines); those it
+    one orbit per vertex, two for every 16th, from the exact curve and splines); those it
     cannot certify are bisected on certified labels, from ±HALF_WIDTH·tol around a shot's
     Newton estimate, else from ±FIRST_BRACKET·tol around the exact curve, widened ×8 while
     an end carries the other side (the RK4 map's boundary lies O(dt⁴) ≈ 1e-9 from the exact

@@ -205,9 +205,9 @@ def _advance(th, v, yt, yv, beta, drift, pull, w, st, sv, syt, syv, at, av, ayt,
 
 
 @nb.njit(nogil=True, fastmath=SIN_FASTMATH)
-def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width, pinv, box,
-                 r_max, saddle0, alpha, omega0, torque, dt, n_checks, kind, n_steps, sigma,
-                 rounding, reached):
+def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width, target,
+                 budget, pinv, box, r_max, saddle0, alpha, omega0, torque, dt, n_checks, kind,
+                 n_steps, sigma, rounding, reached, bracket):
     n = theta.size
     th = np.zeros(LANES)
     v = np.zeros(LANES)
@@ -221,6 +221,8 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
     orbit = np.full(LANES, -1, np.int64)
     check = np.zeros(LANES, np.int64)
     was_in = np.zeros(LANES, np.bool_)
+    sub = np.zeros(LANES, np.bool_)  # the whole segment crossed: a narrower part is read
+    sub_c, sub_r = np.zeros(LANES), np.zeros(LANES)  # its centre and half-width [w]
     st, sv, syt, syv = np.zeros(LANES), np.zeros(LANES), np.zeros(LANES), np.zeros(LANES)
     at, av, ayt, ayv = np.zeros(LANES), np.zeros(LANES), np.zeros(LANES), np.zeros(LANES)
     cb, seg = np.zeros(LANES), np.zeros(LANES)
@@ -241,10 +243,42 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
                         turns[lane] += turn
                         # the subtraction's rounding, and fl(2π)'s own error per turn
                         drift[lane] += (abs(th[lane]) + abs(turn) * TURN_ERROR) * pull[lane]
-                    code, centre_in, sg = _read(th[lane], v[lane], yt[lane], yv[lane],
-                                                beta[lane], w[lane], saddle0, pinv, box,
-                                                r_max)
-                    if code == UNDECIDED and was_in[lane] and not centre_in:
+                    lo, hi = -1.0, 1.0
+                    if not sub[lane]:
+                        code, centre_in, sg = _read(th[lane], v[lane], yt[lane], yv[lane],
+                                                    beta[lane], w[lane], saddle0, pinv, box,
+                                                    r_max)
+                        if code == CROSSED and (w[lane] > target[i]
+                                                or w[lane] + drift[lane] > budget):
+                            # certified for the whole segment, wider than wanted: a part of
+                            # half-width h < 1 (in units of w) around the estimate is read
+                            # from now on
+                            h = min(target[i], 0.9 * (budget - drift[lane])) / w[lane]
+                            if h > 0.0:
+                                sub[lane], sub_r[lane] = True, h
+                                sub_c[lane] = min(max(sg, h - 1.0), 1.0 - h)
+                                code = UNDECIDED
+                    else:
+                        c, h = sub_c[lane], sub_r[lane]
+                        code, centre_in, sg = _read(th[lane] + c * w[lane] * yt[lane],
+                                                    v[lane] + c * w[lane] * yv[lane],
+                                                    yt[lane], yv[lane], beta[lane],
+                                                    h * w[lane], saddle0, pinv, box, r_max)
+                        sg = c + h * sg
+                        if code == CROSSED and h * w[lane] + drift[lane] <= budget:
+                            lo, hi = c - h, c + h
+                        elif code == NONFINITE or check[lane] >= n_checks or not centre_in:
+                            # the part undecided: the whole segment's certificate stands
+                            code = CROSSED
+                            sg = min(max(sg, -1.0), 1.0) if math.isfinite(sg) else c
+                        else:  # undecided, beside the estimate, or wider than the rounding
+                            # now leaves room for: centred on the latest estimate
+                            h = min(h, 0.9 * (budget - drift[lane]) / w[lane])
+                            if math.isfinite(sg) and h > 0.0:
+                                sub_r[lane] = h
+                                sub_c[lane] = min(max(sg, h - 1.0), 1.0 - h)
+                            code = UNDECIDED
+                    if code == UNDECIDED and was_in[lane] and not centre_in and not sub[lane]:
                         code = ESCAPED
                     was_in[lane] = was_in[lane] or centre_in
                     if code == UNDECIDED and check[lane] < n_checks:
@@ -255,6 +289,7 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
                     sigma[i] = sg if code == CROSSED or code == SAME else math.nan
                     rounding[i] = drift[lane]
                     reached[i] = np.int64(turns[lane])
+                    bracket[i, 0], bracket[i, 1] = lo, hi
                     orbit[lane] = -1
                 if nxt >= n:  # nothing left: the lane idles at rest
                     th[lane] = v[lane] = beta[lane] = w[lane] = drift[lane] = 0.0
@@ -269,7 +304,7 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
                 pull[lane] = ROUNDING * lip_check / math.sqrt(yt[lane] * yt[lane]
                                                             + yv[lane] * yv[lane])
                 check[lane] = 0
-                was_in[lane] = False
+                was_in[lane] = sub[lane] = False
         if active == 0:
             return
         for lane in range(LANES):  # |y| shrinks by at most lip per step, forwards or back
@@ -283,38 +318,55 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
 
 
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
-def _shoot(theta, theta_dot, d_theta, d_theta_dot, half_width, pinv, box, r_max, saddle0,
-           alpha, omega0, torque, dt, n_checks, kind, n_steps, sigma, rounding, reached,
-           n_chunks):
+def _shoot(theta, theta_dot, d_theta, d_theta_dot, half_width, target, budget, pinv, box,
+           r_max, saddle0, alpha, omega0, torque, dt, n_checks, kind, n_steps, sigma,
+           rounding, reached, bracket, n_chunks):
     for b in nb.prange(n_chunks):
         _shoot_chunk(np.int64(b), n_chunks, theta, theta_dot, d_theta, d_theta_dot,
-                     half_width, pinv, box, r_max, saddle0, alpha, omega0, torque, dt,
-                     n_checks, kind, n_steps, sigma, rounding, reached)
+                     half_width, target, budget, pinv, box, r_max, saddle0, alpha, omega0,
+                     torque, dt, n_checks, kind, n_steps, sigma, rounding, reached, bracket)
 
 
 def shoot(theta, theta_dot, d_theta, d_theta_dot, half_width, pinv, box, *, r_max, saddle0,
-          alpha, omega0, torque, dt, n_checks):
+          alpha, omega0, torque, dt, n_checks, target=None, budget=math.inf):
     """Shoot every segment (centres ``theta``, ``theta_dot`` [rad, rad s⁻¹], unit directions
     ``d_theta``, ``d_theta_dot``, ``half_width`` [rad-ish]) to the saddles
     (``saddle0`` + 2πj, 0) [rad], as the module docstring says, for at most ``n_checks`` ·
     CHECK_EVERY steps; ``pinv``, ``box``, ``r_max``: the saddles' constants
-    (:class:`atlas.boundaries.shooting.SaddleBox`). Returns, one per segment: kind (int8),
-    the step of the decision (int32), sigma, the rounding estimate [rad-ish] (the rounding
-    of the orbit, ε_k = ROUNDING·(|θ| + |θ̇|) at every step, each pulled back to the segment as
-    ε_k/|y_k| and summed: how far it could move the crossing, at the worst, not a bound), and
-    the j of the saddle the orbit was read at (int64)."""
+    (:class:`atlas.boundaries.shooting.SaddleBox`).
+
+    ``target`` [rad-ish] (default: ``half_width``) and ``budget`` [rad-ish]: once a whole
+    segment is crossed, the orbit goes on where it is wider than wanted, and reads only a
+    part of it, of half-width h = min(target, 0.9·(budget − R)) (R the orbit's rounding
+    estimate) centred on the latest Newton estimate, until that part is crossed too with
+    h + R ≤ budget (the whole image's enclosure holds for every part of it, so each part's
+    ends are read as a segment's; a few more steps, where a narrower segment would be a
+    second orbit); if the part stays undecided until the orbit leaves the box or the checks
+    run out, the whole segment's certificate is returned.
+
+    Returns, one per segment: kind (int8), the step of the decision (int32), sigma, the
+    rounding estimate [rad-ish] (the rounding of the orbit, ε_k = ROUNDING·(|θ| + |θ̇|) at
+    every step, each pulled back to the segment as ε_k/|y_k| and summed: how far it could
+    move the crossing, at the worst, not a bound), the j of the saddle the orbit was read at
+    (int64), and the certified part (N, 2) [units of half_width from the centre]: (−1, 1)
+    for the whole segment (NaN-free; meaningful where kind is CROSSED)."""
     arrays = [np.ascontiguousarray(a, dtype=np.float64)
               for a in (theta, theta_dot, d_theta, d_theta_dot, half_width)]
     n = arrays[0].size
+    wanted = arrays[4] if target is None else np.ascontiguousarray(
+        np.broadcast_to(np.asarray(target, dtype=np.float64), (n,)))
     kind = np.zeros(n, np.int8)
     n_steps = np.zeros(n, np.int32)
     sigma = np.full(n, np.nan)
     rounding = np.zeros(n)
     reached = np.zeros(n, np.int64)
+    bracket = np.zeros((n, 2))
+    bracket[:, 0], bracket[:, 1] = -1.0, 1.0
     if n:
         chunks = max(1, min(n // LANES, 16 * nb.get_num_threads()))
         box = tuple(float(x) for x in box)
-        _shoot(*arrays, np.ascontiguousarray(pinv, dtype=np.float64), box, float(r_max),
-               float(saddle0), float(alpha), float(omega0), float(torque), float(dt),
-               int(n_checks), kind, n_steps, sigma, rounding, reached, chunks)
-    return kind, n_steps, sigma, rounding, reached
+        _shoot(*arrays, wanted, float(budget), np.ascontiguousarray(pinv, dtype=np.float64),
+               box, float(r_max), float(saddle0), float(alpha), float(omega0), float(torque),
+               float(dt), int(n_checks), kind, n_steps, sigma, rounding, reached, bracket,
+               chunks)
+    return kind, n_steps, sigma, rounding, reached, bracket

@@ -40,12 +40,12 @@ def boundary(request):
     return p, base + star[:, None] * normal, normal, saddle, labels.t_max
 
 
-def _shoot(p, shooter, centre, normal, w):
+def _shoot(p, shooter, centre, normal, w, **narrower):
     box = shooter.box
     return shoot(centre[:, 0], centre[:, 1], normal[:, 0], normal[:, 1],
                  np.full(centre.shape[0], w), box.pinv, box.constants, r_max=box.r_max,
                  saddle0=p.saddle_angle, alpha=p.alpha, omega0=p.omega0, torque=p.torque,
-                 dt=DT, n_checks=shooter.n_checks)
+                 dt=DT, n_checks=shooter.n_checks, **narrower)
 
 
 def test_across_the_labels_boundary_certified_beside_it_not(boundary):
@@ -59,9 +59,45 @@ def test_across_the_labels_boundary_certified_beside_it_not(boundary):
         kind, *_ = _shoot(p, shooter, star + delta * w * normal, normal, w)
         assert np.all(kind == CROSSED), delta
     for delta in (-30.0, -3.0, 3.0, 30.0):
-        kind, _, sigma, _, _ = _shoot(p, shooter, star + delta * w * normal, normal, w)
+        kind, _, sigma, *_ = _shoot(p, shooter, star + delta * w * normal, normal, w)
         assert np.all(kind == SAME), delta
         np.testing.assert_allclose(delta + sigma, 0.0, atol=0.1)
+
+
+@pytest.mark.parametrize("wide", [8.0, 128.0, 512.0])
+def test_a_wide_segment_is_narrowed_in_one_orbit(boundary, wide):
+    """A segment ``wide`` times w across the labels' boundary, off-centre by 0.6 of its
+    half-width, asked for a part of half-width w: one orbit certifies a part no wider than
+    2w (plus rounding) that holds the labels' boundary (bisected to tol/64; up to the
+    rounding estimate), with its Newton estimate inside the part."""
+    p, star, normal, _, t_max = boundary
+    shooter = Shooter(p, TOL, dt=DT, t_max=t_max)
+    w, big = HALF_WIDTH * TOL, wide * HALF_WIDTH * TOL
+    for side in (-1.0, 1.0):
+        off = side * 0.6 * big
+        kind, _, sigma, rounding, _, part = _shoot(p, shooter, star - off * normal, normal,
+                                                   big, target=w, budget=TOL)
+        assert np.all(kind == CROSSED)
+        lo, hi = part[:, 0] * big, part[:, 1] * big  # from the centre, star at +off
+        assert np.all(hi - lo <= 2.0 * w * (1.0 + 1e-9))
+        slack = TOL / 64 + rounding
+        assert np.all((lo - slack <= off) & (off <= hi + slack))
+        assert np.all((part[:, 0] <= sigma) & (sigma <= part[:, 1]))
+
+
+def test_a_part_left_undecided_keeps_the_whole_segments_certificate(boundary):
+    """A segment 10⁶ times w across the boundary (its enclosure's β, growing as its width
+    squared, keeps a part of width 2w from being read before the orbit leaves the box):
+    the whole segment's certificate is returned, and it holds the labels' boundary."""
+    p, star, normal, _, t_max = boundary
+    shooter = Shooter(p, TOL, dt=DT, t_max=t_max)
+    big = 1e6 * HALF_WIDTH * TOL
+    kind, *_, part = _shoot(p, shooter, star + 0.3 * big * normal, normal, big,
+                            target=HALF_WIDTH * TOL, budget=TOL)
+    whole = (part[:, 0] == -1.0) & (part[:, 1] == 1.0)
+    assert np.all(kind == CROSSED) and whole.all()
+    # the whole segment: star lies at −0.3 of its half-width from its centre
+    assert np.all((part[:, 0] <= -0.3) & (-0.3 <= part[:, 1]))
 
 
 def test_newton_steps_from_the_exact_curves_distance(boundary):

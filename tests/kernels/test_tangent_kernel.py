@@ -202,10 +202,18 @@ def test_shots_do_not_depend_on_the_threads():
     rng = np.random.default_rng(5)
     n = 2000
     theta, speed = rng.uniform(-2.0, 3.0, n), rng.uniform(-1.0, 2.0, n)
-    args = (theta, speed, np.full(n, 0.6), np.full(n, 0.8), np.full(n, 1e-9), box.pinv,
-            box.constants)
+    d_theta, d_speed = np.full(n, 0.6), np.full(n, 0.8)
+    # and a quarter across the saddle's stable eigen-line, 1e-6 to 1e-5 from the saddle
+    # (within ~1e-10 of the stable manifold): these are crossed
+    lam_u, lam_s = p.saddle_eigenvalues()
+    a = rng.uniform(1e-6, 1e-5, n // 4) * rng.choice([-1.0, 1.0], n // 4)
+    theta[: n // 4] = p.saddle_angle + a / math.hypot(1.0, lam_s)
+    speed[: n // 4] = a * lam_s / math.hypot(1.0, lam_s)
+    d_theta[: n // 4], d_speed[: n // 4] = np.array([1.0, lam_u]) / math.hypot(1.0, lam_u)
+    args = (theta, speed, d_theta, d_speed, np.full(n, 1e-9), box.pinv, box.constants)
+    # a part 1/50 of each segment is read once it is crossed (the parts' own path too)
     kw = dict(r_max=box.r_max, saddle0=p.saddle_angle, alpha=p.alpha, omega0=p.omega0,
-              torque=p.torque, dt=DT, n_checks=2000)
+              torque=p.torque, dt=DT, n_checks=2000, target=2e-11, budget=1e-10)
     threads = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
@@ -217,3 +225,4 @@ def test_shots_do_not_depend_on_the_threads():
     for a, b in zip(one, every, strict=True):
         np.testing.assert_array_equal(a, b)
     assert np.isin(one[0], (1, 2)).sum() > 0  # some reached a saddle and were read
+    assert (one[5][:, 1] - one[5][:, 0] < 2.0).sum() > 0  # and some parts were certified
