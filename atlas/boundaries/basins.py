@@ -27,8 +27,8 @@ class ExactAreas(NamedTuple):
     k:             the wells whose basins meet the window (int64).
     fraction:      each well's basin area ∩ window / window area.
     error:         estimated error of each ``fraction`` (the reference's change from rtol
-                   1e-12 to 1e-13, with torque plus chord_error × that basin's boundary
-                   length in the window, over the window area), at least 4 ulp.
+                   1e-12 to 1e-13, and the rounding of the coordinates at the window's
+                   scale), at least 4 ulp.
     running:       the running basin's fraction (0 when there is no running limit cycle).
     running_error: the same for ``running`` (0 without a cycle).
 

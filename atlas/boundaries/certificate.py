@@ -95,9 +95,8 @@ class Certifier:
         the nearest boundary)."""
         theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
         full = np.broadcast_shapes(theta.shape, theta_dot.shape, np.shape(status))
-        side = self.exact.side(theta, theta_dot)
         theta, theta_dot = np.broadcast_to(theta, full), np.broadcast_to(theta_dot, full)
-        dist, n_near = self.distance(theta, theta_dot)
+        side, dist, n_near = self.exact.side_and_distance(theta, theta_dot)
         status = np.asarray(status)
         has_label, running = labelled(status), status == RUNNING
         agree = (has_label | running) & (_basin(attractor, status) == side)

@@ -71,6 +71,11 @@ class ExactBoundaries(Protocol):
     def distance(self, theta, theta_dot) -> tuple[np.ndarray, np.ndarray]:
         """(distance [rad-ish] to the nearest boundary, its saddle n); (inf, 0) if none."""
 
+    def side_and_distance(self, theta, theta_dot) -> tuple[np.ndarray, np.ndarray,
+                                                           np.ndarray]:
+        """(:meth:`side`, then :meth:`distance`'s two arrays), as one call: the certifier
+        asks for both (with torque, one search gives both)."""
+
     def saddles_within(self, theta, theta_dot, radius: float) -> tuple[np.ndarray, np.ndarray]:
         """(lowest, highest) saddle n of the boundaries within ``radius`` [rad-ish] of each
         point, a superset (flattened; (0, 0) where none)."""
@@ -181,6 +186,9 @@ class UntiltedExact:
             index = self._index(margin)
             dist[todo], n[todo] = index.nearest(theta[todo], theta_dot[todo])
 
+    def side_and_distance(self, theta, theta_dot):
+        return (self.side(theta, theta_dot), *self.distance(theta, theta_dot))
+
     def saddles_within(self, theta, theta_dot, radius: float):
         return self._index(_FIRST_MARGIN).saddles_within(theta, theta_dot, radius)
 
@@ -226,8 +234,8 @@ class TiltedExact:
     """:class:`ExactBoundaries` with torque 0 < |τ| < ω0²: the stable branches of the tilted
     saddles (:class:`atlas.boundaries.tilted.TiltedBoundaries`, kept as ``tilted``; ``cycle``
     as there, or ``tilted`` itself if the caller built it). A boundary's saddle s_j is named
-    n = 2j + 1 (the saddle near (2j + 1)π). The reference error includes the polylines' chord
-    error (the distances are measured to polylines)."""
+    n = 2j + 1 (the saddle near (2j + 1)π). Sides and distances are the branches' (their
+    dense output), found through polylines."""
 
     def __init__(self, pendulum: Pendulum, window: Box, *, cycle=FIND_CYCLE, tilted=None):
         from atlas.boundaries.tilted import TiltedBoundaries
@@ -252,12 +260,15 @@ class TiltedExact:
 
     @property
     def reference_error(self) -> float:
-        """The polylines' error: their change from rtol 1e-12 plus their chord error (made
-        on first use: the areas and nearest points are exact for the dense output)."""
-        return self.tilted.reference_error + self.tilted.chord_error
+        """The branches' error: their change from rtol 1e-12 (made on first use)."""
+        return self.tilted.reference_error
 
     def side(self, theta, theta_dot):
         return self.tilted.side(theta, theta_dot)
+
+    def side_and_distance(self, theta, theta_dot):
+        side, dist, j = self.tilted.side_and_distance(theta, theta_dot)
+        return side, dist, 2 * np.asarray(j, np.int64) + 1
 
     def running_shock(self):
         return self.tilted.running_shock()
@@ -331,6 +342,9 @@ class UnboundedExact:
     def distance(self, theta, theta_dot):
         shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))
         return np.full(shape, np.inf), np.zeros(shape, np.int64)
+
+    def side_and_distance(self, theta, theta_dot):
+        return (self.side(theta, theta_dot), *self.distance(theta, theta_dot))
 
     def nearest_point(self, theta, theta_dot):
         shape = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))

@@ -27,7 +27,11 @@ def segment_distance(px, py, ax, ay, bx, by):
 
 class Segments:
     """Nearest segments of polylines, exactly, and the vertical ray's crossings. ``runs``:
-    list of (θ, θ̇, tag) polylines (those of fewer than two vertices are dropped).
+    list of (θ, θ̇, tag) polylines (those of fewer than two vertices are dropped), or of
+    (θ, θ̇, tag, step, span, shift) where the chords stand for curves: segment i of the run is
+    the chord of the polynomial of a dense output's step ``step[i]`` over the x range
+    ``span[i]``, moved by (shift, 0) (−1: a straight piece; searched by
+    :func:`atlas.kernels.segments.nearer_curves`).
 
     The segments, in their order along the runs (consecutive pieces of smooth curves: tight
     boxes; measured faster than a Morton order of their midpoints), are held in a
@@ -50,6 +54,13 @@ class Segments:
         self.ax, self.ay = cat(lambda r: r[0][:-1]), cat(lambda r: r[1][:-1])
         self.bx, self.by = cat(lambda r: r[0][1:]), cat(lambda r: r[1][1:])
         self.tag = cat(lambda r: np.full(r[0].size - 1, r[2], np.int64)).astype(np.int64)
+        # the curves the chords stand for, where the runs give them: per segment the step of
+        # a dense output and its x span, and the θ shift of the run (:meth:`nearest_curves`)
+        curved = bool(runs) and all(len(r) == 6 for r in runs)
+        self.step = cat(lambda r: r[3]).astype(np.int64) if curved else np.zeros(0, np.int64)
+        self.span = cat(lambda r: r[4]).reshape(-1, 2) if curved else np.zeros((0, 2))
+        self.shift = cat(lambda r: np.full(r[0].size - 1, r[5], float)) if curved \
+            else np.zeros(0)
         self.xlo, self.xhi, self.ylo, self.yhi, self.start = build(self.ax, self.ay, self.bx,
                                                                    self.by)
 

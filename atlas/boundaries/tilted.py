@@ -8,10 +8,11 @@ along the stable eigenvector until they leave a band of θ̇ around the window; 
 branch is a 2π translate, and
 (θ, θ̇, τ) → (−θ, −θ̇, −τ) gives τ < 0. Above the homoclinic torque the basins are tongues
 in a running basin (*bistable*, checked against :func:`atlas.physics.running.limit_cycle`),
-below it strips. The branches are polylines with chord error ≤ ``CHORD_TOL``; sides (ray
-parity), distances (:class:`atlas.boundaries.segments.Segments`) and areas (polygon
-clipping) are exact for them, their error ``chord_error`` + ``reference_error`` (the change
-from rtol 1e-12 to 1e-13). Units: θ [rad], θ̇ [rad s⁻¹], distances and areas in the (θ, θ̇)
+below it strips. Sides (ray parity over polylines of chord error ≤ ``CHORD_TOL``, the nearest
+point's side within reach of the arcs), distances (the chords searched,
+:class:`atlas.boundaries.segments.Segments`, the arcs measured by Newton's method) and areas
+(curved polygons clipped) are exact for the dense output, their error ``reference_error``
+(the change from rtol 1e-12 to 1e-13). Units: θ [rad], θ̇ [rad s⁻¹], distances and areas in the (θ, θ̇)
 plane with both as one unit ("rad-ish"). References: Krauskopf et al., Int. J. Bifurcation
 Chaos 15 (2005) 763; Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5–6; Levi, Hoppensteadt &
 Miranker, Q. Appl. Math. 36 (1978) 167. Derivation: docs/design/tilted-boundaries.md.
@@ -29,10 +30,20 @@ from atlas.boundaries.manifold import RTOL, RTOL_CHECK, _DenseOutput
 from atlas.boundaries.segments import Segments, segment_distance
 from atlas.physics.pendulum import START_DISTANCE, Pendulum
 
-__all__ = ["TiltedBoundaries", "RUNNING_SIDE", "CHORD_TOL", "MAX_SEGMENT", "MARGIN"]
+__all__ = ["TiltedBoundaries", "RUNNING_SIDE", "CHORD_TOL", "CURVE_CHORD_TOL", "MAX_SEGMENT",
+           "MARGIN"]
 
-#: Largest distance [rad-ish] of a branch from its polyline's chords, aimed for.
-CHORD_TOL = 1e-8
+#: Largest distance [rad-ish] of a branch from its polyline's chords, aimed for: the chords
+#: the sides and distances search (the distances themselves are measured to the dense
+#: output), whose vertices the trace starts from.
+CHORD_TOL = 1e-6
+#: The same for the finer polylines of :meth:`TiltedBoundaries.curves` (the basin polygons
+#: of the Gaussian basin stability, whose error their chord error enters).
+CURVE_CHORD_TOL = 1e-8
+#: How far [units of the largest chord distance measured, at the middle time of each chord]
+#: a branch is taken to stray from its chords: the distance search's reach beyond them, and
+#: the band around the curves where a side is read off the nearest point instead.
+SLACK = 2.0
 #: Longest polyline segment [rad-ish] (keeps the coarse chords of the distance search short:
 #: their length enters its pruning bound).
 MAX_SEGMENT = 0.004
@@ -138,12 +149,32 @@ def _near_first(search, near: float | None, bound: float):
     return search(bound)
 
 
+class _Polyline:
+    """A polyline of Γ_0 = L_0 ∪ R_0 (canonical): ``left``, ``right`` (2, n) each from the
+    saddle out (the saddle first), ``theta``, ``theta_dot`` (from L_0's end through the
+    saddle to R_0's end), ``times`` (each branch's reversed times at its vertices, the
+    saddle's left out), ``chord_error``; and per segment of ``theta``: ``step``, the step of
+    the packed dense output (:attr:`_Fundamental.packed`) whose polynomial it is the chord
+    of (−1 for the two straight pieces at the saddle), and ``span``, its x range there."""
+
+    def __init__(self, fundamental: _Fundamental, parts, times, chord_error: float):
+        saddle = np.array([[fundamental.saddle], [0.0]])
+        self.left, self.right = (np.concatenate([saddle, xy], axis=1) for xy in parts)
+        self.theta, self.theta_dot = np.concatenate([self.left[:, ::-1], self.right[:, 1:]],
+                                                    axis=1)
+        self.times, self.chord_error = times, chord_error
+        (l_step, l_span), (r_step, r_span) = (
+            fundamental.pieces_of(i, t) for i, t in enumerate(times))
+        self.step = np.concatenate([l_step[::-1], r_step])
+        self.span = np.ascontiguousarray(np.concatenate([l_span[::-1, ::-1], r_span]))
+
+
 class _Fundamental:
     """Γ_0 = L_0 ∪ R_0 of the canonical pendulum ``p`` (τ > 0) at rtol ``rtol``: its two
     branches integrated (``ends``, ``bistable``), as polynomial pieces (``pieces``, from L_0's
-    end through the saddle to R_0's end: the exact areas and nearest points) and, once
-    :meth:`polyline` is called, as one polyline (``left``, ``right``, ``theta``,
-    ``theta_dot``, ``times``, ``chord_error``: sides and distances of the grid's points)."""
+    end through the saddle to R_0's end: the exact areas and nearest points), packed
+    (``packed``: both branches' dense outputs, L_0's steps first: the distance search's
+    curves) and as polylines (:meth:`polyline`: sides and distances of the grid's points)."""
 
     def __init__(self, p: Pendulum, rtol: float, bottom: float, top: float):
         from atlas.kernels.dense_curves import reversed_pieces, segment
@@ -160,31 +191,48 @@ class _Fundamental:
             _pieces(right)])
         self.theta_range = (float(min(left.y[:, 0].min(), right.y[:, 0].min())),
                             float(max(left.y[:, 0].max(), right.y[:, 0].max())))
-        self.times = None
+        self._polylines = {}
 
-    def polyline(self, times=None) -> _Fundamental:
-        """Make the polyline (once): through the reversed times ``times`` (the per-branch
-        times of another _Fundamental) if given, else refined to CHORD_TOL. Returns self."""
-        if self.times is not None:
-            return self
-        saddle = np.array([[self.saddle], [0.0]])
-        chord_error, all_times, parts = 0.0, [], []
-        for i, (dense, sol, _) in enumerate(self.branches):
-            steps = sol.t
-            if times is None:
-                t, xy, err = _refine(dense, steps, CHORD_TOL, MAX_SEGMENT)
-                chord_error = max(chord_error, err)
-            else:
-                t = np.append(times[i][times[i] < steps[-1]], steps[-1])
-                xy = dense(t)
-            all_times.append(t)
-            parts.append(np.concatenate([saddle, xy], axis=1))
-        self.chord_error = chord_error
-        self.left, self.right = parts
-        self.theta, self.theta_dot = np.concatenate([self.left[:, ::-1], self.right[:, 1:]],
-                                                    axis=1)
-        self.times = all_times
-        return self
+    @cached_property
+    def packed(self):
+        """(F (steps, powers, 2) highest power first, y_old (steps, 2)) of both branches'
+        dense outputs, L_0's steps first, and the first step of each branch."""
+        dense = [d for d, _, _ in self.branches]
+        return (np.ascontiguousarray(np.concatenate([d.F for d in dense])),
+                np.ascontiguousarray(np.concatenate([d.y_old for d in dense])),
+                (0, dense[0].h.size))
+
+    def pieces_of(self, branch: int, times):
+        """(step in :attr:`packed`, x span (n, 2)) of each segment of ``branch``'s polyline
+        through the saddle and the vertices at reversed ``times``: −1 for the straight piece
+        from the saddle, then the step that holds each chord's middle time."""
+        dense = self.branches[branch][0]
+        step = np.clip(np.searchsorted(dense.t, 0.5 * (times[:-1] + times[1:]), "right") - 1,
+                       0, dense.h.size - 1)
+        span = np.column_stack([(times[:-1] - dense.t_old[step]) / dense.h[step],
+                                (times[1:] - dense.t_old[step]) / dense.h[step]])
+        first = self.packed[2][branch]
+        return (np.concatenate([[-1], step + first]).astype(np.int64),
+                np.concatenate([np.zeros((1, 2)), span]))
+
+    def polyline(self, tol: float = CHORD_TOL, times=None) -> _Polyline:
+        """The polyline (made once per ``tol``): through the reversed times ``times`` (the
+        per-branch times of another polyline) if given, else refined to ``tol``."""
+        key = tol if times is None else ("times", id(times))
+        if key not in self._polylines:
+            chord_error, all_times, parts = 0.0, [], []
+            for i, (dense, sol, _) in enumerate(self.branches):
+                steps = sol.t
+                if times is None:
+                    t, xy, err = _refine(dense, steps, tol, MAX_SEGMENT)
+                    chord_error = max(chord_error, err)
+                else:
+                    t = np.append(times[i][times[i] < steps[-1]], steps[-1])
+                    xy = dense(t)
+                all_times.append(t)
+                parts.append(xy)
+            self._polylines[key] = _Polyline(self, parts, all_times, chord_error)
+        return self._polylines[key]
 
     @property
     def bistable(self) -> bool:
@@ -268,20 +316,32 @@ class TiltedBoundaries:
 
     # ------------------------------------------------------------------ polylines
     @cached_property
-    def _fine(self) -> _Fundamental:
-        """Γ_0 at rtol with its polyline refined to CHORD_TOL (made on first use: the areas
-        and nearest points do not need it)."""
+    def _fine(self) -> _Polyline:
+        """Γ_0 at rtol, its polyline refined to CHORD_TOL (made on first use: the areas and
+        nearest points do not need it): the chords of the sides and distances."""
         return self._branches.polyline()
 
     @cached_property
-    def _coarse(self) -> _Fundamental:
+    def _coarse(self) -> _Polyline:
         """Γ_0 at RTOL_CHECK, its polyline through the fine one's reversed times."""
-        return self._branches_check.polyline(self._fine.times)
+        return self._branches_check.polyline(times=self._fine.times)
 
     @cached_property
     def chord_error(self) -> float:
-        """The polylines' chord error [rad-ish] (≤ CHORD_TOL)."""
+        """The search polylines' chord error [rad-ish] (≤ CHORD_TOL): how far apart the
+        chords the sides and distances search and the curves they stand for are (the
+        results are the curves': it is not their error)."""
         return self._fine.chord_error
+
+    @property
+    def curves_chord_error(self) -> float:
+        """The chord error [rad-ish] (≤ CURVE_CHORD_TOL) of :meth:`curves`' polylines."""
+        return self._branches.polyline(CURVE_CHORD_TOL).chord_error
+
+    @property
+    def _slack(self) -> float:
+        """How far [rad-ish] a branch is taken to stray from its search chords."""
+        return SLACK * self.chord_error
 
     @cached_property
     def reference_error(self) -> float:
@@ -335,7 +395,8 @@ class TiltedBoundaries:
     def curves(self, clip: bool = True):
         """The branches that meet the window: a list of (saddle index j, branch 'left' or
         'right', θ [rad], θ̇ [rad s⁻¹]) in the actual frame, each from its saddle outward
-        (the first vertex is the saddle itself) to where it leaves the band. With ``clip``,
+        (the first vertex is the saddle itself) to where it leaves the band, as polylines
+        with chord error ≤ CURVE_CHORD_TOL (:attr:`curves_chord_error`). With ``clip``,
         only the parts in the window (each run of vertices inside, with one vertex beyond
         either end so that it reaches the window's edge), one entry per run."""
         return list(self.iter_curves(clip))
@@ -344,7 +405,7 @@ class TiltedBoundaries:
         """:meth:`curves` one entry at a time (unclipped, all translates of a monostable
         pendulum's branches together take hundreds of MB; one at a time, a few)."""
         (a, b), (v0, v1) = self.window
-        for j, branch, vertices in self.branches():
+        for j, branch, vertices, _ in self.branches(CURVE_CHORD_TOL):
             theta, theta_dot = vertices()
             if not clip:
                 yield j, branch, theta, theta_dot
@@ -353,16 +414,20 @@ class TiltedBoundaries:
             for start, stop in _runs_around(inside):
                 yield j, branch, theta[start:stop], theta_dot[start:stop]
 
-    def branches(self):
-        """The unclipped branches of :meth:`iter_curves`, each as (saddle index j, branch,
-        ``vertices``): ``vertices(index=slice(None))`` gives (θ [rad], θ̇ [rad s⁻¹]) of the
-        vertices ``index`` (a slice or an index array) of that branch — the same doubles as
-        the whole branch's there, without shifting the whole polyline to Γ_k for a few."""
-        f = self._fine
+    def branches(self, tol: float = CHORD_TOL):
+        """The unclipped branches (polylines of chord error ≤ ``tol``), each as (saddle
+        index j, branch, ``vertices``, ``on_curve``): ``vertices(index=slice(None))`` gives
+        (θ [rad], θ̇ [rad s⁻¹]) of the vertices ``index`` (a slice or an index array) of that
+        branch — the same doubles as the whole branch's there, without shifting the whole
+        polyline to Γ_k for a few —, ``on_curve(segment, fraction)`` the points of the
+        branch itself (its dense output) at the reversed time that fraction of the way along
+        each segment (between vertices segment and segment + 1)."""
+        f = self._branches.polyline(tol)
         for k in self._translates(*self._canonical_window()[0]):
-            for name, xy in (("left", f.left), ("right", f.right)):
+            for i, (name, xy) in enumerate((("left", f.left), ("right", f.right))):
                 branch = name if self.sign > 0 else {"left": "right", "right": "left"}[name]
-                yield self._saddle(k), branch, partial(self._translate, xy, k)
+                yield (self._saddle(k), branch, partial(self._translate, xy, k),
+                       partial(self._on_curve, i, f.times[i], k))
 
     def _translate(self, xy, k: int, index=slice(None)):
         """(θ [rad], θ̇ [rad s⁻¹]) in the actual frame of the vertices ``index`` of Γ_0's
@@ -371,22 +436,43 @@ class TiltedBoundaries:
         vertex, however many are asked)."""
         return self.sign * (xy[0, index] + _TWO_PI * k), self.sign * xy[1, index]
 
+    def _on_curve(self, branch: int, times, k, segment, fraction):
+        """(θ [rad], θ̇ [rad s⁻¹]) in the actual frame of Γ_k's branch ``branch`` (0: L, 1: R)
+        at the reversed time ``fraction`` of the way along its polyline's segments
+        ``segment`` (vertex times ``times``, the saddle as vertex 0; the first segment is the
+        straight piece from the saddle)."""
+        dense = self._branches.branches[branch][0]
+        segment, fraction = np.asarray(segment, np.int64), np.asarray(fraction, float)
+        t = np.concatenate([[0.0], times])
+        at = t[segment] + fraction * (t[segment + 1] - t[segment])
+        x, v = dense(np.maximum(at, times[0]))
+        # the straight piece: the saddle to the branch's first point
+        straight = segment == 0
+        if straight.any():
+            f = fraction[straight]
+            x[straight] = self._branches.saddle + f * (x[straight] - self._branches.saddle)
+            v[straight] = f * v[straight]
+        return self.sign * (x + _TWO_PI * np.asarray(k)), self.sign * v
+
     def axis_speeds(self) -> np.ndarray:
-        """θ̇ [rad s⁻¹] where the branches in the window (:meth:`curves`' clipped runs) cross
-        the axis θ = 0 (a segment whose ends have θ of opposite signs), by linear
-        interpolation along the segment; unsorted. Found on Γ_0: Γ_k's segment crosses θ = 0
-        where Γ_0's crosses θ = −2πk (each segment, shorter than MAX_SEGMENT, can cross one
-        line only), so only the segments that cross and their neighbours (the clipping) are
-        shifted."""
+        """θ̇ [rad s⁻¹] where the branches in the window (:meth:`curves`' clipped runs of the
+        search polylines) cross the axis θ = 0, on the branches themselves (a segment whose
+        ends have θ of opposite signs holds a crossing of its arc, found by bisection in
+        reversed time on the dense output, :meth:`_axis_crossings`); unsorted. Found on
+        Γ_0: Γ_k's segment crosses θ = 0 where Γ_0's crosses θ = −2πk (each segment, shorter
+        than MAX_SEGMENT, can cross one line only), so only the segments that cross and their
+        neighbours (the clipping) are shifted."""
         (a, b), (v0, v1) = self.window
         ks = self._translates(*self._canonical_window()[0])
         speeds = []
-        for xy in (self._fine.left, self._fine.right):
+        f = self._fine
+        for branch, xy in enumerate((f.left, f.right)):
             x = xy[0]
             k = np.rint(-0.5 * (x[:-1] + x[1:]) / _TWO_PI).astype(np.int64)  # the one line
             seg = np.flatnonzero((k >= ks.start) & (k < ks.stop))
             shifted = (x[seg] + _TWO_PI * k[seg], x[seg + 1] + _TWO_PI * k[seg])
             seg = seg[np.sign(shifted[0]) * np.sign(shifted[1]) < 0]
+            crossing = []
             for i, k_i in zip(seg.tolist(), k[seg].tolist()):
                 # the segment belongs to a clipped run when both ends are next to a vertex of
                 # Γ_k in the window (:meth:`iter_curves`)
@@ -394,12 +480,26 @@ class TiltedBoundaries:
                 theta, theta_dot = self._translate(xy, k_i, near)
                 inside = (theta >= a) & (theta <= b) & (theta_dot >= v0) & (theta_dot <= v1)
                 at = i - near[0]  # the segment's first end within ``near``
-                if not (inside[max(at - 1, 0):at + 2].any() and inside[at:at + 3].any()):
-                    continue
-                (t0, t1), (w0, w1) = theta[at:at + 2], theta_dot[at:at + 2]
-                f = t0 / (t0 - t1)
-                speeds.append(w0 + f * (w1 - w0))
-        return np.array(speeds)
+                if inside[max(at - 1, 0):at + 2].any() and inside[at:at + 3].any():
+                    crossing.append((i, k_i))
+            if crossing:
+                speeds.append(self._axis_crossings(branch, f.times[branch],
+                                                   *np.array(crossing).T))
+        return np.concatenate(speeds) if speeds else np.zeros(0)
+
+    def _axis_crossings(self, branch: int, times, segment, k) -> np.ndarray:
+        """θ̇ [rad s⁻¹] where Γ_k's branch ``branch`` crosses θ = 0 within each of its
+        polyline's segments ``segment`` (whose ends have θ of opposite signs): bisection on
+        the fraction of each segment's reversed time, all at once, to 2⁻⁵⁰ of it."""
+        lo, hi = np.zeros(segment.size), np.ones(segment.size)
+        start, _ = self._on_curve(branch, times, k, segment, lo)
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            theta, _ = self._on_curve(branch, times, k, segment, mid)
+            same = np.sign(theta) == np.sign(start)
+            lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+        theta, theta_dot = self._on_curve(branch, times, k, segment, 0.5 * (lo + hi))
+        return theta_dot
 
     def vertices_within(self, theta_range, theta_dot_range):
         """(θ [rad], θ̇ [rad s⁻¹], saddle j) of every vertex of every branch (:meth:`iter_curves`,
@@ -426,9 +526,25 @@ class TiltedBoundaries:
     def side(self, theta, theta_dot):
         """The basin of the exact equation each point (θ [rad], θ̇ [rad s⁻¹], broadcast) lies
         in: the well k (rest state (arcsin(τ/ω0²) + 2πk, 0), the kernels' ``attractor``), or
-        :data:`RUNNING_SIDE` for the running basin. Exact for the polylines (points within
-        ``chord_error`` + ``reference_error`` of a boundary may get the other side). θ̇ must
-        lie within ``band``; ValueError otherwise."""
+        :data:`RUNNING_SIDE` for the running basin (:meth:`side_and_distance`; the branches
+        are searched only as far as its band around them). θ̇ must lie within ``band``;
+        ValueError otherwise."""
+        return self._sides(theta, theta_dot, full=False)[0]
+
+    def side_and_distance(self, theta, theta_dot):
+        """(:meth:`side`, :meth:`distance`'s distance and saddle) of each point, from one
+        search. The side is the parity of the upward vertical ray's crossings with the
+        search polylines' chords, exact for the branches (their dense output) wherever a
+        point lies farther from them than the chords stray (SLACK·``chord_error``): only
+        between a chord and its arc can the two differ. A point nearer than twice that is
+        given the side of the point 3·SLACK·``chord_error`` from its nearest point of the
+        branches, on its own side (along the normal there: beyond the chords). Its error:
+        ``reference_error``."""
+        return self._sides(theta, theta_dot, full=True)
+
+    def _sides(self, theta, theta_dot, full: bool):
+        """:meth:`side_and_distance`; without ``full`` the branches are searched within the
+        band 2·SLACK·``chord_error`` only (the distances are inf beyond it)."""
         x, v = self._canonical(theta, theta_dot)
         shape = x.shape
         x, v = x.ravel(), v.ravel()
@@ -437,18 +553,29 @@ class TiltedBoundaries:
             raise ValueError(f"theta_dot must lie within the band {self.band} of the "
                              "integrated boundaries")
         if x.size == 0:
-            return np.zeros(shape, np.int64)
+            return (np.zeros(shape, np.int64), np.zeros(shape), np.zeros(shape, np.int64))
+        dist, k, foot_x, foot_y = self._nearest_curves(
+            x, v, None if full else 2.0 * self._slack)
+        out = self._ray_sides(x, v)
+        near = np.flatnonzero((dist <= 2.0 * self._slack) & (dist > 0.0))
+        if near.size:
+            reach = 3.0 * self._slack / dist[near]
+            out[near] = self._ray_sides(foot_x[near] + reach * (x[near] - foot_x[near]),
+                                        foot_y[near] + reach * (v[near] - foot_y[near]))
+        if self.sign < 0:
+            out = np.where(out == RUNNING_SIDE, out, -out)
+        return (out.reshape(shape), dist.reshape(shape), self._saddle(k).reshape(shape))
+
+    def _ray_sides(self, x, v):
+        """The side of canonical points by the ray's crossings with the search chords."""
         lo, hi = float(x.min()), float(x.max())
         ks = self._translates(lo, hi)
         f = self._fine
         # L_k continues left above the band when it leaves at the top
-        flip = (f.theta[0] + _TWO_PI * np.arange(ks.start, ks.stop) if f.ends[0] == "top"
-                else np.full(len(ks), -np.inf))
+        flip = (f.theta[0] + _TWO_PI * np.arange(ks.start, ks.stop)
+                if self._branches.ends[0] == "top" else np.full(len(ks), -np.inf))
         index = self._index(lo - self.margin - MAX_SEGMENT, hi + self.margin + MAX_SEGMENT)
-        out = index.sides(x, v, ks.start, ks.stop - 1, flip, self.bistable, RUNNING_SIDE)
-        if self.sign < 0:
-            out = np.where(out == RUNNING_SIDE, out, -out)
-        return out.reshape(shape)
+        return index.sides(x, v, ks.start, ks.stop - 1, flip, self.bistable, RUNNING_SIDE)
 
     # ------------------------------------------------------------------ distance
     def _index(self, theta_lo: float, theta_hi: float) -> Segments:
@@ -473,14 +600,16 @@ class TiltedBoundaries:
 
     def _segments(self, theta_lo: float, theta_hi: float) -> Segments:
         """The segments of every Γ_k (canonical) with a vertex in θ ∈ [lo, hi], and their
-        neighbours: per translate k, the runs of Γ_0's vertices in [lo − 2πk, hi − 2πk], one
-        vertex beyond either end, shifted by 2πk."""
+        neighbours, with the curves they stand for: per translate k, the runs of Γ_0's
+        search polyline's vertices in [lo − 2πk, hi − 2πk], one vertex beyond either end,
+        shifted by 2πk."""
         f = self._fine
         runs = []
         for k in self._translates(theta_lo, theta_hi):
             shift = _TWO_PI * k
             inside = (f.theta >= theta_lo - shift) & (f.theta <= theta_hi - shift)
-            runs.extend((f.theta[start:stop] + shift, f.theta_dot[start:stop], k)
+            runs.extend((f.theta[start:stop] + shift, f.theta_dot[start:stop], k,
+                         f.step[start:stop - 1], f.span[start:stop - 1], shift)
                         for start, stop in _runs_around(inside))
         return Segments(runs)
 
@@ -489,27 +618,41 @@ class TiltedBoundaries:
         point (θ [rad], θ̇ [rad s⁻¹], broadcast) to the nearest basin boundary, and the index j
         of that boundary's saddle s_j (the translate of the branches through it).
 
-        The boundaries within θ ± ``margin`` of the points are searched first (the window's
-        index, :meth:`_index`). A point is done when the distance found is at most its
-        clearance from the θ range the searched segments cover (less MAX_SEGMENT): every
-        other segment lies beyond that range, farther. The others are searched again on the
-        boundaries within θ ± the largest distance found (no nearer boundary can lie beyond;
-        a whole turn more if none was found), each from its squared distance found, a bound
-        that prunes the wider search at once, skipping the boxes within the θ range searched
-        before (:func:`atlas.kernels.segments.nearer_segments`: the same minimum as a search
-        of the wider index alone), and so on. Exact for the polylines wherever the distance
-        is at most the point's clearance from the band's edges beyond which the boundaries
-        continue (the bottom, and the top when the branches leave there: ``bistable``
-        false); for points of the window that is at least ``margin``. The error:
-        ``chord_error`` + ``reference_error``."""
-        from atlas.kernels.segments import nearer_segments
-
+        The distance is to the branches themselves, their dense output: the search
+        polylines' chords, each within SLACK·``chord_error`` of its arc, are searched for
+        the arcs that may be nearest, and each such arc is measured by Newton's method on its
+        polynomial (:func:`atlas.kernels.segments.nearer_curves`). The boundaries within
+        θ ± ``margin`` of the points are searched first (the window's index, :meth:`_index`).
+        A point is done when the distance found is at most its clearance from the θ range
+        the searched segments cover (less MAX_SEGMENT and the slack): every other arc lies
+        beyond that range, farther. The others are searched again on the boundaries within
+        θ ± the largest distance found (no nearer boundary can lie beyond; a whole turn more
+        if none was found), each from its squared distance found, a bound that prunes the
+        wider search at once, skipping the boxes within the θ range searched before: the
+        same minimum as a search of the wider index alone, and so on. Exact for the dense
+        output wherever the distance is at most the point's clearance from the band's edges
+        beyond which the boundaries continue (the bottom, and the top when the branches
+        leave there: ``bistable`` false); for points of the window that is at least
+        ``margin``. The error: ``reference_error``."""
         x, v = self._canonical(theta, theta_dot)
         shape = x.shape
-        x, v = x.ravel(), v.ravel()
         if x.size == 0:
             return np.zeros(shape), np.zeros(shape, np.int64)
-        dist2, k = np.full(x.size, np.inf), np.zeros(x.size, np.int64)
+        dist, k, _, _ = self._nearest_curves(x.ravel(), v.ravel())
+        return dist.reshape(shape), self._saddle(k).reshape(shape)
+
+    def _nearest_curves(self, x, v, within: float | None = None):
+        """(distance, canonical k, foot θ, foot θ̇) of canonical points (flat) to the nearest
+        branch (:meth:`distance`'s search); with ``within`` [rad-ish], only the branches that
+        near (inf and NaN feet beyond: one search of the window's index, which holds every
+        branch within reach of its points)."""
+        from atlas.kernels.segments import nearer_curves
+
+        dist2 = np.full(x.size, np.inf if within is None else within * within)
+        k = np.zeros(x.size, np.int64)
+        foot_x, foot_y = np.full(x.size, np.nan), np.full(x.size, np.nan)
+        F, y_old, _ = self._branches.packed
+        slack = self._slack
         todo, reach = np.arange(x.size), self.margin
         searched = (math.inf, -math.inf)  # θ where every segment has been searched
         while todo.size:
@@ -520,13 +663,19 @@ class TiltedBoundaries:
             covered = next((key for key, kept in self._indices.items() if kept is index),
                            wanted)
             px, py, d2, near = x[todo], v[todo], dist2[todo], k[todo]
-            nearer_segments(px, py, index.ax, index.ay, index.bx, index.by, index.tag,
-                            index.xlo, index.xhi, index.ylo, index.yhi, index.start, *searched,
-                            d2, near)
-            dist2[todo], k[todo] = d2, near
+            fx, fy = foot_x[todo], foot_y[todo]
+            nearer_curves(px, py, index.ax, index.ay, index.bx, index.by, index.tag,
+                          index.xlo, index.xhi, index.ylo, index.yhi, index.start, *searched,
+                          slack, index.step, index.span, index.shift, F, y_old, d2, near, fx,
+                          fy)
+            dist2[todo], k[todo], foot_x[todo], foot_y[todo] = d2, near, fx, fy
+            if within is not None:
+                return np.where(np.isnan(foot_x), np.inf, np.sqrt(dist2)), k, foot_x, foot_y
             found = np.sqrt(d2)
-            # every segment the index lacks lies beyond the θ range it covers
-            beyond = found > np.minimum(px - covered[0], covered[1] - px) - MAX_SEGMENT
+            # every arc the index lacks lies beyond the θ range it covers (its chords do,
+            # and the arc strays from them by the slack at most)
+            beyond = found > (np.minimum(px - covered[0], covered[1] - px) - MAX_SEGMENT
+                              - slack)
             todo, found = todo[beyond], found[beyond]
             # the segments there are searched (the index holds every one with a vertex in its
             # θ range: those within it, to the rounding of the translates' shifts)
@@ -534,7 +683,7 @@ class TiltedBoundaries:
             # none nearer than the distance found lies beyond it (a whole turn if none found)
             reach = float(found.max(initial=reach + _TWO_PI)) if np.all(np.isfinite(found)) \
                 else reach + _TWO_PI
-        return np.sqrt(dist2).reshape(shape), self._saddle(k).reshape(shape)
+        return np.sqrt(dist2), k, foot_x, foot_y
 
     # ------------------------------------------------------------------ areas
     def _polygon(self, f: _Fundamental) -> np.ndarray:

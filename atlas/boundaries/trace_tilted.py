@@ -36,6 +36,7 @@ from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
 from atlas.boundaries.crossings import PROBE, tilted_crossings
 from atlas.boundaries.predictor import fine_spacing
 from atlas.boundaries.shooting import HALF_WIDTH, Shooter, left_to_labels
+from atlas.boundaries.tilted import SLACK
 from atlas.boundaries.window import Window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
@@ -133,7 +134,7 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
             "n_skipped": np.int64(skipped),
             "discrepancy": discrepancy, "discrepancy_bound": DISCREPANCY_BOUND,
             "polyline_error": exact.chord_error,
-            "reference_error": exact.reference_error + exact.chord_error,
+            "reference_error": exact.reference_error,
             "n_orbits": labels.orbits + shooter.shots, "n_shots": shooter.shots,
             "rounding": shooter.rounding, "n_unresolved": labels.unresolved,
             "warnings": "\n".join(problems),
@@ -160,7 +161,7 @@ def _vertices(exact, window: Window, max_spacing: float):
     parts = []  # (saddle j, branch, vertex numbers, θ, θ̇, arc lengths) per branch
     fine = fine_spacing(window)
     arcs = {}  # every translate of a branch has its arc lengths and picks: computed once
-    for j, name, vertices in exact.branches():  # only the picked vertices shifted to Γ_k
+    for j, name, vertices, on_curve in exact.branches():  # only the picks shifted to Γ_k
         if name not in arcs:
             theta, theta_dot = vertices()
             step = np.hypot(np.diff(theta), np.diff(theta_dot))
@@ -171,7 +172,8 @@ def _vertices(exact, window: Window, max_spacing: float):
         along, picks = arcs[name]
         pos, (x, v) = along[picks], vertices(picks)
         if fine < max_spacing:  # a small window: points on the chords, ``fine`` apart
-            pos, x, v = _fine_points(window, fine, along, *vertices(), pos, x, v)
+            pos, x, v = _fine_points(window, fine, along, *vertices(), on_curve,
+                                     SLACK * exact.chord_error, pos, x, v)
         number = np.flatnonzero(window.margin(x, v) >= 0)  # along the branch: gaps outside
         parts.append((np.full(number.size, j, np.int64),
                       np.full(number.size, schema.BRANCHES.index(name), np.int8),
@@ -185,17 +187,20 @@ def _vertices(exact, window: Window, max_spacing: float):
     return cat(0, np.int64), cat(1, np.int8), cat(2, np.int32), cat(5, float), base
 
 
-def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v):
+def _fine_points(window: Window, fine: float, along, theta, theta_dot, on_curve,
+                 stray: float, pos, x, v):
     """The picks (arc length ``pos``, θ ``x``, θ̇ ``v``) of a branch's polyline (arc
     lengths ``along`` at its vertices ``theta``, ``theta_dot``), with points added on the
-    chords that come within ``fine`` [rad-ish] of the window, ``fine`` apart along the branch
-    (from ``fine`` off the saddle: there the chord is the stable eigenvector, to
-    O(START_DISTANCE²)); sorted along the branch. The chords are within the polylines' chord
-    error of the exact branch, far inside the bisection's first bracket."""
+    branch itself (``on_curve``: :meth:`atlas.boundaries.tilted.TiltedBoundaries.branches`)
+    along the chords that come within ``fine`` + ``stray`` [rad-ish] of the window (the
+    branch strays from its chords by ``stray`` at most), ``fine`` apart along them (from ``fine``
+    off the saddle: there the branch is the stable eigenvector, to O(START_DISTANCE²));
+    sorted along the branch."""
     (t0, t1), (v0, v1) = window.box
     ax, av, bx, bv = theta[:-1], theta_dot[:-1], theta[1:], theta_dot[1:]
-    near = ((np.maximum(ax, bx) >= t0 - fine) & (np.minimum(ax, bx) <= t1 + fine)
-            & (np.maximum(av, bv) >= v0 - fine) & (np.minimum(av, bv) <= v1 + fine))
+    reach = fine + stray
+    near = ((np.maximum(ax, bx) >= t0 - reach) & (np.minimum(ax, bx) <= t1 + reach)
+            & (np.maximum(av, bv) >= v0 - reach) & (np.minimum(av, bv) <= v1 + reach))
     extra = [np.arange(math.ceil(max(along[i], fine) / fine), math.floor(along[i + 1] / fine)
                        + 1) * fine for i in np.flatnonzero(near)]
     if not extra:
@@ -205,8 +210,7 @@ def _fine_points(window: Window, fine: float, along, theta, theta_dot, pos, x, v
     seg = np.clip(np.searchsorted(along, s) - 1, 0, along.size - 2)
     f = (s - along[seg]) / np.where(along[seg + 1] > along[seg], along[seg + 1] - along[seg],
                                     1.0)
-    sx = theta[seg] + f * (theta[seg + 1] - theta[seg])
-    sv = theta_dot[seg] + f * (theta_dot[seg + 1] - theta_dot[seg])
+    sx, sv = on_curve(seg, f)
     order = np.argsort(np.concatenate([pos, s]), kind="stable")
     return (np.concatenate([pos, s])[order], np.concatenate([x, sx])[order],
             np.concatenate([v, sv])[order])

@@ -1,5 +1,5 @@
-"""Polylines, compiled: made from a dense output, and against points (the nearest segment and
-the vertical ray's crossings).
+"""Polylines, compiled: made from a dense output, and against points (the nearest segment, or
+the nearest arc of the curve it is a chord of, and the vertical ray's crossings).
 
 The tilted basin boundaries (:mod:`atlas.boundaries.tilted`) are polylines of some 10⁵
 short segments each, cut from DOP853's dense output by :func:`refine` until every chord lies
@@ -12,7 +12,10 @@ by a depth-first search, nearest box first, that skips every box farther than th
 distance found: exact for the polylines (the box distance is a lower bound). Each search
 starts from the leaf of the previous point's nearest segment (neighbours on a grid share
 their nearest boundary: a tight first bound); :func:`nearer_segments` also from a bound the
-caller knows (a search among fewer segments before).
+caller knows (a search among fewer segments before). :func:`nearer_curves` searches the
+chords for the arcs they stand for (each within a slack of its chord: the reach of every
+bound grows by it) and measures each arc within reach by Newton's method on its piece of the
+dense output: exact for the dense output.
 :func:`ray_sides` counts, per point, the crossings of the upward vertical ray with the
 segments of each tag (a segment covers θ ∈ [min, max) of its ends, its θ̇ at θ by linear
 interpolation), for the side rule of :meth:`atlas.boundaries.tilted.TiltedBoundaries.side`:
@@ -31,7 +34,8 @@ import numpy as np
 from atlas.kernels import cached_njit
 from atlas.kernels.dop853 import dense_component, dense_step
 
-__all__ = ["FAN", "refine", "build", "nearest_segments", "nearer_segments", "ray_sides"]
+__all__ = ["FAN", "refine", "build", "nearest_segments", "nearer_segments", "nearer_curves",
+           "ray_sides"]
 
 #: Children per box of the hierarchy (segments per leaf box).
 FAN = 16
@@ -44,6 +48,9 @@ _SWEEP_BELOW = 32
 #: older than its pieces): a chord that would be cut beyond them fails the refinement.
 MAX_GENERATIONS = 11
 _TINY = 2.2250738585072014e-308  # the smallest normal double: a zero-length chord's divisor
+#: Newton iterations for the nearest point of a curve piece (quadratic convergence from its
+#: chord's nearest point, within a chord tolerance of it).
+NEWTON = 4
 
 
 @nb.njit(inline="always")
@@ -208,12 +215,14 @@ def nearest_segments(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, out
     """Per point (px, py): the distance to the nearest segment (ax, ay) → (bx, by) and that
     segment's ``tag`` into ``out_dist``, ``out_tag`` (inf, 0 without segments); the
     hierarchy from :func:`build`. Exact for the segments (module docstring)."""
+    step, span, shift, F, y_old, no_foot = _chords_only()
     for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
         first, stop = chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size)
         out_dist[first:stop] = np.inf
         out_tag[first:stop] = 0
         _nearest_run(first, stop, px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start,
-                     np.inf, -np.inf, out_dist, out_tag)
+                     np.inf, -np.inf, 0.0, step, span, shift, F, y_old, out_dist, out_tag,
+                     no_foot, no_foot)
         for p in range(first, stop):
             out_dist[p] = math.sqrt(out_dist[p])
 
@@ -228,20 +237,93 @@ def nearer_segments(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, sear
     within θ ∈ [``searched_lo``, ``searched_hi``] (the segments that search had: pass inf,
     −inf for none). The minimum over both searches' segments: the same doubles as one
     search over them all."""
+    step, span, shift, F, y_old, no_foot = _chords_only()
     for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
         _nearest_run(chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size), px, py, ax, ay, bx,
-                     by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, dist2,
-                     near_tag)
+                     by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, 0.0, step,
+                     span, shift, F, y_old, dist2, near_tag, no_foot, no_foot)
+
+
+@cached_njit(parallel=True, nogil=True)
+def nearer_curves(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, searched_lo,
+                  searched_hi, slack, step, span, shift, F, y_old, dist2, near_tag, foot_x,
+                  foot_y):
+    """:func:`nearer_segments` for the curves the chords stand for: segment s is the chord
+    of the dense output's polynomial of step ``step[s]`` (``F``, ``y_old``:
+    :func:`atlas.kernels.dop853.dense_output`'s) over x ∈ [``span[s, 0]``, ``span[s, 1]``],
+    moved by (``shift[s]``, 0), and lies within ``slack`` [rad-ish] of it (a straight piece:
+    ``step[s]`` = −1, the chord itself). Each point's squared distance to the nearest curve
+    (:func:`_curve_distance2`: Newton's method on the polynomial) replaces ``dist2`` where
+    nearer, with its tag and its foot (``foot_x``, ``foot_y``: the nearest point of that
+    curve). A box (or chord) farther than √best + slack is skipped: no curve in it can be
+    nearer. Exact for the dense output, to Newton's convergence."""
+    for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
+        _nearest_run(chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size), px, py, ax, ay, bx,
+                     by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, slack,
+                     step, span, shift, F, y_old, dist2, near_tag, foot_x, foot_y)
+
+
+@nb.njit(inline="always")
+def _chords_only():
+    """The curve arrays of a search over chords alone (no curves: every chord is exact)."""
+    return (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 1, 2)),
+            np.zeros((0, 2)), np.zeros(0))
+
+
+@nb.njit(inline="always")
+def _dense_jet(F, step, c, x):
+    """(P, dP/dx, d²P/dx²) of component ``c`` of step ``step``'s polynomial at x, without
+    its y_old: :func:`atlas.kernels.dop853.dense_component`'s nested product (the same
+    doubles for P) carried with its two derivatives."""
+    y = dy = ddy = 0.0
+    for p in range(F.shape[1]):
+        y += F[step, p, c]
+        if p % 2 == 0:  # × x
+            ddy = ddy * x + 2.0 * dy
+            dy = dy * x + y
+            y *= x
+        else:  # × (1 − x)
+            ddy = ddy * (1.0 - x) - 2.0 * dy
+            dy = dy * (1.0 - x) - y
+            y *= 1.0 - x
+    return y, dy, ddy
+
+
+@nb.njit(inline="always")
+def _curve_distance2(px, py, F, y_old, step, xa, xb, shift, s0):
+    """(squared distance, x) from (px, py) to the nearest point of the polynomial piece
+    x ∈ [xa, xb] (either order) of step ``step`` moved by (``shift``, 0): Newton's method on
+    g(x) = (P(x) − p)·P'(x) from the chord's nearest fraction ``s0``, kept within the piece,
+    ``NEWTON`` iterations (the piece is a short arc within a tolerance of its chord:
+    quadratic convergence from there)."""
+    lo, hi = min(xa, xb), max(xa, xb)
+    x = xa + s0 * (xb - xa)
+    ox, oy = y_old[step, 0] + shift - px, y_old[step, 1] - py
+    for _ in range(NEWTON):
+        p0, d0, dd0 = _dense_jet(F, step, 0, x)
+        p1, d1, dd1 = _dense_jet(F, step, 1, x)
+        ex, ey = p0 + ox, p1 + oy
+        g = ex * d0 + ey * d1
+        curv = d0 * d0 + d1 * d1 + ex * dd0 + ey * dd1
+        if not curv > 0.0:
+            break
+        x = min(max(x - g / curv, lo), hi)
+    p0, _, _ = _dense_jet(F, step, 0, x)
+    p1, _, _ = _dense_jet(F, step, 1, x)
+    ex, ey = p0 + ox, p1 + oy
+    return ex * ex + ey * ey, x
 
 
 @nb.njit(inline="always")
 def _nearest_run(first, stop, px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start,
-                 searched_lo, searched_hi, dist2, near_tag):
+                 searched_lo, searched_hi, slack, step, span, shift, F, y_old, dist2,
+                 near_tag, foot_x, foot_y):
     """:func:`_nearest` for the points [first, stop) in turn (one parallel task), each
     search's stacks allocated once and each point's search started from the leaf of the
     previous point's nearest segment: a grid's neighbours (a row's, in its order) share
     their nearest boundary, so the first bound is nearly the distance itself and prunes
-    the search at once (about half the work of a search from the top alone)."""
+    the search at once (about half the work of a search from the top alone). Where
+    ``foot_x`` has room, the foot of each point's nearest curve is written too."""
     levels = start.size - 1
     capacity = FAN * (levels + 1)
     st_level = np.empty(capacity, np.int64)
@@ -252,26 +334,57 @@ def _nearest_run(first, stop, px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, s
     near = np.empty(FAN)
     seed = -1  # the previous point's nearest segment (−1: none yet)
     for p in range(first, stop):
-        dist2[p], near_tag[p], nearest = _nearest(
+        dist2[p], near_tag[p], nearest, at = _nearest(
             px[p], py[p], dist2[p], near_tag[p], seed // FAN if seed >= 0 else -1, ax, ay,
-            bx, by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, st_level,
-            st_box, st_lb, lbs, ids, near)
+            bx, by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, slack, step,
+            span, shift, F, y_old, st_level, st_box, st_lb, lbs, ids, near)
         if nearest >= 0:
             seed = nearest
+            if foot_x.size:
+                foot_x[p], foot_y[p] = _foot(px[p], py[p], nearest, at, ax, ay, bx, by,
+                                             step, shift, F, y_old)
+
+
+@nb.njit(inline="always")
+def _foot(x, y, s, at, ax, ay, bx, by, step, shift, F, y_old):
+    """The nearest point of segment ``s``'s curve to (x, y): the polynomial at ``at`` (a
+    curve), or the chord's nearest point (a straight piece)."""
+    if step.size and step[s] >= 0:
+        g = step[s]
+        p0, _, _ = _dense_jet(F, g, 0, at)
+        p1, _, _ = _dense_jet(F, g, 1, at)
+        return p0 + y_old[g, 0] + shift[s], p1 + y_old[g, 1]
+    dx, dy = bx[s] - ax[s], by[s] - ay[s]
+    f = ((x - ax[s]) * dx + (y - ay[s]) * dy) / max(dx * dx + dy * dy, _TINY)
+    f = min(max(f, 0.0), 1.0)
+    return ax[s] + f * dx, ay[s] + f * dy
+
+
+@nb.njit(inline="always")
+def _reach2(best, slack):
+    """The squared distance beyond which no curve within ``slack`` of its chords can be
+    nearer than √best: best itself for chords (slack 0, the same doubles)."""
+    if slack == 0.0:
+        return best
+    r = math.sqrt(best) + slack
+    return r * r
 
 
 @nb.njit(inline="always")
 def _nearest(x, y, best, best_tag, seed_leaf, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start,
-             searched_lo, searched_hi, st_level, st_box, st_lb, lbs, ids, near):
-    """(squared distance, tag, index) of the segment nearest (x, y), or (``best``,
-    ``best_tag``, −1) when none is nearer than that bound: the leaf ``seed_leaf`` first (−1:
-    none), then depth-first from the top, nearest box first, skipping every box not nearer
-    than the best so far (the leaf searched first among them) or within θ ∈
-    [searched_lo, searched_hi] (:func:`_box_bound2`)."""
+             searched_lo, searched_hi, slack, step, span, shift, F, y_old, st_level, st_box,
+             st_lb, lbs, ids, near):
+    """(squared distance, tag, index, foot parameter) of the segment (or, with curves, the
+    curve) nearest (x, y), or (``best``, ``best_tag``, −1, 0) when none is nearer than that
+    bound: the leaf ``seed_leaf`` first (−1: none), then depth-first from the top, nearest
+    box first, skipping every box not within reach of the best so far (:func:`_reach2`;
+    the leaf searched first among them) or within θ ∈ [searched_lo, searched_hi]
+    (:func:`_box_bound2`)."""
     top = start.size - 2
-    best_seg = -1
+    best_seg, at = -1, 0.0
     if seed_leaf >= 0:
-        best, best_seg = _leaf_nearest(x, y, seed_leaf, ax, ay, bx, by, near, best, best_seg)
+        best, best_seg, at = _leaf_nearest(x, y, seed_leaf, ax, ay, bx, by, near, best,
+                                           best_seg, at, slack, step, span, shift, F, y_old)
     sp = 0
     for b in range(start[top], start[top + 1]):  # the top boxes, farthest pushed first
         st_level[sp], st_box[sp] = top, b - start[top]
@@ -282,10 +395,13 @@ def _nearest(x, y, best, best_tag, seed_leaf, ax, ay, bx, by, tag, xlo, xhi, ylo
     while sp > 0:
         sp -= 1
         level, box, lb = st_level[sp], st_box[sp], st_lb[sp]
-        if lb >= best or (level == 0 and box == seed_leaf):
+        reach = _reach2(best, slack)
+        if lb >= reach or (level == 0 and box == seed_leaf):
             continue
         if level == 0:
-            best, best_seg = _leaf_nearest(x, y, box, ax, ay, bx, by, near, best, best_seg)
+            best, best_seg, at = _leaf_nearest(x, y, box, ax, ay, bx, by, near, best,
+                                               best_seg, at, slack, step, span, shift, F,
+                                               y_old)
             continue
         first = box * FAN
         count = min(FAN, start[level] - start[level - 1] - first)
@@ -296,7 +412,7 @@ def _nearest(x, y, best, best_tag, seed_leaf, ax, ay, bx, by, tag, xlo, xhi, ylo
                                   searched_hi)
         m = 0
         for c in range(count):
-            if near[c] < best:
+            if near[c] < reach:
                 lbs[m], ids[m] = near[c], first + c
                 m += 1
         for i in range(m):  # push the farthest first: the nearest is searched next
@@ -305,7 +421,7 @@ def _nearest(x, y, best, best_tag, seed_leaf, ax, ay, bx, by, tag, xlo, xhi, ylo
         sp += m
     if best_seg >= 0:
         best_tag = tag[best_seg]
-    return best, best_tag, best_seg
+    return best, best_tag, best_seg, at
 
 
 @nb.njit(inline="always")
@@ -318,20 +434,31 @@ def _box_bound2(x, y, xlo, xhi, ylo, yhi, searched_lo, searched_hi):
 
 
 @nb.njit(inline="always")
-def _leaf_nearest(x, y, leaf, ax, ay, bx, by, near, best, best_seg):
+def _leaf_nearest(x, y, leaf, ax, ay, bx, by, near, best, best_seg, at, slack, step, span,
+                  shift, F, y_old):
     """The leaf's segments measured into ``near`` (a loop without branches, which the
     compiler can vectorise), then the nearest of them where it is nearer than ``best`` (the
-    first of equals, as segment by segment): (squared distance, index), else (best,
-    best_seg)."""
+    first of equals, as segment by segment): (squared distance, index, foot parameter),
+    else (best, best_seg, at). With curves (``step`` not empty), a chord within reach
+    (:func:`_reach2`) stands for its curve, measured by :func:`_curve_distance2`."""
     first = leaf * FAN
     count = min(FAN, ax.size - first)
     for i in range(count):
         s = first + i
         near[i] = _segment_distance2(x, y, ax[s], ay[s], bx[s], by[s])
     for i in range(count):
-        if near[i] < best:
-            best, best_seg = near[i], first + i
-    return best, best_seg
+        s = first + i
+        if step.size and step[s] >= 0:
+            if near[i] < _reach2(best, slack):
+                dx, dy = bx[s] - ax[s], by[s] - ay[s]
+                f = ((x - ax[s]) * dx + (y - ay[s]) * dy) / max(dx * dx + dy * dy, _TINY)
+                d2, x_at = _curve_distance2(x, y, F, y_old, step[s], span[s, 0], span[s, 1],
+                                            shift[s], min(max(f, 0.0), 1.0))
+                if d2 < best:
+                    best, best_seg, at = d2, s, x_at
+        elif near[i] < best:
+            best, best_seg, at = near[i], s, 0.0
+    return best, best_seg, at
 
 
 @nb.njit(inline="always")

@@ -95,7 +95,7 @@ def basin_shape(boundaries: ExactBoundaries, speed: float | None = None) -> Basi
             raise ValueError(f"the boundaries reach |theta_dot| < {band:g}, not {speed:g}")
         speed = band if speed is None else speed
         theta, theta_dot, j = _tilted_curve(boundaries)
-        chord = tilted.chord_error
+        chord = tilted.curves_chord_error
         strip = not tilted.bistable
         # the boundary of saddle j bounds well j + upper_well from below when a strip, and
         # holds well j + lower_well as a tongue

@@ -249,3 +249,52 @@ def test_refine_is_the_breadth_first_refinement(branch, tol, longest):
     assert ok and error == old_error
     np.testing.assert_array_equal(times, old_times)
     np.testing.assert_array_equal(xy, old_xy)
+
+
+# --------------------------------------------------------------------------- curves
+
+def test_dense_jet_is_the_dense_output_and_its_derivatives(branch):
+    """The jet's value is the dense output's (the same doubles); its two derivatives in x
+    agree with central differences of the dense output's own polynomial (to their
+    truncation, h² of the next derivatives)."""
+    import numba
+
+    from atlas.kernels.dop853 import dense_component
+
+    dense, _ = branch
+    component = numba.njit(lambda F, step, c, x, y_old: dense_component(F, step, c, x, y_old))
+    jet = numba.njit(lambda F, step, c, x: kernel._dense_jet(F, step, c, x))
+    rng = np.random.default_rng(3)
+    h = 1e-4
+    for step in rng.integers(0, dense.h.size, 20):
+        for c in (0, 1):
+            x = float(rng.uniform(0.1, 0.9))
+            value, first, second = jet(dense.F, step, c, x)
+            assert value + dense.y_old[step, c] == component(dense.F, step, c, x, dense.y_old)
+            at = [component(dense.F, step, c, x + d * h, dense.y_old) for d in (-1, 0, 1)]
+            scale = max(abs(first), abs(second), 1e-3)
+            assert abs(first - (at[2] - at[0]) / (2 * h)) < 1e-6 * scale
+            assert abs(second - (at[2] - 2 * at[1] + at[0]) / h**2) < 1e-4 * scale
+
+
+def test_nearer_curves_without_a_slack_over_straight_pieces_is_nearer_segments():
+    """Every segment a straight piece (step −1) and no slack: the curves' search is the
+    chords' (the same doubles and tags), with each foot the chord's nearest point."""
+    rng = np.random.default_rng(9)
+    t = np.cumsum(rng.uniform(0.001, 0.01, 400))
+    runs = [(t, np.sin(3 * t), 2), (t + 0.5, np.cos(2 * t), 5)]
+    seg = Segments(runs)
+    px, py = rng.uniform(0, 3, 300), rng.uniform(-1, 1, 300)
+    d2, tag = np.full(300, np.inf), np.zeros(300, np.int64)
+    kernel.nearer_segments(px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
+                           seg.ylo, seg.yhi, seg.start, np.inf, -np.inf, d2, tag)
+    c2, ctag = np.full(300, np.inf), np.zeros(300, np.int64)
+    fx, fy = np.full(300, np.nan), np.full(300, np.nan)
+    n = seg.ax.size
+    kernel.nearer_curves(px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
+                         seg.ylo, seg.yhi, seg.start, np.inf, -np.inf, 0.0,
+                         np.full(n, -1, np.int64), np.zeros((n, 2)), np.zeros(n),
+                         np.zeros((1, 7, 2)), np.zeros((1, 2)), c2, ctag, fx, fy)
+    np.testing.assert_array_equal(c2, d2)
+    np.testing.assert_array_equal(ctag, tag)
+    np.testing.assert_allclose(np.hypot(fx - px, fy - py), np.sqrt(d2), rtol=1e-12)
