@@ -95,8 +95,9 @@ class Certifier:
         the nearest boundary)."""
         theta, theta_dot = np.asarray(theta, float), np.asarray(theta_dot, float)
         full = np.broadcast_shapes(theta.shape, theta_dot.shape, np.shape(status))
-        theta, theta_dot = np.broadcast_to(theta, full), np.broadcast_to(theta_dot, full)
-        side, dist, n_near = self.exact.side_and_distance(theta, theta_dot)
+        # (a grid's row and column as given: the untilted sides are found a column at a time)
+        side, dist, n_near = (np.broadcast_to(a, full) for a in
+                              self.exact.side_and_distance(theta, theta_dot))
         status = np.asarray(status)
         has_label, running = labelled(status), status == RUNNING
         agree = (has_label | running) & (_basin(attractor, status) == side)

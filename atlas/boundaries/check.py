@@ -7,7 +7,9 @@ points by Newton's method on the dense output (accurate to ≈ 1e-13). Its maxim
 ``discrepancy``, is RK4's O(dt⁴) offset (≈ 6e-10 at α = 0.1 s⁻¹, ω0 = 1 rad s⁻¹,
 dt = 0.01 s), bounded by :data:`DISCREPANCY_BOUND`; the same curve gives the polyline's own
 error. :func:`symmetry_error` compares the located right branch of −π with the reflection of
-the located left branch of π (bounded by :data:`SYMMETRY_BOUND` · tol).
+the located left branch of π (bounded by :data:`SYMMETRY_BOUND` · tol): the trace reflects
+the left branch's points and locates every 8th of them again on its own, so the pairs that
+differ are those.
 Derivation: docs/design/separatrices.md.
 """
 

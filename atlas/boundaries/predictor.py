@@ -183,22 +183,27 @@ def not_a_knot_spline(x: np.ndarray, y: np.ndarray, at: np.ndarray) -> np.ndarra
     end conditions (the third derivative continuous at the second and the second-to-last
     knot; de Boor, *A Practical Guide to Splines*, ch. IV), evaluated at ``at`` within
     [x[0], x[-1]]: scipy's ``CubicSpline(x, y)`` to rounding. The slopes m at the knots solve
-    the usual tridiagonal system (dense here: a few hundred knots at most)."""
+    the usual tridiagonal system (banded LU with partial pivoting, as scipy's: the end rows
+    are not diagonally dominant)."""
+    from scipy.linalg import solve_banded
+
     n = x.size
     dx = np.diff(x)
     slope = np.diff(y) / dx
-    a = np.zeros((n, n))
+    bands = np.zeros((3, n))  # the super-diagonal, the diagonal, the sub-diagonal
     rhs = np.empty(n)
-    i = np.arange(1, n - 1)
-    a[i, i - 1], a[i, i], a[i, i + 1] = dx[1:], 2.0 * (dx[:-1] + dx[1:]), dx[:-1]
-    rhs[i] = 3.0 * (dx[1:] * slope[:-1] + dx[:-1] * slope[1:])
+    bands[1, 1:-1] = 2.0 * (dx[:-1] + dx[1:])
+    bands[0, 2:] = dx[:-1]
+    bands[2, :-2] = dx[1:]
+    rhs[1:-1] = 3.0 * (dx[1:] * slope[:-1] + dx[:-1] * slope[1:])
     d = x[2] - x[0]
-    a[0, 0], a[0, 1] = dx[1], d
+    bands[1, 0], bands[0, 1] = dx[1], d
     rhs[0] = ((dx[0] + 2.0 * d) * dx[1] * slope[0] + dx[0] ** 2 * slope[1]) / d
     d = x[-1] - x[-3]
-    a[-1, -1], a[-1, -2] = dx[-2], d
+    bands[1, -1], bands[2, -2] = dx[-2], d
     rhs[-1] = (dx[-1] ** 2 * slope[-2] + (2.0 * d + dx[-1]) * dx[-2] * slope[-1]) / d
-    m = np.linalg.solve(a, rhs)
+    m = solve_banded((1, 1), bands, rhs, overwrite_ab=True, overwrite_b=True,
+                     check_finite=False)
     k = np.clip(np.searchsorted(x, at, side="right") - 1, 0, n - 2)
     h, u = dx[k], (at - x[k]) / dx[k]
     # cubic Hermite form on each interval

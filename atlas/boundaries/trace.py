@@ -51,13 +51,17 @@ from atlas.boundaries.predictor import (
     sources,
     window_boxes,
 )
-from atlas.boundaries.shooting import Shooter, left_to_labels
+from atlas.boundaries.shooting import HALF_WIDTH, Shooter, left_to_labels
 from atlas.boundaries.trace_tilted import trace_tilted
 from atlas.boundaries.window import Window, checked_window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
 
 __all__ = ["trace"]
+
+#: Every 8th vertex of the right branch of −π that is a reflection of a located one is
+#: located again on its own: the symmetry check.
+_SYMMETRY_STRIDE = 8
 
 
 def trace(
@@ -170,6 +174,38 @@ def _locate(shooter, labels, base, normal, saddle_n, run, tau, tol: float):
     return lo, hi, np.where(ok, estimate, 0.5 * (lo + hi))
 
 
+def _twins(branch: np.ndarray, vertex: np.ndarray) -> np.ndarray:
+    """For each vertex of the right branch of −π (branch 1), the row of the left branch of
+    π's vertex with the same number (its reflection: the predicted right branch is the
+    reflected left one, vertex by vertex); −1 elsewhere."""
+    twin = np.full(branch.size, -1, np.int64)
+    left, right = np.flatnonzero(branch == 0), np.flatnonzero(branch == 1)
+    _, i, j = np.intersect1d(vertex[left], vertex[right], return_indices=True)
+    twin[right[j]] = left[i]
+    return twin
+
+
+def _relocate(shooter, labels, base, normal, saddle_n, rows, tol: float, lo, hi, at):
+    """Locate the vertices ``rows`` on their own (in place of their twins' reflections, so
+    that the symmetry error measures the map's oddness there): shot around the twin's point
+    (in the frame of π, so that their orbits round otherwise than the twins'), or, where
+    that cannot certify them, bisected on labels from ±HALF_WIDTH·tol around it."""
+    if not rows.size:
+        return
+    s_lo, s_hi, s_ok, s_at = shooter.refine(base[rows], normal[rows], at[rows],
+                                            saddle_n[rows] * math.pi)
+    again = ~s_ok
+    if again.any():
+        centre = at[rows[again]]
+        b_lo, b_hi = bisect_across(labels, base[rows[again]] + centre[:, None]
+                                   * normal[rows[again]], normal[rows[again]],
+                                   (saddle_n[rows[again]] + 1) // 2, tol=tol, strict=False,
+                                   half_width=HALF_WIDTH * tol)
+        s_lo[again], s_hi[again] = centre + b_lo, centre + b_hi
+        s_at[again] = 0.5 * (s_lo[again] + s_hi[again])
+    lo[rows], hi[rows], at[rows] = s_lo, s_hi, s_at
+
+
 def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: float,
                     dt: float, backend: str, method: str) -> xr.Dataset:
     """:func:`trace` without torque: the left branch L of π and the right branch R = −L of
@@ -200,9 +236,23 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
     labels = Labeller(p, dt, tau.max(initial=0.0) + linger(p, tol), backend, method)
     shooter = Shooter(p, tol, dt=dt, t_max=labels.t_max, method=method)
     normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1]))
-    lo, hi, at = _locate(shooter, labels, base, normal, saddle_n, run, tau, tol)
+    # the right branch's vertices whose left twin is located too are its reflections (the
+    # RK4 map is odd; a pair shares its normal, so the offsets change sign): located once,
+    # every _SYMMETRY_STRIDE-th checked on its own
+    twin = _twins(branch, vertex) if shooter.box is not None else np.full(branch.size, -1)
+    own = twin < 0
+    lo, hi, at = np.empty(run.size), np.empty(run.size), np.empty(run.size)
+    lo[own], hi[own], at[own] = _locate(shooter, labels, base[own], normal[own],
+                                        saddle_n[own], run[own], tau[own], tol)
+    mirrored = np.flatnonzero(~own)
+    lo[mirrored], hi[mirrored], at[mirrored] = (-a[twin[mirrored]] for a in (hi, lo, at))
+    relocated = mirrored[::_SYMMETRY_STRIDE]
+    _relocate(shooter, labels, base, normal, saddle_n, relocated, tol, lo, hi, at)
     point = base + at[:, None] * normal
     symmetry = symmetry_error(branch, vertex, point)
+    # pairs located independently: the mirrored ones checked, or all where none is mirrored
+    pairs = relocated.size if mirrored.size else int(np.isin(
+        vertex[branch == 1], vertex[branch == 0]).sum())
     source, copy = place(run, point, window)
     stored_n = (saddle_n[source] + 2 * copy).astype(np.int32)
     order = np.lexsort((vertex[source], branch[source], stored_n))
@@ -255,7 +305,7 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
             "dt": float(dt),
             "t_max": max(labels.t_max, axis_labels.t_max),
             "n_boundaries": int(saddles.size),
-            "symmetry_error": symmetry,
+            "symmetry_error": symmetry, "symmetry_pairs": np.int64(pairs),
             "symmetry_bound": SYMMETRY_BOUND * tol,
             "discrepancy": checked.discrepancy,
             "discrepancy_bound": DISCREPANCY_BOUND,

@@ -145,7 +145,8 @@ def separatrix_lines(ds: xr.Dataset) -> list[str]:
          f"{int(ds.attrs.get('shift_pairs', 0))} pairs"
          if "shift_error" in ds.attrs else
          "symmetry: right branch of -pi vs reflected left branch of pi: "
-         + (f"max distance {symmetry:.1e} "
+         + (f"max distance {symmetry:.1e} over "
+            f"{int(ds.attrs.get('symmetry_pairs', 0))} pairs located independently "
             f"({'within' if symmetry <= symmetry_bound else 'EXCEEDS'} bound "
             f"{symmetry_bound:.0e})" if symmetry == symmetry else
             "not checked (the window needs one of them only)")),
