@@ -3,7 +3,8 @@
 Every boundary of the untilted pendulum is a 2π copy of L, the left branch of the saddle
 (π, 0), or of R = −L, the right branch of (−π, 0). :func:`predict` walks L's DOP853 dense
 output (:class:`atlas.boundaries.manifold.StableManifold`, rtol = atol = 1e-13) in reversed
-time from the saddle with chords ≤ max_spacing and ≤ max_spacing/√κ (κ the curvature), so the
+time from the saddle (compiled: :func:`atlas.kernels.segments.walk`) with chords
+≤ max_spacing and ≤ max_spacing/√κ (κ the curvature), so the
 polyline's chord error stays below max_spacing²/8; an extra vertex sits wherever the curve
 crosses a θ̇ edge of the window. :func:`needed` keeps the stretch the window's copies use,
 :func:`copies` and :func:`place` enumerate those copies. :func:`not_a_knot_spline` (de Boor,
@@ -100,16 +101,6 @@ def fine_spacing(window: Window) -> float:
                window.theta_dot[1] - window.theta_dot[0]) / _WINDOW_VERTICES
 
 
-def _box_distance(y, boxes) -> float:
-    """Euclidean distance [rad-ish] of the point ``y`` from the nearest of ``boxes``."""
-    best = math.inf
-    for (t0, t1), (v0, v1) in boxes:
-        dx = max(t0 - y[0], 0.0, y[0] - t1)
-        dy = max(v0 - y[1], 0.0, y[1] - v1)
-        best = min(best, math.hypot(dx, dy))
-    return best
-
-
 def predict(m: StableManifold, edges: list[float], max_spacing: float, boxes=(),
             fine: float = math.inf) -> Predicted:
     """Vertices along L, the left branch of π, walking the dense output of ``m`` in reversed
@@ -122,39 +113,34 @@ def predict(m: StableManifold, edges: list[float], max_spacing: float, boxes=(),
     decade of scale), ``fine`` inside; and the straight piece between the saddle and the
     reference's first point gets vertices ``fine`` apart where a box holds it (a zoom into
     the saddle)."""
+    from atlas.kernels.segments import walk
+
     p = m.pendulum
     u2 = -p.saddle_eigenvalues()[1]
     refine = bool(boxes) and fine < max_spacing
     first = 0.1 * (min(max_spacing, fine) if refine else max_spacing)
     tau = min(max(0.0, math.log(first / START_DISTANCE) / u2), m.tau_end)
-    y = m.at(tau)
-    verts = _straight(m, boxes, fine, u2) if refine and tau == 0.0 else []
-    verts.append((*y, tau))
-    while tau < m.tau_end:
-        if len(verts) > _MAX_VERTICES:
-            raise SeparatrixError(f"the stable manifold needs more than {_MAX_VERTICES} "
-                                  "vertices; raise separatrices.max_spacing or shrink the window")
-        (f0, f1), (g0, g1) = p.field_jet(*y)
-        speed = math.hypot(f0, f1)
-        kappa = abs(f0 * g1 - f1 * g0) / speed**3  # curvature of the orbit [rad⁻¹]
-        growth = abs(f0 * g0 + f1 * g1) / speed**2  # |d ln speed / d tau|
-        h = max_spacing * min(1.0, 1.0 / math.sqrt(kappa)) if kappa > 0 else max_spacing
-        if refine:
-            h = min(h, max(fine, 0.5 * _box_distance(y, boxes)))
-        span = min(_CHORD_AIM * h / speed, _SPEED_GROWTH / max(growth, 1e-300))
-        while True:
-            t = min(tau + span, m.tau_end)
-            z = m.at(t)
-            chord = math.hypot(z[0] - y[0], z[1] - y[1])
-            if chord <= h:
-                break
-            span = (t - tau) * _CHORD_AIM * h / chord
-        crossings = sorted(float(m.speed_crossing(v, tau, t))
-                           for v in edges if (y[1] - v) * (z[1] - v) < 0)
-        verts += [(*m.at(s), s) for s in crossings]
-        verts.append((*z, t))
-        tau, y = t, z
-    arr = np.array(verts, float)
+    straight = _straight(m, boxes, fine, u2) if refine and tau == 0.0 else []
+    sol = m._sol
+    rows = np.array([(t0, t1, v0, v1) for (t0, t1), (v0, v1) in boxes] if refine else
+                    np.zeros((0, 4)), float).reshape(-1, 4)
+    taus, ok = walk(sol.t, sol.t_old, sol.h, sol.y_old, sol.F, tau, float(m.tau_end),
+                    float(max_spacing), p.alpha, p.omega0, p.torque, rows, float(fine),
+                    _CHORD_AIM, _SPEED_GROWTH, _MAX_VERTICES - len(straight))
+    if not ok:
+        raise SeparatrixError(f"the stable manifold needs more than {_MAX_VERTICES} "
+                              "vertices; raise separatrices.max_spacing or shrink the window")
+    theta, theta_dot = m.at(taus)
+    # an extra vertex wherever a chord crosses a θ̇ edge (bisection on the dense output)
+    extra = [m.speed_crossing(v, taus[i], taus[i + 1]) for v in edges
+             if (i := np.flatnonzero((theta_dot[:-1] - v) * (theta_dot[1:] - v) < 0)).size]
+    if extra:
+        taus = np.concatenate([taus, *extra])
+        taus = taus[np.argsort(taus, kind="stable")]
+        theta, theta_dot = m.at(taus)
+    arr = np.column_stack([theta, theta_dot, taus])
+    if straight:
+        arr = np.concatenate([np.array(straight, float), arr])
     return Predicted(1, "left", arr[:, 0], arr[:, 1], arr[:, 2], np.arange(arr.shape[0]))
 
 

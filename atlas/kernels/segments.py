@@ -1,9 +1,10 @@
 """Polylines, compiled: made from a dense output, and against points (the nearest segment, or
 the nearest arc of the curve it is a chord of, and the vertical ray's crossings).
 
-The tilted basin boundaries (:mod:`atlas.boundaries.tilted`) are polylines of some 10⁵
+The tilted basin boundaries (:mod:`atlas.boundaries.tilted`) are polylines of some 10⁴–10⁵
 short segments each, cut from DOP853's dense output by :func:`refine` until every chord lies
-within a tolerance of the curve. :func:`build` groups them, in their order along the curves,
+within a tolerance of the curve; the untilted trace's vertices are walked along L's dense
+output by :func:`walk` (chords within a spacing and the curvature's share of it). :func:`build` groups them, in their order along the curves,
 into a bounding-volume hierarchy: ``FAN`` consecutive segments per leaf box, ``FAN`` boxes
 per box of the level above, until at most ``FAN`` boxes remain (consecutive pieces of a
 smooth curve have tight boxes). :func:`nearest_segments` finds, per point (``prange``:
@@ -34,8 +35,8 @@ import numpy as np
 from atlas.kernels import cached_njit
 from atlas.kernels.dop853 import dense_component, dense_step
 
-__all__ = ["FAN", "refine", "build", "nearest_segments", "nearer_segments", "nearer_curves",
-           "ray_sides"]
+__all__ = ["FAN", "refine", "walk", "build", "nearest_segments", "nearer_segments",
+           "nearer_curves", "ray_sides"]
 
 #: Children per box of the hierarchy (segments per leaf box).
 FAN = 16
@@ -156,6 +157,69 @@ def refine(times, t, t_old, h, y_old, F, tol, longest):
                 sp += 1
                 end_t, end_x, end_y = start_t, start_x, start_y
     return out_t[:n], out_xy[:, :n], worst_all, True
+
+
+@nb.njit(inline="always")
+def _dense_point(tau, t, t_old, h, y_old, F, tau_end):
+    """(θ, θ̇) of a dense output at τ clipped to [0, tau_end] (the step by bisection)."""
+    tau = min(max(tau, 0.0), tau_end)
+    step = dense_step(tau, t, h.size - 1)
+    x = (tau - t_old[step]) / h[step]
+    return dense_component(F, step, 0, x, y_old), dense_component(F, step, 1, x, y_old)
+
+
+@cached_njit(nogil=True)
+def walk(t, t_old, h, y_old, F, tau0, tau_end, max_spacing, alpha, omega0, torque, boxes,
+         fine, chord_aim, speed_growth, most):
+    """The reversed times [s] of vertices along an orbit's dense output (``t``, ``t_old``,
+    ``h``, ``y_old``, ``F`` highest power first: :func:`atlas.kernels.dop853.dense_output`'s;
+    θ and θ̇ its first two components) of θ̈ = τ − ω0² sin θ − 2αθ̇, from ``tau0`` to
+    ``tau_end``: from each vertex y the next is the first whose chord from y is at most
+    h = max_spacing·min(1, 1/√κ) (κ the orbit's curvature at y [rad⁻¹]; with ``boxes``
+    (m, 4) rows (θ lo, θ hi, θ̇ lo, θ̇ hi) also at most max(``fine``, half the distance to
+    the nearest box)), aiming at ``chord_aim``·h, the step in τ also at most
+    ``speed_growth``/|d ln|f|/dτ| (the speed grows fast next to a saddle). Returns (times,
+    ok): ok false when more than ``most`` vertices would be needed."""
+    w2, a2 = omega0 * omega0, 2.0 * alpha
+    out = np.empty(1024)
+    n = 0
+    tau = tau0
+    y0, y1 = _dense_point(tau, t, t_old, h, y_old, F, tau_end)
+    out[n] = tau
+    n += 1
+    while tau < tau_end:
+        if n > most:
+            return out[:n], False
+        f0 = y1
+        f1 = (torque - w2 * math.sin(y0)) - a2 * y1
+        g0, g1 = f1, -w2 * math.cos(y0) * f0 - a2 * f1  # J·f, the acceleration
+        speed = math.hypot(f0, f1)
+        kappa = abs(f0 * g1 - f1 * g0) / speed**3
+        growth = abs(f0 * g0 + f1 * g1) / speed**2
+        longest = max_spacing * min(1.0, 1.0 / math.sqrt(kappa)) if kappa > 0 else max_spacing
+        if boxes.shape[0]:
+            near = math.inf
+            for b in range(boxes.shape[0]):
+                dx = max(boxes[b, 0] - y0, 0.0, y0 - boxes[b, 1])
+                dy = max(boxes[b, 2] - y1, 0.0, y1 - boxes[b, 3])
+                near = min(near, math.hypot(dx, dy))
+            longest = min(longest, max(fine, 0.5 * near))
+        span = min(chord_aim * longest / speed, speed_growth / max(growth, 1e-300))
+        while True:
+            nxt = min(tau + span, tau_end)
+            z0, z1 = _dense_point(nxt, t, t_old, h, y_old, F, tau_end)
+            chord = math.hypot(z0 - y0, z1 - y1)
+            if chord <= longest:
+                break
+            span = (nxt - tau) * chord_aim * longest / chord
+        if n == out.size:
+            grown = np.empty(2 * n)
+            grown[:n] = out
+            out = grown
+        out[n] = nxt
+        n += 1
+        tau, y0, y1 = nxt, z0, z1
+    return out[:n], True
 
 
 @cached_njit(nogil=True)

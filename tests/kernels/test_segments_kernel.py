@@ -298,3 +298,27 @@ def test_nearer_curves_without_a_slack_over_straight_pieces_is_nearer_segments()
     np.testing.assert_array_equal(c2, d2)
     np.testing.assert_array_equal(ctag, tag)
     np.testing.assert_allclose(np.hypot(fx - px, fy - py), np.sqrt(d2), rtol=1e-12)
+
+
+def test_walk_keeps_its_chords_within_the_spacing_and_curvature(branch):
+    """The walked vertices run from the first time to the last, each chord at most the
+    spacing and at most spacing/√κ (κ the orbit's curvature at its start, from the vector
+    field), and a budget of vertices too small says so."""
+    from atlas.physics.pendulum import Pendulum
+
+    dense, steps = branch
+    p = Pendulum(0.05, 1.0, 0.5)
+    spacing = 0.05
+    args = (dense.t, dense.t_old, dense.h, dense.y_old, dense.F, 0.0, float(steps[-1]),
+            spacing, p.alpha, p.omega0, p.torque, np.zeros((0, 4)), np.inf, 0.9, 0.3)
+    times, ok = kernel.walk(*args, 10**6)
+    assert ok and times[0] == 0.0 and times[-1] == steps[-1] and np.all(np.diff(times) > 0)
+    x, v = dense(times)
+    chord = np.hypot(np.diff(x), np.diff(v))
+    (f0, f1), (g0, g1) = p.field_jet(x[:-1], v[:-1])
+    kappa = np.abs(f0 * g1 - f1 * g0) / np.hypot(f0, f1) ** 3
+    assert np.all(chord <= spacing * (1 + 1e-12))
+    assert np.all(chord <= spacing / np.sqrt(kappa) * (1 + 1e-9))
+    assert chord.max() > 0.5 * spacing  # and not far below it
+    _, ok = kernel.walk(*args, 10)
+    assert not ok
