@@ -48,7 +48,8 @@ half-width h·w, the same β). A spline's prediction is shot ``PREDICTED_WIDTH``
 than the bracket it needs; once the whole is crossed the orbit goes on, reading the part
 of half-width HALF_WIDTH·tol around its latest Newton estimate until that part is crossed
 too (:func:`atlas.kernels.shooting.shoot`'s ``target``): a few checks more instead of a
-second orbit where the prediction was off by more than the bracket. Derivation: docs/design/separatrices.md#shooting.
+second orbit where the prediction was off by more than the bracket.
+Derivation: docs/design/separatrices.md#shooting.
 """
 
 from __future__ import annotations

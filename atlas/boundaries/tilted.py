@@ -12,8 +12,8 @@ below it strips. Sides (ray parity over polylines of chord error ≤ ``CHORD_TOL
 point's side within reach of the arcs), distances (the chords searched,
 :class:`atlas.boundaries.segments.Segments`, the arcs measured by Newton's method) and areas
 (curved polygons clipped) are exact for the dense output, their error ``reference_error``
-(the change from rtol 1e-12 to 1e-13). Units: θ [rad], θ̇ [rad s⁻¹], distances and areas in the (θ, θ̇)
-plane with both as one unit ("rad-ish"). References: Krauskopf et al., Int. J. Bifurcation
+(the change from rtol 1e-12 to 1e-13). Units: θ [rad], θ̇ [rad s⁻¹], distances and areas in
+the (θ, θ̇) plane with both as one unit ("rad-ish"). References: Krauskopf et al., Int. J. Bifurcation
 Chaos 15 (2005) 763; Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5–6; Levi, Hoppensteadt &
 Miranker, Q. Appl. Math. 36 (1978) 167. Derivation: docs/design/tilted-boundaries.md.
 """
@@ -27,7 +27,7 @@ import numpy as np
 
 from atlas.boundaries.basins import FIND_CYCLE, RUNNING_SIDE, ExactAreas
 from atlas.boundaries.manifold import RTOL, RTOL_CHECK, _DenseOutput
-from atlas.boundaries.segments import Segments, segment_distance
+from atlas.boundaries.segments import Segments
 from atlas.physics.pendulum import START_DISTANCE, Pendulum
 
 __all__ = ["TiltedBoundaries", "RUNNING_SIDE", "CHORD_TOL", "CURVE_CHORD_TOL", "MAX_SEGMENT",
@@ -376,19 +376,28 @@ class TiltedBoundaries:
                      math.ceil((theta_hi - f.theta.min()) / _TWO_PI) + 1)
 
     def _reference_error(self) -> float:
-        """Largest distance of the rtol 1e-12 polyline's vertices from the 1e-13 polyline
-        (canonical frame, Γ_0 only: the translates are exact copies). Both are sampled at
-        the same reversed times, so each coarse vertex is compared with the two fine segments
-        at its own index (an overestimate wherever its foot lies farther along)."""
+        """Largest distance of the rtol 1e-12 branches from the 1e-13 ones, over the former's
+        polyline vertices (canonical frame, Γ_0 only: the translates are exact copies): each
+        vertex's nearest point of the 1e-13 branch, from the vertex at the same reversed time
+        (the two solutions drift apart along the curve far more than across it, ~1e-5
+        against ~1e-10), by Gauss–Newton steps along the branch (its velocity is the vector
+        field's: dy/dτ = −f(y) in reversed time), three of them: each leaves the square of the
+        drift times the curvature."""
+        canon = Pendulum(self.pendulum.alpha, self.pendulum.omega0, abs(self.pendulum.torque))
         worst = 0.0
-        for fine, coarse in ((self._fine.left, self._coarse.left),
-                             (self._fine.right, self._coarse.right)):
-            n = min(fine.shape[1], coarse.shape[1])
-            (fx, fy), (cx, cy) = fine[:, :n], coarse[:, :n]
-            before = segment_distance(cx[1:], cy[1:], fx[:-1], fy[:-1], fx[1:], fy[1:])
-            after = segment_distance(cx[:-1], cy[:-1], fx[:-1], fy[:-1], fx[1:], fy[1:])
-            dist = np.minimum(np.append(np.inf, before), np.append(after, np.inf))
-            worst = max(worst, float(dist.max(initial=0.0)))
+        for i, coarse in enumerate((self._coarse.left, self._coarse.right)):
+            dense, _, end = self._branches.branches[i]
+            times = self._coarse.times[i]
+            first, last = times[0], self._branches.branches[i][1].t[-1]
+            cx, cy = coarse[0, 1:], coarse[1, 1:]  # the saddle left out: the same point
+            tau = np.minimum(times, last)
+            for _ in range(3):
+                x, v = dense(tau)
+                f0, f1 = canon.field(x, v)
+                along = (x - cx) * f0 + (v - cy) * f1  # the velocity is −f
+                tau = np.clip(tau + along / (f0 * f0 + f1 * f1), first, last)
+            x, v = dense(tau)
+            worst = max(worst, float(np.hypot(x - cx, v - cy).max(initial=0.0)))
         return worst
 
     # ------------------------------------------------------------------ curves

@@ -4,8 +4,9 @@ the nearest arc of the curve it is a chord of, and the vertical ray's crossings)
 The tilted basin boundaries (:mod:`atlas.boundaries.tilted`) are polylines of some 10⁴–10⁵
 short segments each, cut from DOP853's dense output by :func:`refine` until every chord lies
 within a tolerance of the curve; the untilted trace's vertices are walked along L's dense
-output by :func:`walk` (chords within a spacing and the curvature's share of it). :func:`build` groups them, in their order along the curves,
-into a bounding-volume hierarchy: ``FAN`` consecutive segments per leaf box, ``FAN`` boxes
+output by :func:`walk` (chords within a spacing and the curvature's share of it).
+:func:`build` groups the segments, in their order along the curves, into a bounding-volume
+hierarchy: ``FAN`` consecutive segments per leaf box, ``FAN`` boxes
 per box of the level above, until at most ``FAN`` boxes remain (consecutive pieces of a
 smooth curve have tight boxes). :func:`nearest_segments` finds, per point (``prange``:
 independent of the thread count), the Euclidean distance to the nearest segment and its tag

@@ -313,7 +313,7 @@ def brute_distance(tb: TiltedBoundaries, theta, theta_dot, reach=1.0):
                 m = int(np.argmin(d))
                 lo, hi = times[max(m - 1, 0)], times[min(m + 1, times.size - 1)]
 
-                def gap(t, shift=shift, dense=dense):
+                def gap(t, shift=shift, dense=dense, px=px, py=py):
                     x, v = dense(np.array([t]))
                     return math.hypot(x[0] + shift - px, v[0] - py)
 
@@ -322,6 +322,33 @@ def brute_distance(tb: TiltedBoundaries, theta, theta_dot, reach=1.0):
                 best = min(best, res.fun, d[m])
         out.append(best)
     return np.array(out)
+
+
+@pytest.mark.parametrize("case", ["bstab", "reversed"])
+def test_reference_error_is_the_distance_between_the_two_tolerances(case, built):
+    """reference_error, the largest distance of the rtol 1e-12 branches' vertices from the
+    1e-13 branches, is at least the distance scipy's bounded minimisation finds (over the
+    offset from each vertex's own reversed time) for 100 sampled vertices, and of their
+    order (the drift along the curve, ~1e-5, does not enter)."""
+    from scipy.optimize import minimize_scalar
+
+    tb = built[case]
+    rng = np.random.default_rng(11)
+    found = []
+    for i, coarse in enumerate((tb._coarse.left, tb._coarse.right)):
+        dense, sol, _ = tb._branches.branches[i]
+        times, last = tb._coarse.times[i], sol.t[-1]
+        for j in rng.choice(np.arange(coarse.shape[1] - 2), 50, replace=False):
+            c, t = coarse[:, j + 1], min(times[j], last)
+
+            def gap(u, c=c, t=t, dense=dense):
+                return math.hypot(*(dense(np.array([t + u]))[:, 0] - c))
+
+            found.append(minimize_scalar(gap, bounds=(-0.05, min(0.05, last - t)),
+                                         method="bounded", options={"xatol": 1e-18}).fun)
+    found = np.array(found)
+    assert np.all(found <= tb.reference_error * (1 + 1e-6))
+    assert 0 < tb.reference_error < 100 * found.max() and tb.reference_error < 1e-9
 
 
 @pytest.mark.parametrize("case", ["bstab", "monostable", "reversed"])
