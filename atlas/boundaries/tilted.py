@@ -14,8 +14,8 @@ point's side within reach of the arcs), distances (the chords searched,
 (curved polygons clipped) are exact for the dense output, their error ``reference_error``
 (the change from rtol 1e-12 to 1e-13). Units: θ [rad], θ̇ [rad s⁻¹], distances and areas in
 the (θ, θ̇) plane with both as one unit ("rad-ish"). References: Krauskopf et al., Int. J.
-Bifurcation Chaos 15 (2005) 763; Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5–6; Levi, Hoppensteadt &
-Miranker, Q. Appl. Math. 36 (1978) 167. Derivation: docs/design/tilted-boundaries.md.
+Bifurcation Chaos 15 (2005) 763; Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.5–6; Levi,
+Hoppensteadt & Miranker, Q. Appl. Math. 36 (1978) 167. Derivation: docs/design/tilted-boundaries.md.
 """
 
 from __future__ import annotations
