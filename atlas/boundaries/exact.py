@@ -6,12 +6,12 @@ basin), its distance to the nearest boundary, the saddles of the boundaries near
 area of each basin in the window, and the boundaries' own error. :func:`exact_boundaries`
 picks the implementation: :class:`UntiltedExact` (τ = 0: the stable manifolds of
 :mod:`atlas.boundaries.manifold`, one DOP853 curve and its copies, areas by quadrature),
-:class:`TiltedExact` (0 < |τ| < ω0²: :mod:`atlas.boundaries.tilted`, polylines for sides
-and distances, areas and nearest points exact for the DOP853 dense output) and
+:class:`TiltedExact` (0 < |τ| < ω0²: :mod:`atlas.boundaries.tilted`, sides, distances,
+areas and nearest points exact for the DOP853 dense output, polylines to search it) and
 :class:`UnboundedExact` (|τ| > ω0²: no rest state, no boundary, the running basin is the
 whole plane). Accuracy: distances and sides are exact for the
 reference curves, whose error is ``reference_error`` (the change from DOP853 rtol 1e-12 to
-1e-13, plus the polylines' chord error with torque). After Attractors.jl's small mapper
+1e-13). After Attractors.jl's small mapper
 interface. Derivations: docs/design/separatrices.md, docs/design/tilted-boundaries.md.
 """
 

@@ -464,10 +464,10 @@ class TiltedBoundaries:
         return self.sign * (x + _TWO_PI * np.asarray(k)), self.sign * v
 
     def axis_speeds(self) -> np.ndarray:
-        """θ̇ [rad s⁻¹] where the branches in the window (:meth:`curves`' clipped runs of the
-        search polylines) cross the axis θ = 0, on the branches themselves (a segment whose
-        ends have θ of opposite signs holds a crossing of its arc, found by bisection in
-        reversed time on the dense output, :meth:`_axis_crossings`); unsorted. Found on
+        """θ̇ [rad s⁻¹] where the branches in the window (the search polylines' runs, clipped
+        as :meth:`curves` clips its own) cross the axis θ = 0, on the branches themselves (a
+        segment whose ends have θ of opposite signs holds a crossing of its arc, found by
+        bisection in reversed time on the dense output, :meth:`_axis_crossings`); unsorted. Found on
         Γ_0: Γ_k's segment crosses θ = 0 where Γ_0's crosses θ = −2πk (each segment, shorter
         than MAX_SEGMENT, can cross one line only), so only the segments that cross and their
         neighbours (the clipping) are shifted."""
@@ -511,9 +511,9 @@ class TiltedBoundaries:
         return theta_dot
 
     def vertices_within(self, theta_range, theta_dot_range):
-        """(θ [rad], θ̇ [rad s⁻¹], saddle j) of every vertex of every branch (:meth:`iter_curves`,
-        unclipped) with θ ∈ ``theta_range`` and θ̇ ∈ ``theta_dot_range`` (closed; infinite
-        bounds allowed), in no particular order. Γ_0's vertices within the θ̇ range are sorted
+        """(θ [rad], θ̇ [rad s⁻¹], saddle j) of every vertex of every branch's search polyline
+        (:meth:`branches`, unclipped) with θ ∈ ``theta_range`` and θ̇ ∈ ``theta_dot_range``
+        (closed; infinite bounds allowed), in no particular order. Γ_0's vertices within the θ̇ range are sorted
         by θ once; Γ_k's within the θ range are then a slice of them (θ0 + 2πk, rounded, is
         monotone in θ0), its ends found by bisection and checked on the shifted values."""
         (t0, t1), (u0, u1) = theta_range, theta_dot_range

@@ -248,11 +248,11 @@ def _shoot_chunk(b, n_chunks, theta, theta_dot, d_theta, d_theta_dot, half_width
                         code, centre_in, sg = _read(th[lane], v[lane], yt[lane], yv[lane],
                                                     beta[lane], w[lane], saddle0, pinv, box,
                                                     r_max)
-                        if code == CROSSED and (w[lane] > target[i]
-                                                or w[lane] + drift[lane] > budget):
+                        if code == CROSSED and check[lane] < n_checks and (
+                                w[lane] > target[i] or w[lane] + drift[lane] > budget):
                             # certified for the whole segment, wider than wanted: a part of
                             # half-width h < 1 (in units of w) around the estimate is read
-                            # from now on
+                            # from now on (while checks are left: else the whole stands)
                             h = min(target[i], 0.9 * (budget - drift[lane])) / w[lane]
                             if h > 0.0:
                                 sub[lane], sub_r[lane] = True, h

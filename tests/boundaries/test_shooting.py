@@ -143,3 +143,23 @@ def test_another_method_is_not_shot():
     lo, hi, ok, _ = shooter.refine(np.array([[0.0, 1.9]]), np.array([[0.0, 1.0]]),
                                    np.zeros(1), np.array([np.pi]))
     assert shooter.box is None and shooter.shots == 0 and not ok.any()
+
+
+def test_a_whole_crossing_at_the_last_check_is_kept(boundary):
+    """A wide segment crossed at its very last check (no check left to read a part in)
+    keeps the whole segment's certificate: the same kind and part as without a target."""
+    p, star, normal, _, t_max = boundary
+    shooter = Shooter(p, TOL, dt=DT, t_max=t_max)
+    big = 512 * HALF_WIDTH * TOL
+    kind, n_steps, *_ = _shoot(p, shooter, star, normal, big)
+    assert np.all(kind == CROSSED)
+    box = shooter.box
+    from atlas.kernels.shooting import CHECK_EVERY
+
+    for i in range(star.shape[0]):
+        last = int(n_steps[i]) // CHECK_EVERY  # the check at which the whole was crossed
+        got = shoot(star[i:i + 1, 0], star[i:i + 1, 1], normal[i:i + 1, 0], normal[i:i + 1, 1],
+                    np.array([big]), box.pinv, box.constants, r_max=box.r_max,
+                    saddle0=p.saddle_angle, alpha=p.alpha, omega0=p.omega0, torque=p.torque,
+                    dt=DT, n_checks=last, target=HALF_WIDTH * TOL, budget=TOL)
+        assert got[0][0] == CROSSED and tuple(got[5][0]) == (-1.0, 1.0)
