@@ -513,9 +513,10 @@ class TiltedBoundaries:
     def vertices_within(self, theta_range, theta_dot_range):
         """(θ [rad], θ̇ [rad s⁻¹], saddle j) of every vertex of every branch's search polyline
         (:meth:`branches`, unclipped) with θ ∈ ``theta_range`` and θ̇ ∈ ``theta_dot_range``
-        (closed; infinite bounds allowed), in no particular order. Γ_0's vertices within the θ̇ range are sorted
-        by θ once; Γ_k's within the θ range are then a slice of them (θ0 + 2πk, rounded, is
-        monotone in θ0), its ends found by bisection and checked on the shifted values."""
+        (closed; infinite bounds allowed), in no particular order. Γ_0's vertices within the
+        θ̇ range are sorted by θ once; Γ_k's within the θ range are then a slice of them
+        (θ0 + 2πk, rounded, is monotone in θ0), its ends found by bisection and checked on the
+        shifted values."""
         (t0, t1), (u0, u1) = theta_range, theta_dot_range
         f = self._fine
         xy = np.concatenate([f.left, f.right], axis=1)
