@@ -3,10 +3,10 @@
 Every basin boundary that meets the axis θ0 = 0 (inside the window or not, without torque;
 inside it, with torque) crosses it at one initial speed θ̇0 [rad s⁻¹]. The exact boundary
 predicts that speed — without torque the exact value of L at θ = −(|n| − 1)π
-(:func:`axis_crossings`), with torque the exact polylines' crossings of θ = 0
-(:func:`tilted_crossings`) — and bisection along θ̇0 on certified RK4 labels
-(:mod:`atlas.boundaries.bisection`), or with torque a shot to the saddle
-(:mod:`atlas.boundaries.shooting`), locates the label change to ``tol``: the crossing of the
+(:func:`axis_crossings`), with torque the exact branches' crossings of θ = 0
+(:func:`tilted_crossings`) — and a shot to the saddle (:mod:`atlas.boundaries.shooting`),
+or where that cannot certify it bisection along θ̇0 on certified RK4 labels
+(:mod:`atlas.boundaries.bisection`), locates the label change to ``tol``: the crossing of the
 RK4 map's boundary at step dt. Derivation: docs/design/separatrices.md.
 """
 
@@ -40,9 +40,13 @@ def axis_crossings(m: StableManifold, saddles: np.ndarray, tol: float, dt: float
     left branch of π shifted by (n − 1)π, at θ̇ = L(−(n − 1)π); for n ≤ −1 the right branch,
     the reflection of L shifted by (n + 1)π, at θ̇ = −L((n + 1)π). The reference ``m`` gives L
     there (:meth:`~atlas.boundaries.manifold.StableManifold.extended` if it ends short of
-    −(|n| − 1)π: a crossing may lie beyond the window's speeds); the crossing is bisected
-    along the θ̇0 axis on certified labels, with t_max covering the travel time to the saddle.
-    Returns (θ̇0, bracket width, k above, the labeller)."""
+    −(|n| − 1)π: a crossing may lie beyond the window's speeds); the crossing is shot to its
+    saddle along the θ̇0 axis (:class:`atlas.boundaries.shooting.Shooter`, its Newton estimate
+    stored) or, where that cannot certify it (or for a method the shots do not integrate),
+    bisected along the axis on certified labels, with t_max covering the travel time to the
+    saddle. Returns (θ̇0, bracket width, k above, the labeller, the orbits shot)."""
+    from atlas.boundaries.shooting import Shooter, left_to_labels
+
     u = -(np.abs(saddles) - 1) * np.pi
     if u.size:
         m = m.extended(float(u.min()))
@@ -51,10 +55,17 @@ def axis_crossings(m: StableManifold, saddles: np.ndarray, tol: float, dt: float
                       backend, method)
     predicted = np.sign(saddles) * m.at(travel)[1]
     base = np.column_stack([np.zeros(saddles.size), predicted])
+    up = np.broadcast_to([0.0, 1.0], base.shape)
     k_above = (saddles + 1) // 2
-    lo, hi = bisect_across(labels, base, np.broadcast_to([0.0, 1.0], base.shape), k_above,
-                           tol=tol, half_width=FIRST_BRACKET * tol, strict=False)
-    return predicted + 0.5 * (lo + hi), hi - lo, k_above, labels
+    shooter = Shooter(m.pendulum, tol, dt=dt, t_max=labels.t_max, method=method)
+    lo, hi, ok, at = shooter.refine(base, np.ascontiguousarray(up), np.zeros(saddles.size),
+                                    saddles * np.pi)
+    for bad, centre, half_width in left_to_labels(ok, at, tol):
+        b_lo, b_hi = bisect_across(labels, base[bad] + centre[:, None] * up[bad], up[bad],
+                                   k_above[bad], tol=tol, half_width=half_width, strict=False)
+        lo[bad], hi[bad] = centre + b_lo, centre + b_hi
+    at = np.where(ok, at, 0.5 * (lo + hi))
+    return predicted + at, hi - lo, k_above, labels, shooter.shots
 
 
 def tilted_crossings(exact, labels, shooter, window: Window, tol: float):

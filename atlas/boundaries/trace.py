@@ -261,8 +261,8 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
     checked = check(ref, stored_n, branch[source], vertex[source], stored_theta,
                     point[source, 1])
     saddles = np.unique(stored_n).astype(np.int64)
-    crossing, crossing_width, k_above, axis_labels = axis_crossings(ref, saddles, tol, dt,
-                                                                    backend, method)
+    crossing, crossing_width, k_above, axis_labels, axis_shots = axis_crossings(
+        ref, saddles, tol, dt, backend, method)
     crossing_in_window = (window.margin(0.0, crossing) >= 0).astype(np.int8)
 
     problems = []
@@ -310,8 +310,8 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
             "discrepancy": checked.discrepancy,
             "discrepancy_bound": DISCREPANCY_BOUND,
             "polyline_error": checked.polyline_error,
-            "n_orbits": labels.orbits + shooter.shots + axis_labels.orbits,
-            "n_shots": shooter.shots,
+            "n_orbits": labels.orbits + shooter.shots + axis_labels.orbits + axis_shots,
+            "n_shots": shooter.shots + axis_shots,
             "rounding": shooter.rounding,
             "n_unresolved": labels.unresolved + axis_labels.unresolved,
             "warnings": "\n".join(problems),
