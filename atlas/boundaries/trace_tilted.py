@@ -35,6 +35,7 @@ from atlas.boundaries.bisection import (
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND
 from atlas.boundaries.crossings import PROBE, tilted_crossings
 from atlas.boundaries.predictor import fine_spacing
+from atlas.boundaries.segments import segment_distance
 from atlas.boundaries.shooting import HALF_WIDTH, Shooter, left_to_labels
 from atlas.boundaries.tilted import SLACK
 from atlas.boundaries.window import Window
@@ -72,12 +73,13 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     ``saddle_n`` = 2j + 1 for the saddle π − θ* + 2πj, the one near (2j + 1)π; attributes as
     without torque, plus ``torque``, ``shift_error``, ``shift_pairs``, ``n_skipped`` and
     ``reference_error`` (the exact boundaries' own error: DOP853's, from rtol 1e-12 to 1e-13;
-    ``polyline_error``, the search polylines' chord error, is not part of it: distances are
-    measured to the dense output).
+    sides and distances are the dense output's). ``polyline_error``, as without torque, is
+    the largest distance of the exact boundary from the polyline through the stored points
+    (:func:`_vertices`).
     """
     labels = Labeller(p, dt, t_max + linger(p, tol), backend, method, barrier)
     shooter = Shooter(p, tol, dt=dt, t_max=labels.t_max, method=method)
-    saddle_j, branch, vertex, arc, base = _vertices(exact, window, max_spacing)
+    saddle_j, branch, vertex, arc, base, sagitta = _vertices(exact, window, max_spacing)
     normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1])) if base.size \
         else base.copy()
     below = exact.side(base[:, 0] - PROBE * normal[:, 0], base[:, 1] - PROBE * normal[:, 1])
@@ -135,7 +137,7 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
             "shift_error": shift_error, "shift_pairs": np.int64(shift_pairs),
             "n_skipped": np.int64(skipped),
             "discrepancy": discrepancy, "discrepancy_bound": DISCREPANCY_BOUND,
-            "polyline_error": exact.chord_error,
+            "polyline_error": sagitta,
             "reference_error": exact.reference_error,
             "n_orbits": labels.orbits + shooter.shots, "n_shots": shooter.shots,
             "rounding": shooter.rounding, "n_unresolved": labels.unresolved,
@@ -159,10 +161,15 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
 def _vertices(exact, window: Window, max_spacing: float):
     """The vertices to locate: (saddle j, branch flag, vertex number along the branch — gaps
     outside the window —, arc length from the saddle [rad-ish], (θ, θ̇) (N, 2)) of every
-    branch in the window, about ``max_spacing`` apart along it."""
+    branch in the window, about ``max_spacing`` apart along it; and the polyline error, the
+    largest distance of the branch from the chord of two consecutive vertices (its search
+    polyline's vertices between them, points of the branch, against that chord; the
+    located points lie ≈ 1e-9 from the vertices; a small window's extra points, ``fine``
+    apart, are left out: their chords stray by less than fine²/8 per rad of curvature)."""
     parts = []  # (saddle j, branch, vertex numbers, θ, θ̇, arc lengths) per branch
     fine = fine_spacing(window)
     arcs = {}  # every translate of a branch has its arc lengths and picks: computed once
+    sagitta = 0.0
     for j, name, vertices, on_curve in exact.branches():  # only the picks shifted to Γ_k
         if name not in arcs:
             theta, theta_dot = vertices()
@@ -170,12 +177,16 @@ def _vertices(exact, window: Window, max_spacing: float):
             along = np.concatenate([[0.0], np.cumsum(step)])
             picks = np.unique(np.searchsorted(along, np.arange(_FIRST_VERTEX, along[-1],
                                                                max_spacing)))
-            arcs[name] = along, picks[picks < theta.size]
-        along, picks = arcs[name]
+            arcs[name] = along, picks[picks < theta.size], theta, theta_dot
+        along, picks, theta, theta_dot = arcs[name]
         pos, (x, v) = along[picks], vertices(picks)
         if fine < max_spacing:  # a small window: points on the chords, ``fine`` apart
             pos, x, v = _fine_points(window, fine, along, *vertices(), on_curve,
                                      SLACK * exact.chord_error, pos, x, v)
+        else:  # the chords between consecutive picks in the window (shift-invariant: Γ_0's)
+            inside = np.flatnonzero(window.margin(x, v) >= 0)
+            pair = inside[:-1][np.diff(inside) == 1]
+            sagitta = max(sagitta, _sagitta(theta, theta_dot, picks[pair], picks[pair + 1]))
         number = np.flatnonzero(window.margin(x, v) >= 0)  # along the branch: gaps outside
         parts.append((np.full(number.size, j, np.int64),
                       np.full(number.size, schema.BRANCHES.index(name), np.int8),
@@ -186,7 +197,24 @@ def _vertices(exact, window: Window, max_spacing: float):
             else np.zeros(0, dtype)
 
     base = np.column_stack([cat(3, float), cat(4, float)]).reshape(-1, 2)
-    return cat(0, np.int64), cat(1, np.int8), cat(2, np.int32), cat(5, float), base
+    return cat(0, np.int64), cat(1, np.int8), cat(2, np.int32), cat(5, float), base, sagitta
+
+
+def _sagitta(theta, theta_dot, a, b) -> float:
+    """The largest distance [rad-ish] of the polyline vertices strictly between ``a[k]`` and
+    ``b[k]`` (indices into ``theta``, ``theta_dot``, increasing; each pair's b the next's a
+    or less) from the chord (a[k], b[k]), over k; 0 for no pair."""
+    if not a.size:
+        return 0.0
+    m = np.arange(int(a.min()) + 1, int(b.max()))
+    k = np.searchsorted(a, m, side="right") - 1
+    keep = (k >= 0) & (m < b[np.maximum(k, 0)])
+    m, k = m[keep], k[keep]
+    if not m.size:
+        return 0.0
+    dist = segment_distance(theta[m], theta_dot[m], theta[a[k]], theta_dot[a[k]],
+                            theta[b[k]], theta_dot[b[k]])
+    return float(dist.max())
 
 
 def _fine_points(window: Window, fine: float, along, theta, theta_dot, on_curve,

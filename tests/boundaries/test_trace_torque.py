@@ -36,6 +36,27 @@ def traced(request):
     return p, barrier, exact, sep
 
 
+def test_polyline_error_is_the_stored_polylines(traced):
+    """polyline_error is how far the exact boundary strays from the polyline through the
+    stored points: the largest distance of points on their chords (15 a chord, consecutive
+    vertices of a branch) from the exact boundaries, to a tenth (both measure the chords'
+    sagitta), and below max_spacing²/8 per rad of curvature at most 1."""
+    _, _, exact, sep = traced
+    n, b, vertex = (sep[name].values for name in ("saddle_n", "branch", "vertex"))
+    theta, theta_dot = sep["theta"].values, sep["theta_dot"].values
+    order = np.lexsort((vertex, b, n))
+    same = (np.diff(n[order]) == 0) & (np.diff(b[order]) == 0) & (np.diff(vertex[order]) == 1)
+    i0, i1 = order[:-1][same], order[1:][same]
+    f = np.linspace(0.0, 1.0, 17)[1:-1, None]
+    x = theta[i0] + f * (theta[i1] - theta[i0])
+    v = theta_dot[i0] + f * (theta_dot[i1] - theta_dot[i0])
+    dist, _ = exact.distance(x.ravel(), v.ravel())
+    error = sep.attrs["polyline_error"]
+    assert i0.size > 20
+    assert dist.max() == pytest.approx(error, rel=0.1)
+    assert error < sep.attrs["max_spacing"] ** 2 / 8
+
+
 @pytest.mark.slow
 def test_labels_differ_across_every_located_point(traced):
     """At every located point ± tol along the normal of the vector field: two certified RK4
