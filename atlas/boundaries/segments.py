@@ -66,15 +66,19 @@ class Segments:
 
     def nearest(self, px, py):
         """(distance, tag of the nearest segment) for points (px, py): exact for the
-        polylines (class docstring); (inf, 0) when there are none."""
-        from atlas.kernels.segments import nearest_segments
+        polylines (class docstring; the curves' search with every segment straight and no
+        slack, :func:`atlas.kernels.segments.nearer_curves`); (inf, 0) when there are none."""
+        from atlas.kernels.segments import nearer_curves
 
         px = np.ascontiguousarray(px, dtype=np.float64).ravel()
         py = np.ascontiguousarray(py, dtype=np.float64).ravel()
-        dist, tag = np.empty(px.size), np.zeros(px.size, np.int64)
-        nearest_segments(px, py, self.ax, self.ay, self.bx, self.by, self.tag, self.xlo,
-                         self.xhi, self.ylo, self.yhi, self.start, dist, tag)
-        return dist, tag
+        dist2, tag = np.full(px.size, np.inf), np.zeros(px.size, np.int64)
+        n, none = self.ax.size, np.zeros(0)
+        nearer_curves(px, py, self.ax, self.ay, self.bx, self.by, self.tag, self.xlo,
+                      self.xhi, self.ylo, self.yhi, self.start, np.inf, -np.inf, 0.0,
+                      np.full(n, -1, np.int64), np.zeros((n, 2)), np.zeros(n),
+                      np.zeros((1, 7, 2)), np.zeros((1, 2)), dist2, tag, none, none)
+        return np.sqrt(dist2), tag
 
     def sides(self, px, py, k_lo: int, k_hi: int, flip_from, bistable: bool, running: int):
         """The side of each point by the parity of its upward vertical ray's crossings with

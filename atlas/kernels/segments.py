@@ -8,16 +8,16 @@ output by :func:`walk` (chords within a spacing and the curvature's share of it)
 :func:`build` groups the segments, in their order along the curves, into a bounding-volume
 hierarchy: ``FAN`` consecutive segments per leaf box, ``FAN`` boxes
 per box of the level above, until at most ``FAN`` boxes remain (consecutive pieces of a
-smooth curve have tight boxes). :func:`nearest_segments` finds, per point (``prange``:
-independent of the thread count), the Euclidean distance to the nearest segment and its tag
-by a depth-first search, nearest box first, that skips every box farther than the best
-distance found: exact for the polylines (the box distance is a lower bound). Each search
-starts from the leaf of the previous point's nearest segment (neighbours on a grid share
-their nearest boundary: a tight first bound); :func:`nearer_segments` also from a bound the
-caller knows (a search among fewer segments before). :func:`nearer_curves` searches the
-chords for the arcs they stand for (each within a slack of its chord: the reach of every
-bound grows by it) and measures each arc within reach by Newton's method on its piece of the
-dense output: exact for the dense output.
+smooth curve have tight boxes). :func:`nearer_curves` finds, per point (``prange``:
+independent of the thread count), the Euclidean distance to the nearest of the curves the
+segments are chords of, and its tag, by a depth-first search, nearest box first, that skips
+every box farther than the best distance found plus a slack (each arc within it of its
+chord: the box distance less the slack is a lower bound) and measures each arc within reach
+by Newton's method on its piece of the dense output: exact for the dense output (for
+straight pieces and no slack, exact for the polylines). Each search starts from the leaf of
+the previous point's nearest segment (neighbours on a grid share their nearest boundary: a
+tight first bound), and from a bound the caller knows (a search among fewer segments
+before).
 :func:`ray_sides` counts, per point, the crossings of the upward vertical ray with the
 segments of each tag (a segment covers θ ∈ [min, max) of its ends, its θ̇ at θ by linear
 interpolation), for the side rule of :meth:`atlas.boundaries.tilted.TiltedBoundaries.side`:
@@ -36,12 +36,11 @@ import numpy as np
 from atlas.kernels import cached_njit
 from atlas.kernels.dop853 import dense_component, dense_step
 
-__all__ = ["FAN", "refine", "walk", "build", "nearest_segments", "nearer_segments",
-           "nearer_curves", "ray_sides"]
+__all__ = ["FAN", "refine", "walk", "build", "nearer_curves", "ray_sides"]
 
 #: Children per box of the hierarchy (segments per leaf box).
 FAN = 16
-_CHUNK = 256  # points per parallel task of nearest_segments (each seeds the next search)
+_CHUNK = 256  # points per parallel task of nearer_curves (each seeds the next search)
 #: :func:`ray_sides` walks the hierarchy once for all points (instead of once per column of
 #: equal θ) when they hold fewer than this many a column on average (measured on the tilted
 #: boundaries: scattered points ~2 µs each instead of ~13 µs; equal near 64 a column).
@@ -275,64 +274,28 @@ def _segment_distance2(px, py, ax, ay, bx, by):
 
 
 @cached_njit(parallel=True, nogil=True)
-def nearest_segments(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, out_dist,
-                     out_tag):
-    """Per point (px, py): the distance to the nearest segment (ax, ay) → (bx, by) and that
-    segment's ``tag`` into ``out_dist``, ``out_tag`` (inf, 0 without segments); the
-    hierarchy from :func:`build`. Exact for the segments (module docstring)."""
-    step, span, shift, F, y_old, no_foot = _chords_only()
-    for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
-        first, stop = chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size)
-        out_dist[first:stop] = np.inf
-        out_tag[first:stop] = 0
-        _nearest_run(first, stop, px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start,
-                     np.inf, -np.inf, 0.0, step, span, shift, F, y_old, out_dist, out_tag,
-                     no_foot, no_foot)
-        for p in range(first, stop):
-            out_dist[p] = math.sqrt(out_dist[p])
-
-
-@cached_njit(parallel=True, nogil=True)
-def nearer_segments(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, searched_lo,
-                    searched_hi, dist2, near_tag):
-    """:func:`nearest_segments` from known bounds, on squared distances: on entry
-    ``dist2``, ``near_tag`` hold each point's squared distance to some segment and its tag
-    (inf, 0 for none), the nearest of a search before; each is replaced where a nearer
-    segment is found, and the search skips every box not nearer than it and every box
-    within θ ∈ [``searched_lo``, ``searched_hi``] (the segments that search had: pass inf,
-    −inf for none). The minimum over both searches' segments: the same doubles as one
-    search over them all."""
-    step, span, shift, F, y_old, no_foot = _chords_only()
-    for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
-        _nearest_run(chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size), px, py, ax, ay, bx,
-                     by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, 0.0, step,
-                     span, shift, F, y_old, dist2, near_tag, no_foot, no_foot)
-
-
-@cached_njit(parallel=True, nogil=True)
 def nearer_curves(px, py, ax, ay, bx, by, tag, xlo, xhi, ylo, yhi, start, searched_lo,
                   searched_hi, slack, step, span, shift, F, y_old, dist2, near_tag, foot_x,
                   foot_y):
-    """:func:`nearer_segments` for the curves the chords stand for: segment s is the chord
+    """Per point (px, py), the nearest of the curves the chords stand for, from known
+    bounds, on squared distances (the hierarchy from :func:`build`): segment s is the chord
     of the dense output's polynomial of step ``step[s]`` (``F``, ``y_old``:
     :func:`atlas.kernels.dop853.dense_output`'s) over x ∈ [``span[s, 0]``, ``span[s, 1]``],
     moved by (``shift[s]``, 0), and lies within ``slack`` [rad-ish] of it (a straight piece:
     ``step[s]`` = −1, the chord itself). Each point's squared distance to the nearest curve
     (:func:`_curve_distance2`: Newton's method on the polynomial) replaces ``dist2`` where
     nearer, with its tag and its foot (``foot_x``, ``foot_y``: the nearest point of that
-    curve). A box (or chord) farther than √best + slack is skipped: no curve in it can be
-    nearer. Exact for the dense output, to Newton's convergence."""
+    curve; zero-size arrays: not written). On entry ``dist2``, ``near_tag`` hold each
+    point's squared distance to some curve and its tag (inf, 0 for none), the nearest of a
+    search before; the search skips every box farther than √best + slack (no curve in it can
+    be nearer) and every box within θ ∈ [``searched_lo``, ``searched_hi``] (the segments
+    that search had: pass inf, −inf for none). The minimum over both searches' curves: the
+    same doubles as one search over them all. Exact for the dense output, to Newton's
+    convergence; with every segment a straight piece and no slack, exact for the chords."""
     for chunk in nb.prange((px.size + _CHUNK - 1) // _CHUNK):
         _nearest_run(chunk * _CHUNK, min((chunk + 1) * _CHUNK, px.size), px, py, ax, ay, bx,
                      by, tag, xlo, xhi, ylo, yhi, start, searched_lo, searched_hi, slack,
                      step, span, shift, F, y_old, dist2, near_tag, foot_x, foot_y)
-
-
-@nb.njit(inline="always")
-def _chords_only():
-    """The curve arrays of a search over chords alone (no curves: every chord is exact)."""
-    return (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 1, 2)),
-            np.zeros((0, 2)), np.zeros(0))
 
 
 @nb.njit(inline="always")

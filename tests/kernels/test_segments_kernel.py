@@ -70,8 +70,12 @@ def test_nearest_does_not_depend_on_the_order_of_the_points():
 
 
 def _search(seg, px, py, dist2, tag, searched=(np.inf, -np.inf)):
-    kernel.nearer_segments(px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
-                           seg.ylo, seg.yhi, seg.start, *searched, dist2, tag)
+    """The chords' search (every segment a straight piece, no slack), from bounds."""
+    n, none = seg.ax.size, np.zeros(0)
+    kernel.nearer_curves(px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
+                         seg.ylo, seg.yhi, seg.start, *searched, 0.0, np.full(n, -1, np.int64),
+                         np.zeros((n, 2)), np.zeros(n), np.zeros((1, 7, 2)), np.zeros((1, 2)),
+                         dist2, tag, none, none)
 
 
 def test_nearer_segments_continue_a_search_of_fewer_segments():
@@ -277,26 +281,24 @@ def test_dense_jet_is_the_dense_output_and_its_derivatives(branch):
             assert abs(second - (at[2] - 2 * at[1] + at[0]) / h**2) < 1e-4 * scale
 
 
-def test_nearer_curves_without_a_slack_over_straight_pieces_is_nearer_segments():
-    """Every segment a straight piece (step −1) and no slack: the curves' search is the
-    chords' (the same doubles and tags), with each foot the chord's nearest point."""
+def test_the_foot_of_a_straight_piece_is_its_nearest_point():
+    """Every segment a straight piece and no slack: each point's foot is the chord's nearest
+    point, at the distance found, which is the brute-force minimum over the chords."""
     rng = np.random.default_rng(9)
     t = np.cumsum(rng.uniform(0.001, 0.01, 400))
     runs = [(t, np.sin(3 * t), 2), (t + 0.5, np.cos(2 * t), 5)]
     seg = Segments(runs)
     px, py = rng.uniform(0, 3, 300), rng.uniform(-1, 1, 300)
     d2, tag = np.full(300, np.inf), np.zeros(300, np.int64)
-    kernel.nearer_segments(px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
-                           seg.ylo, seg.yhi, seg.start, np.inf, -np.inf, d2, tag)
-    c2, ctag = np.full(300, np.inf), np.zeros(300, np.int64)
     fx, fy = np.full(300, np.nan), np.full(300, np.nan)
     n = seg.ax.size
     kernel.nearer_curves(px, py, seg.ax, seg.ay, seg.bx, seg.by, seg.tag, seg.xlo, seg.xhi,
                          seg.ylo, seg.yhi, seg.start, np.inf, -np.inf, 0.0,
                          np.full(n, -1, np.int64), np.zeros((n, 2)), np.zeros(n),
-                         np.zeros((1, 7, 2)), np.zeros((1, 2)), c2, ctag, fx, fy)
-    np.testing.assert_array_equal(c2, d2)
-    np.testing.assert_array_equal(ctag, tag)
+                         np.zeros((1, 7, 2)), np.zeros((1, 2)), d2, tag, fx, fy)
+    best, best_tag = _brute_nearest(runs, px, py)
+    np.testing.assert_allclose(np.sqrt(d2), best, rtol=4e-16, atol=0)
+    np.testing.assert_array_equal(tag, best_tag)
     np.testing.assert_allclose(np.hypot(fx - px, fy - py), np.sqrt(d2), rtol=1e-12)
 
 
