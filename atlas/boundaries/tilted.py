@@ -163,10 +163,24 @@ class _Polyline:
         self.theta, self.theta_dot = np.concatenate([self.left[:, ::-1], self.right[:, 1:]],
                                                     axis=1)
         self.times, self.chord_error = times, chord_error
+        self._fundamental = fundamental
+
+    @cached_property
+    def _pieces(self):
+        """(step, span) of every segment of ``theta`` (made on first use: the distance search
+        needs them, the reference polyline and the drawn curves do not)."""
         (l_step, l_span), (r_step, r_span) = (
-            fundamental.pieces_of(i, t) for i, t in enumerate(times))
-        self.step = np.concatenate([l_step[::-1], r_step])
-        self.span = np.ascontiguousarray(np.concatenate([l_span[::-1, ::-1], r_span]))
+            self._fundamental.pieces_of(i, t) for i, t in enumerate(self.times))
+        return (np.concatenate([l_step[::-1], r_step]),
+                np.ascontiguousarray(np.concatenate([l_span[::-1, ::-1], r_span])))
+
+    @property
+    def step(self) -> np.ndarray:
+        return self._pieces[0]
+
+    @property
+    def span(self) -> np.ndarray:
+        return self._pieces[1]
 
 
 class _Fundamental:
@@ -386,9 +400,9 @@ class TiltedBoundaries:
         canon = Pendulum(self.pendulum.alpha, self.pendulum.omega0, abs(self.pendulum.torque))
         worst = 0.0
         for i, coarse in enumerate((self._coarse.left, self._coarse.right)):
-            dense, _, end = self._branches.branches[i]
+            dense, sol, _ = self._branches.branches[i]
             times = self._coarse.times[i]
-            first, last = times[0], self._branches.branches[i][1].t[-1]
+            first, last = times[0], sol.t[-1]
             cx, cy = coarse[0, 1:], coarse[1, 1:]  # the saddle left out: the same point
             tau = np.minimum(times, last)
             for _ in range(3):

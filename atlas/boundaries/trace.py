@@ -51,7 +51,7 @@ from atlas.boundaries.predictor import (
     sources,
     window_boxes,
 )
-from atlas.boundaries.shooting import HALF_WIDTH, Shooter, left_to_labels
+from atlas.boundaries.shooting import Shooter, left_to_labels
 from atlas.boundaries.trace_tilted import trace_tilted
 from atlas.boundaries.window import Window, checked_window
 from atlas.physics.pendulum import Pendulum
@@ -194,16 +194,15 @@ def _relocate(shooter, labels, base, normal, saddle_n, rows, tol: float, lo, hi,
         return
     s_lo, s_hi, s_ok, s_at = shooter.refine(base[rows], normal[rows], at[rows],
                                             saddle_n[rows] * math.pi)
-    again = ~s_ok
-    if again.any():
-        centre = at[rows[again]]
-        b_lo, b_hi = bisect_across(labels, base[rows[again]] + centre[:, None]
-                                   * normal[rows[again]], normal[rows[again]],
-                                   (saddle_n[rows[again]] + 1) // 2, tol=tol, strict=False,
-                                   half_width=HALF_WIDTH * tol)
-        s_lo[again], s_hi[again] = centre + b_lo, centre + b_hi
-        s_at[again] = 0.5 * (s_lo[again] + s_hi[again])
-    lo[rows], hi[rows], at[rows] = s_lo, s_hi, s_at
+    guess = np.where(np.isfinite(s_at), s_at, at[rows])  # a shot's estimate, else the twin's
+    for bad, centre, half_width in left_to_labels(s_ok, guess, tol):
+        b_lo, b_hi = bisect_across(labels, base[rows[bad]] + centre[:, None]
+                                   * normal[rows[bad]], normal[rows[bad]],
+                                   (saddle_n[rows[bad]] + 1) // 2, tol=tol, strict=False,
+                                   half_width=half_width)
+        s_lo[bad], s_hi[bad] = centre + b_lo, centre + b_hi
+    lo[rows], hi[rows] = s_lo, s_hi
+    at[rows] = np.where(s_ok, s_at, 0.5 * (s_lo + s_hi))
 
 
 def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: float,

@@ -180,14 +180,13 @@ def _vertices(exact, window: Window, max_spacing: float):
             arcs[name] = along, picks[picks < theta.size], theta, theta_dot
         along, picks, theta, theta_dot = arcs[name]
         pos, (x, v) = along[picks], vertices(picks)
-        if fine < max_spacing:  # a small window: points on the chords, ``fine`` apart
+        if fine < max_spacing:  # a small window: points on the branch, ``fine`` apart
             pos, x, v = _fine_points(window, fine, along, *vertices(), on_curve,
                                      SLACK * exact.chord_error, pos, x, v)
-        else:  # the chords between consecutive picks in the window (shift-invariant: Γ_0's)
-            inside = np.flatnonzero(window.margin(x, v) >= 0)
-            pair = inside[:-1][np.diff(inside) == 1]
-            sagitta = max(sagitta, _sagitta(theta, theta_dot, picks[pair], picks[pair + 1]))
         number = np.flatnonzero(window.margin(x, v) >= 0)  # along the branch: gaps outside
+        if fine >= max_spacing:  # the chords between consecutive picks in the window (their
+            pair = number[:-1][np.diff(number) == 1]  # shape shift-invariant: Γ_0's)
+            sagitta = max(sagitta, _sagitta(theta, theta_dot, picks[pair], picks[pair + 1]))
         parts.append((np.full(number.size, j, np.int64),
                       np.full(number.size, schema.BRANCHES.index(name), np.int8),
                       number.astype(np.int32), x[number], v[number], pos[number]))
