@@ -62,7 +62,7 @@ def torque_rows(quick: bool) -> list[dict]:
     with tempfile.TemporaryDirectory(prefix="atlas-bench-torque-") as tmp:
         folder = Path(tmp)
         for torque in (False, True):  # warm-up: every kernel compiled and cached
-            _run(folder, f"warm{int(torque)}", torque=torque, points=2, num=16)
+            _run(folder, f"warm{int(torque)}", torque=torque, points=2, num=64)
         flat_wall, flat = _run(folder, "untilted", torque=False, points=points, num=num)
         tilt_wall, tilt = _run(folder, "torque", torque=True, points=points, num=num)
     rows = [{"variant": f"torque sweep, {points} points, {num}² grid, end to end",

@@ -123,7 +123,10 @@ def measure_rate(cfg: Config, layout: Layout, barriers: list, seed: int = 0
     random grid rows (as a tile holds them), labelled with the run's kernels (``barriers``:
     the points' running barriers).
 
-    A first, untimed stretch loads (or compiles) the kernels. The sample grows from
+    A first, untimed call of :data:`FIRST_SAMPLE` orbits at each point timed loads (or
+    compiles) the kernels the timed calls take (it stops at the first trap test, so costs
+    little; a smaller one would load another kernel: :func:`atlas.kernels.lanes.n_chunks`,
+    and time the compilation of the one the timed calls take). The sample grows from
     :data:`FIRST_SAMPLE` orbits (aimed at the rate seen, at most fourfold:
     :func:`_next_sample`) until one call takes :data:`CALL_S` s (or
     :data:`MAX_SAMPLE` orbits), at one random parameter point, then is labelled as large at
@@ -151,7 +154,9 @@ def measure_rate(cfg: Config, layout: Layout, barriers: list, seed: int = 0
         return time.perf_counter() - start
 
     points = [int(p) for p in rng.permutation(layout.n_params)[:MAX_POINTS]]
-    seconds(points[0], sample(width))  # untimed: the kernels' loading or compilation
+    for p in points:  # untimed: load (or compile) every kernel the timed calls take, which
+        # a batch's size chooses (one chunk runs a serial twin: atlas.kernels.lanes)
+        seconds(p, sample(FIRST_SAMPLE), t_max=cfg.integrator.dt)
     n = FIRST_SAMPLE
     while True:
         first = sample(n)

@@ -67,6 +67,30 @@ def test_the_rate_is_the_per_orbit_cost_without_a_calls_fixed_cost(tmp_path, mon
             assert np.all(v == v[0]) and v[0] in layout.theta_dot0
 
 
+def test_every_kernel_the_timed_calls_take_is_loaded_before_timing(tmp_path, monkeypatch):
+    """A batch's size chooses the kernel (one chunk runs a serial twin, compiled on its own:
+    atlas.kernels.lanes.n_chunks), so the untimed first call must be as large as the timed
+    ones, at every point timed; a small one left the timed calls to compile theirs (a first
+    big run once announced 37 min for a 5 s sweep)."""
+    import atlas.labels.labelling as labelling
+    from atlas.kernels.lanes import n_chunks
+
+    cfg = _small(tmp_path)
+    layout = sweep.layout_of(cfg)
+    loaded, late = set(), []
+
+    def fake_label(theta0, theta_dot0, *, t_max, torque, **kw):
+        kernel = (torque, n_chunks(theta0.size) == 1)
+        if t_max == cfg.integrator.dt:
+            loaded.add(kernel)
+        elif kernel not in loaded:
+            late.append(kernel)
+
+    monkeypatch.setattr(labelling, "label", fake_label)
+    preflight.measure_rate(cfg, layout, [None] * layout.n_params)
+    assert loaded and not late, late
+
+
 def test_the_sample_grows_to_about_one_call_of_call_s(tmp_path, monkeypatch):
     """On a machine that labels 100 000 orbits/s (a fake clock), the sample grows until a
     call takes CALL_S, aimed at the rate seen: every timed call of the final size takes
