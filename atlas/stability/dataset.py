@@ -3,9 +3,11 @@ the bifurcations of the parameter ranges, laid out as the study file's schema
 (:mod:`atlas.store.study`) says.
 
 The bifurcations are computed here, once per line of the study: the homoclinic torque per
-(α, ω0), the saddle-node torque per ω0, the focus–node damping per (ω0, τ) and, in a study
-over α at fixed τ, the homoclinic damping inside the α range
-(:mod:`atlas.stability.bifurcations`).
+(α, ω0), the saddle-node torque per ω0, the focus–node damping per (ω0, τ); in a study over
+α at fixed τ, the homoclinic damping inside the α range; in a study over τ, the focus–node
+torque per (α, ω0); in a study over ω0, the saddle-node and focus–node frequencies and, at
+fixed τ, the homoclinic frequency inside the ω0 range (:mod:`atlas.stability.bifurcations`;
+which parameter each is a value of: :data:`atlas.store.study.BIFURCATIONS`).
 """
 
 from __future__ import annotations
@@ -24,30 +26,42 @@ from atlas.store.study import (
     RUNNING_BASIN,
     STUDY_FORMAT,
     STUDY_SCHEMA,
+    STUDY_VARIABLES,
     variable_attrs,
 )
 
 __all__ = ["study_dataset", "bifurcation_values"]
 
 
-def bifurcation_values(alphas, omega0s, torques, *, homoclinic_damping: bool):
-    """{name: array over its parameters (alpha, omega0, torque order, full lists)} of every
-    bifurcation the schema stores (module docstring)."""
+def bifurcation_values(alphas, omega0s, torques, swept) -> dict:
+    """{name: array over the parameters of its schema dims (full lists, in their order)} of
+    every bifurcation the schema stores for a study over ``swept`` (module docstring)."""
     out = {"homoclinic_torque": np.array([[bif.homoclinic_torque(a, w) for w in omega0s]
                                           for a in alphas]),
            "saddle_node_torque": np.array([bif.saddle_node_torque(w) for w in omega0s]),
            "focus_node_damping": np.array([[bif.focus_node_damping(w, t) for t in torques]
                                            for w in omega0s])}
-    if homoclinic_damping:
+    if "alpha" in swept and "torque" not in swept:  # over torque: homoclinic_torque's curve
         lo, hi = min(alphas), max(alphas)
         out["homoclinic_damping"] = np.array(
-            [[np.nan if (a := bif.homoclinic_damping(t, w, lo, hi)) is None else a
-              for t in torques] for w in omega0s])
+            [[_nan(bif.homoclinic_damping(t, w, lo, hi)) for t in torques] for w in omega0s])
+    if "torque" in swept:
+        out["focus_node_torque"] = np.array([[bif.focus_node_torque(a, w) for w in omega0s]
+                                             for a in alphas])
+    if "omega0" in swept:
+        out["saddle_node_omega0"] = np.array([bif.saddle_node_omega0(t) for t in torques])
+        out["focus_node_omega0"] = np.array([[bif.focus_node_omega0(a, t) for t in torques]
+                                             for a in alphas])
+        if "torque" not in swept:
+            lo, hi = min(omega0s), max(omega0s)
+            out["homoclinic_omega0"] = np.array(
+                [[_nan(bif.homoclinic_omega0(a, t, lo, hi)) for t in torques]
+                 for a in alphas])
     return out
 
 
-_OVER = {"homoclinic_torque": ("alpha", "omega0"), "saddle_node_torque": ("omega0",),
-         "focus_node_damping": ("omega0", "torque"), "homoclinic_damping": ("omega0", "torque")}
+def _nan(value):
+    return np.nan if value is None else value
 
 
 #: The running cycle's fatal shock: variable → field of
@@ -108,10 +122,9 @@ def study_dataset(cfg, settings: StudySettings, results: list[PointResult]) -> x
             continue
         put(name, array.reshape(shape), swept)
     put("point_status", status.reshape(shape), swept)
-    lines = bifurcation_values(values["alpha"], values["omega0"], values["torque"],
-                               homoclinic_damping="alpha" in swept and "torque" not in swept)
+    lines = bifurcation_values(values["alpha"], values["omega0"], values["torque"], swept)
     for name, array in lines.items():
-        full = _OVER[name]
+        full = STUDY_VARIABLES[name][0]  # the parameters it runs over
         keep = tuple(d for d in full if d in swept)
         index = tuple(slice(None) if d in swept else 0 for d in full)
         put(name, np.asarray(array, float)[index], keep)

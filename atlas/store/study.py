@@ -27,7 +27,8 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import PARAMETERS
 
-__all__ = ["STUDY_SCHEMA", "STUDY_FORMAT", "STUDY_VARIABLES", "POINT_STATUS_MEANINGS",
+__all__ = ["STUDY_SCHEMA", "STUDY_FORMAT", "STUDY_VARIABLES", "BIFURCATIONS",
+           "POINT_STATUS_MEANINGS",
            "write_study", "open_study", "is_study_file", "check_study", "swept_dims",
            "variable_attrs", "RUNNING_BASIN"]
 
@@ -105,6 +106,22 @@ STUDY_VARIABLES = {
                            "the damping below which the running cycle exists, inside the "
                            "study's alpha range (NaN where it is outside); only in studies "
                            "over alpha at fixed torque"),
+    "homoclinic_omega0": (("alpha", "torque"), False, "homoclinic natural frequency",
+                          "rad s-1", "the natural frequency below which the running cycle "
+                          "exists, inside the study's omega0 range (NaN where it is "
+                          "outside); Brent's method on omega0, 1e-13 relative, on the "
+                          "homoclinic torque; only in studies over omega0 at fixed torque"),
+    "saddle_node_omega0": (("torque",), False, "saddle-node natural frequency sqrt(|torque|)",
+                           "rad s-1", "no rest state for omega0 <= sqrt(|torque|); only in "
+                           "studies over omega0"),
+    "focus_node_torque": (("alpha", "omega0"), False, "focus-node torque", "rad s-2",
+                          "(omega0^4 - alpha^4)^(1/2): the rest state is a focus for |torque| "
+                          "below it, a node above it (closed form; NaN for alpha >= omega0); "
+                          "only in studies over torque"),
+    "focus_node_omega0": (("alpha", "torque"), False, "focus-node natural frequency",
+                          "rad s-1", "(alpha^4 + torque^2)^(1/4): the rest state is a node "
+                          "for omega0 below it, a focus above it (closed form); only in "
+                          "studies over omega0"),
     "gaussian_stability": (_PARAMS, False, "basin stability under a Gaussian perturbation",
                            "1", "probability that a rest state kicked by independent normal "
                            "perturbations (sigma_theta, sigma_theta_dot: attributes) stays in "
@@ -118,6 +135,18 @@ STUDY_VARIABLES = {
                             "in basin target at point step + 1 (Kaszas, Feudel & Tel 2019); "
                             f"basin {RUNNING_BASIN}: the running basin; rows sum to 1"),
 }
+
+#: The bifurcation variables: name → (the parameter whose value it is, the bifurcation): a
+#: study over that parameter marks it on its axis (1-D) or draws it as a curve (2-D); the
+#: same bifurcation read along another parameter is another variable.
+BIFURCATIONS = {"homoclinic_torque": ("torque", "homoclinic"),
+                "homoclinic_damping": ("alpha", "homoclinic"),
+                "homoclinic_omega0": ("omega0", "homoclinic"),
+                "saddle_node_torque": ("torque", "saddle-node"),
+                "saddle_node_omega0": ("omega0", "saddle-node"),
+                "focus_node_damping": ("alpha", "focus-node"),
+                "focus_node_torque": ("torque", "focus-node"),
+                "focus_node_omega0": ("omega0", "focus-node")}
 
 
 def _dims(kind, swept: tuple[str, ...]) -> tuple[str, ...]:

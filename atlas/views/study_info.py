@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
+from atlas.store.study import BIFURCATIONS
 
 __all__ = ["study_lines", "study_info_lines"]
 
@@ -27,13 +28,20 @@ def _inside(ds: xr.Dataset, name: str, value: float) -> bool:
     return values.size > 1 and values[0] <= value <= values[-1]
 
 
+#: What each bifurcation variable marks (:data:`atlas.store.study.BIFURCATIONS`).
+_WHAT = {"homoclinic_torque": "the running cycle appears",
+         "homoclinic_damping": "below it the running cycle exists",
+         "homoclinic_omega0": "below it the running cycle exists",
+         "saddle_node_torque": "the rest states vanish",
+         "saddle_node_omega0": "below it there is no rest state",
+         "focus_node_damping": "the rest state turns node",
+         "focus_node_torque": "above it the rest state is a node",
+         "focus_node_omega0": "below it the rest state is a node"}
+
+
 def _bifurcation_lines(ds: xr.Dataset) -> list[str]:
     lines = []
-    for var, axis, what in (("homoclinic_torque", "torque", "the running cycle appears"),
-                            ("saddle_node_torque", "torque", "the rest states vanish"),
-                            ("focus_node_damping", "alpha", "the rest state turns node"),
-                            ("homoclinic_damping", "alpha", "below it the running cycle "
-                             "exists")):
+    for var, (axis, _) in BIFURCATIONS.items():
         if var not in ds:
             continue
         values = np.atleast_1d(ds[var].values).ravel()
@@ -42,7 +50,7 @@ def _bifurcation_lines(ds: xr.Dataset) -> list[str]:
             continue
         where = f"{axis} = {shown[0]:.12g}" if len(shown) == 1 else \
             f"{len(shown)} values of {axis} in {min(shown):.6g} … {max(shown):.6g}"
-        lines.append(f"bifurcation {var}: {where} ({what})")
+        lines.append(f"bifurcation {var}: {where} ({_WHAT[var]})")
     return lines
 
 

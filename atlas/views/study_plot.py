@@ -18,16 +18,25 @@ import numpy as np
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
+from atlas.store.study import BIFURCATIONS
 from atlas.views.style import CURVE_SIZE, MAP_SIZE, PNG_OPTIONS, STYLE, basin_colours
 
 __all__ = ["plot_study"]
 
 _LABELS = {"alpha": "damping α [1/s]", "omega0": "natural frequency ω0 [rad/s]",
            "torque": "torque τ [rad/s²]"}
-_LINES = {"homoclinic_torque": ("torque", "homoclinic τ_c", "#b2182b", "--"),
-          "saddle_node_torque": ("torque", "saddle-node τ = ω0²", "#2166ac", ":"),
-          "focus_node_damping": ("alpha", "focus → node", "#5e3c99", "-."),
-          "homoclinic_damping": ("alpha", "homoclinic α_c", "#b2182b", "--")}
+#: The bifurcation variables' labels (which parameter each is a value of:
+#: :data:`atlas.store.study.BIFURCATIONS`), and each bifurcation's colour and dashes.
+_LABELS_OF = {"homoclinic_torque": "homoclinic τ_c", "homoclinic_damping": "homoclinic α_c",
+              "homoclinic_omega0": "homoclinic ω0_c",
+              "saddle_node_torque": "saddle-node τ = ω0²",
+              "saddle_node_omega0": "saddle-node ω0 = √|τ|",
+              "focus_node_damping": "focus → node", "focus_node_torque": "focus → node",
+              "focus_node_omega0": "focus → node"}
+_DRAWN = {"homoclinic": ("#b2182b", "--"), "saddle-node": ("#2166ac", ":"),
+          "focus-node": ("#5e3c99", "-.")}
+#: The bifurcations where the basin stability jumps (a curve is broken there).
+_JUMPS = ("homoclinic", "saddle-node")
 
 
 def _figure(out: Path, size, draw, dpi) -> Path:
@@ -45,21 +54,36 @@ def _figure(out: Path, size, draw, dpi) -> Path:
     return out
 
 
-def _bifurcation_lines(ax, ds: xr.Dataset, axis: str) -> None:
-    """Every bifurcation of ``axis`` inside the plotted range: a labelled vertical line."""
+def _bifurcations_at(ds: xr.Dataset, axis: str) -> list[tuple[str, float]]:
+    """(variable, value) of every bifurcation of ``axis`` inside its plotted range, by
+    value."""
     lo, hi = float(ds[axis][0]), float(ds[axis][-1])
-    for name, (along, label, colour, style) in _LINES.items():
-        if along != axis or name not in ds:
-            continue
-        for value in np.unique(np.atleast_1d(ds[name].values)):
-            if np.isfinite(value) and lo <= value <= hi:
-                ax.axvline(value, color=colour, ls=style, lw=1.0)
-                right = value > lo + 0.7 * (hi - lo)  # above the axes, over nothing drawn
-                ax.annotate(f"{label} = {value:.10g}", (value, 1.0),
-                            xycoords=("data", "axes fraction"), xytext=(0, 2),
-                            textcoords="offset points", va="bottom", fontsize=8,
-                            color=colour, ha="right" if right else "left",
-                            annotation_clip=False)
+    found = [(name, float(value)) for name, (along, _) in BIFURCATIONS.items()
+             if along == axis and name in ds
+             for value in np.unique(np.atleast_1d(ds[name].values))
+             if np.isfinite(value) and lo <= value <= hi]
+    return sorted(found, key=lambda item: item[1])
+
+
+def _bifurcation_lines(ax, ds: xr.Dataset, axis: str) -> int:
+    """Every bifurcation of ``axis`` inside the plotted range: a labelled vertical line, the
+    labels above the axes, on rows of their own where they lie close (the focus–node torque
+    √(1 − α⁴) lies a hair from the saddle-node 1). Returns the rows of labels."""
+    lo, hi = float(ds[axis][0]), float(ds[axis][-1])
+    found = _bifurcations_at(ds, axis)
+    row, rows, last = 0, 0, -np.inf
+    for name, value in found:
+        # a label's own row unless the one before lies within a third of the axis
+        row = row + 1 if value - last < (hi - lo) / 3 else 0
+        rows, last = max(rows, row + 1), value
+        colour, style = _DRAWN[BIFURCATIONS[name][1]]
+        ax.axvline(value, color=colour, ls=style, lw=1.0)
+        right = value > lo + 0.7 * (hi - lo)  # above the axes, over nothing drawn
+        ax.annotate(f"{_LABELS_OF[name]} = {value:.10g}", (value, 1.0),
+                    xycoords=("data", "axes fraction"), xytext=(0, 2 + 10 * row),
+                    textcoords="offset points", va="bottom", fontsize=8, color=colour,
+                    ha="right" if right else "left", annotation_clip=False)
+    return rows
 
 
 def _nan_points(ax, ds: xr.Dataset, axis: str) -> None:
@@ -76,10 +100,7 @@ def _curve(ds: xr.Dataset, axis: str, values) -> tuple[np.ndarray, np.ndarray]:
     """(x, y) of a curve against ``axis``, broken (a NaN) between the two points on either
     side of each bifurcation: a jump there is not drawn as a slope."""
     x, y = np.asarray(ds[axis].values, float), np.asarray(values, float)
-    cuts = []
-    for name, (along, *_) in _LINES.items():
-        if along == axis and name in ds:
-            cuts += [v for v in np.atleast_1d(ds[name].values) if np.isfinite(v)]
+    cuts = [v for name, v in _bifurcations_at(ds, axis) if BIFURCATIONS[name][1] in _JUMPS]
     at = sorted({int(i) for v in cuts if x[0] < v < x[-1]
                  for i in [np.searchsorted(x, v)] if x[i] != v})
     return np.insert(x, at, np.nan), np.insert(y, at, np.nan)
@@ -112,14 +133,14 @@ def _stability_curves(ds: xr.Dataset, axis: str):
                     lw=1.2, marker=marker,
                     label=f"rest state under a Gaussian kick σθ = "
                     f"{ds.attrs['sigma_theta']:g}, σθ̇ = {ds.attrs['sigma_theta_dot']:g}")
-        _bifurcation_lines(ax, ds, axis)
+        rows = _bifurcation_lines(ax, ds, axis)
         _nan_points(ax, ds, axis)
         ax.set_xlim(x[0], x[-1])
         ax.set_ylim(-0.02, 1.02)
         ax.set_xlabel(_LABELS[axis])
         ax.set_ylabel("basin stability (exact area fraction)")
         ax.set_title(f"basin stability: {_parameter_title(ds, (axis,))}", fontsize=9,
-                     pad=14)
+                     pad=4 + 10 * max(rows, 1))
         handles, labels = ax.get_legend_handles_labels()
         unique = dict(zip(labels, handles))
         ax.legend(unique.values(), unique.keys(), loc="best")
@@ -137,14 +158,14 @@ def _shock_curve(ds: xr.Dataset, axis: str):
             ax.plot(*_curve(ds, axis, ds["running_fatal_shock"].values), color="#525252",
                     lw=1.6, ls="--", marker="." if x.size <= 60 else None,
                     label="of the running cycle")
-        _bifurcation_lines(ax, ds, axis)
+        rows = _bifurcation_lines(ax, ds, axis)
         _nan_points(ax, ds, axis)
         ax.set_xlim(x[0], x[-1])
         ax.set_ylim(bottom=0.0)
         ax.set_xlabel(_LABELS[axis])
         ax.set_ylabel("minimal fatal shock √(Δθ² + Δθ̇²)")
         ax.set_title(f"minimal fatal shock: {_parameter_title(ds, (axis,))}", fontsize=9,
-                     pad=14)
+                     pad=4 + 10 * max(rows, 1))
         ax.legend(loc="upper center", title="minimal fatal shock", fontsize=8,
                   title_fontsize=8)
 
@@ -157,9 +178,11 @@ def _stability_map(ds: xr.Dataset, x: str, y: str):
         mesh = ax.pcolormesh(ds[x].values, ds[y].values, total.values, shading="nearest",
                              cmap="viridis", vmin=0.0, vmax=1.0)
         ax.figure.colorbar(mesh, ax=ax, label="basin stability of the rest states")
-        for name, (value_axis, label, colour, style) in _LINES.items():
-            # a bifurcation value along one axis of the map, over the other one
-            if name not in ds or value_axis not in (x, y):
+        drawn = set()
+        for name, (value_axis, kind) in BIFURCATIONS.items():
+            # a bifurcation value along one axis of the map, over the other one (each
+            # bifurcation once: the first of its variables that is such a curve)
+            if name not in ds or value_axis not in (x, y) or kind in drawn:
                 continue
             other = y if value_axis == x else x
             values = ds[name]
@@ -169,9 +192,11 @@ def _stability_map(ds: xr.Dataset, x: str, y: str):
                 along, at = ds[other].values[[0, -1]], np.full(2, float(values))
             else:
                 continue
+            drawn.add(kind)
+            colour, style = _DRAWN[kind]
             pair = (at, along) if value_axis == x else (along, at)
             ax.plot(*pair, color="white", lw=2.4)
-            ax.plot(*pair, color=colour, ls=style, lw=1.3, label=label)
+            ax.plot(*pair, color=colour, ls=style, lw=1.3, label=_LABELS_OF[name])
         ax.set_xlim(ds[x].values[0], ds[x].values[-1])
         ax.set_ylim(ds[y].values[0], ds[y].values[-1])
         ax.set_xlabel(_LABELS[x])

@@ -1,0 +1,119 @@
+"""Every bifurcation inside a study's range is located, stored, printed and drawn, whichever
+parameter the study sweeps: the homoclinic, saddle-node and focus–node values read along α, ω0
+and τ (atlas.stability.bifurcations), each checked by a method of its own (τ_c's scaling
+law, the rest state's eigenvalues, the critical points' existence)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from atlas.cli import main
+from atlas.physics.pendulum import Pendulum
+from atlas.stability import bifurcations as bif
+from atlas.store.study import BIFURCATIONS, open_study
+from tests.helpers import write_config
+
+pytestmark = pytest.mark.slow  # runs the CLI in-process, computes a study
+
+ALPHA, TORQUE = 0.1, 0.3
+
+
+def _is_focus(alpha, omega0, torque) -> bool:
+    """The rest state's eigenvalues are complex: a focus."""
+    return Pendulum(alpha=alpha, omega0=omega0, torque=torque).attractor_eigenvalues()[0].imag != 0
+
+
+def _drawn(ds, axis) -> set[float]:
+    """The x of every vertical line the study's 1-D stability figure draws."""
+    from matplotlib.figure import Figure
+
+    from atlas.views.study_plot import _stability_curves
+
+    ax = Figure().add_subplot()
+    _stability_curves(ds, axis)(ax)
+    return {float(line.get_xdata()[0]) for line in ax.lines
+            if len(set(map(float, line.get_xdata()))) == 1 and len(line.get_xdata()) == 2}
+
+
+@pytest.fixture(scope="module")
+def over_omega0(tmp_path_factory):
+    """A study over ω0 from 0.5 to 1.5 at α = 0.1, τ = 0.3: the saddle-node √τ ≈ 0.548, the
+    focus–node (α⁴ + τ²)^(1/4) just above it and the homoclinic ω0_c ≈ 1.2 all inside."""
+    tmp = tmp_path_factory.mktemp("omega0")
+    cfg = write_config(tmp / "w.yaml", (
+        f"pendulum:\n  alpha: {ALPHA}\n  omega0: {{start: 0.5, stop: 1.5, num: 5}}\n"
+        f"  torque: {TORQUE}\n"
+        "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
+        "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
+        f"output: {tmp / 'w.h5'}\n"))
+    assert main(["stability", str(cfg)]) == 0
+    return tmp / "w.h5"
+
+
+def test_a_study_over_omega0_locates_all_three(over_omega0):
+    ds = open_study(over_omega0)
+    omega_c = float(ds["homoclinic_omega0"])
+    # τ_c(α, ω0) = ω0² τ_c(α/ω0, 1) (t → ω0 t): another frequency and damping than located
+    scaled = omega_c**2 * bif.homoclinic_torque(ALPHA / omega_c, 1.0)
+    assert abs(scaled - TORQUE) < 1e-10 * TORQUE
+    assert 0.5 < omega_c < 1.5
+    sn = float(ds["saddle_node_omega0"])
+    assert Pendulum(alpha=ALPHA, omega0=sn * (1 + 1e-12), torque=TORQUE).has_rest_states
+    assert not Pendulum(alpha=ALPHA, omega0=sn * (1 - 1e-12), torque=TORQUE).has_rest_states
+    fn = float(ds["focus_node_omega0"])
+    assert sn < fn < 1.5
+    assert _is_focus(ALPHA, fn * (1 + 1e-9), TORQUE)
+    assert not _is_focus(ALPHA, fn * (1 - 1e-9), TORQUE)
+
+
+def test_a_study_over_omega0_prints_and_draws_them(over_omega0, capsys):
+    ds = open_study(over_omega0)
+    assert main(["info", str(over_omega0)]) == 0
+    out = capsys.readouterr().out
+    drawn = _drawn(ds, "omega0")
+    for name in ("homoclinic_omega0", "saddle_node_omega0", "focus_node_omega0"):
+        value = float(ds[name])
+        assert f"bifurcation {name}: omega0 = {value:.12g}" in out
+        assert value in drawn, (name, value, drawn)
+
+
+def test_a_study_over_torque_marks_the_focus_node_torque(tmp_path, capsys):
+    """At α = 0.2, ω0 = 1 the rest state turns node at τ = √(1 − α⁴) ≈ 0.9992, inside a
+    study up to 1 (with the saddle-node) — as the eigenvalues say."""
+    cfg = write_config(tmp_path / "t.yaml", (
+        "pendulum: {alpha: 0.2, omega0: 1.0, torque: [0.0, 0.5, 1.0]}\n"
+        "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
+        "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
+        f"output: {tmp_path / 't.h5'}\n"))
+    assert main(["stability", str(cfg)]) == 0
+    ds = open_study(tmp_path / "t.h5")
+    fn = float(ds["focus_node_torque"])
+    assert _is_focus(0.2, 1.0, fn * (1 - 1e-9)) and not _is_focus(0.2, 1.0, fn * (1 + 1e-9))
+    drawn = _drawn(ds, "torque")
+    assert {fn, float(ds["saddle_node_torque"]), float(ds["homoclinic_torque"])} <= drawn
+    assert main(["info", str(tmp_path / "t.h5")]) == 0
+    assert f"focus_node_torque: torque = {fn:.12g}" in capsys.readouterr().out
+
+
+def test_every_parameter_reads_every_bifurcation_it_depends_on():
+    """The schema's table: each bifurcation is a value of each parameter it depends on
+    (the saddle-node does not depend on α)."""
+    along = {}
+    for axis, kind in BIFURCATIONS.values():
+        along.setdefault(kind, set()).add(axis)
+    assert along == {"homoclinic": {"alpha", "omega0", "torque"},
+                     "saddle-node": {"omega0", "torque"},
+                     "focus-node": {"alpha", "omega0", "torque"}}
+
+
+def test_the_closed_forms_agree_with_each_other():
+    """The focus–node surface α⁴ + τ² = ω0⁴ read along each axis gives the same point."""
+    for omega0, torque in [(1.0, 0.5), (2.0, 3.9), (1.1, 0.2)]:
+        a = bif.focus_node_damping(omega0, torque)
+        assert math.isclose(bif.focus_node_torque(a, omega0), abs(torque), rel_tol=1e-12)
+        assert math.isclose(bif.focus_node_omega0(a, torque), omega0, rel_tol=1e-12)
+    assert math.isnan(bif.focus_node_torque(1.2, 1.0))
+    assert math.isnan(bif.saddle_node_omega0(0.0))
+    assert bif.homoclinic_omega0(0.1, 0.0, 0.5, 1.5) is None
