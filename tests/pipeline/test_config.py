@@ -272,3 +272,11 @@ def test_a_tol_the_window_resolves_is_kept(tmp_path, caplog):
                     "separatrices: {tol: 1.0e-11}\n")
     assert load_config(path).separatrices.tol == 1e-11
     assert not [w for w in _warnings(caplog) if "separatrices.tol" in w]
+
+
+@pytest.mark.parametrize("path", [p for p in CONFIGS if p.name not in STUDIES],
+                         ids=lambda p: p.name)
+def test_every_shipped_sweep_traces_its_separatrices(path):
+    """A shipped sweep certifies its labels for the exact equation: its separatrices are on
+    (they measure the boundary shift d_cert that certification needs)."""
+    assert _load_shipped(path).separatrices.enabled

@@ -1,7 +1,7 @@
 """Gaussian-perturbation stability and tipping probabilities: Green's theorem against the
-closed form on a rectangle, → 1 as σ → 0, and both against seeded Monte Carlo samples of the
-same exact basins (:meth:`ExactBoundaries.side`), within 4 standard errors; tipping rows sum
-to 1."""
+closed form on a rectangle, → 1 as σ → 0, the uniform fraction's 1/σ trend as σ grows, and
+both against seeded Monte Carlo samples of the same exact basins
+(:meth:`ExactBoundaries.side`), within 4 standard errors; tipping rows sum to 1."""
 
 from __future__ import annotations
 
@@ -49,6 +49,29 @@ def test_gaussian_against_monte_carlo(alpha, torque, sigma):
     se = math.sqrt(hits * (1 - hits) / n)
     assert abs(value - hits) < 4 * se + error, (value, hits, se)
     assert 0.05 < value < 0.999  # a case where the boundary matters
+
+
+@pytest.mark.slow
+def test_gaussian_follows_the_uniform_fractions_trend_as_sigma_grows():
+    """Far out, orbits lose about 4πα of speed a turn, so well 0's basin is one band of
+    fixed height among ever more: its share of a box of half-width L falls as 1/L (the
+    uniform fraction), and its Gaussian probability as 1/σ. Both fall monotonically, and
+    their local log-log slopes tend to −1 together as σ grows (the uniform one over a box
+    of ±3σ around the rest state)."""
+    p = Pendulum(0.1, 1.0, 0.0)
+    sigmas = (8.0, 16.0, 32.0)
+    gauss, uniform = [], []
+    for sigma in sigmas:
+        half = 3.0 * sigma
+        b = exact_boundaries(p, ((-half, half), (-half, half)))
+        gauss.append(gaussian_stability(basin_shape(b, 12.5 * sigma), sigma, sigma)[0])
+        uniform.append(float(b.areas.fraction[list(b.areas.k).index(0)]))
+    for values in (gauss, uniform):
+        assert values[0] > values[1] > values[2] > 0.0
+        slopes = -np.diff(np.log(values)) / np.diff(np.log(sigmas))
+        assert abs(slopes[1] - 1.0) < abs(slopes[0] - 1.0) and abs(slopes[1] - 1.0) < 0.2, \
+            slopes
+    assert abs(gaussian_stability(basin_shape(b, 12.5 * 0.01), 0.01, 0.01)[0] - 1.0) < 1e-12
 
 
 @pytest.mark.slow

@@ -94,3 +94,23 @@ def test_a_script_without_a_main_guard_runs_two_studies(tmp_path):
                           timeout=300, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert proc.stdout.strip() == "True"
+
+
+def test_the_command_on_its_own_local_cluster_writes_the_same_study(tmp_path):
+    """``atlas stability --backend dask`` without a scheduler starts a local cluster of its
+    own (and closes it): the study it writes holds the same numbers as on this machine's
+    CPU."""
+    from atlas.cli import main
+    from atlas.store.study import open_study
+    from tests.helpers import STUDY_BODY, write_config
+
+    files = {}
+    for backend in ("cpu", "dask"):
+        cfg = write_config(tmp_path / f"{backend}.yaml", STUDY_BODY.format(
+            torque="{start: 0.0, stop: 0.9, num: 6}", output=tmp_path / f"{backend}.h5"))
+        assert main(["stability", str(cfg), "--backend", backend]) == 0
+        files[backend] = open_study(tmp_path / f"{backend}.h5")
+    cpu, dask = files["cpu"], files["dask"]
+    assert set(cpu.data_vars) == set(dask.data_vars)
+    for name in cpu.data_vars:
+        np.testing.assert_array_equal(cpu[name].values, dask[name].values, err_msg=name)

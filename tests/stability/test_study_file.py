@@ -171,3 +171,24 @@ def test_a_zarr_study_written_over_keeps_one_whole_study(study, tmp_path, monkey
     np.testing.assert_array_equal(open_study(path)["basin_stability"].values,
                                   first["basin_stability"].values)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]
+
+
+def test_verbose_reports_each_phase_per_point(tmp_path):
+    """``atlas stability -v`` logs the mean and largest cost per point of each phase, over
+    every point that has it (the Gaussian stability only when asked)."""
+    import re
+
+    from atlas.stability.study import PHASES
+    from tests.helpers import run_cli
+
+    cfg = write_config(tmp_path / "v.yaml", BODY.format(
+        torque="{start: 0.0, stop: 0.9, num: 4}", output=tmp_path / "v.h5")
+        + "stability: {sigma_theta: 0.5, sigma_theta_dot: 0.5}\n")
+    proc = run_cli("stability", cfg, "-v")
+    assert proc.returncode == 0, proc.stderr
+    found = {m.group(1): (float(m.group(2)), float(m.group(3)), int(m.group(4)))
+             for m in re.finditer(r"per point, (\w+)\s+mean\s+([0-9.]+) ms, max\s+([0-9.]+) "
+                                  r"ms \((\d+) points\)", proc.stderr)}
+    assert set(found) == set(PHASES), proc.stderr
+    for mean, most, points in found.values():
+        assert 0.0 <= mean <= most and points == 4

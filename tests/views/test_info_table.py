@@ -124,3 +124,19 @@ def test_a_point_the_atlas_does_not_hold_is_one_line(alpha_atlas, options, names
     code, lines, err = _info(alpha_atlas, *options)
     assert code == 2 and lines == [] and err.count("\n") == 1
     assert err.startswith("atlas: error: ") and all(name in err for name in names), err
+
+
+def test_labels_near_boundary_only_for_want_of_a_trace_say_so(tmp_path):
+    """Without separatrices no boundary shift is measured: every label stays near_boundary,
+    and atlas info and the status comment say that this is why, in those words."""
+    from atlas.status import NEAR_BOUNDARY, TRAPPED
+
+    small_atlas(tmp_path, "untraced", {"alpha": 0.2, "omega0": 1.0}, **WINDOW,
+                separatrices=False)
+    code, lines, _ = _info(tmp_path / "untraced.h5")
+    assert code == 0
+    assert any("d_cert not measured (separatrices disabled)" in line for line in lines), lines
+    with atlas.open(tmp_path / "untraced.h5") as ds:
+        status = ds["status"].values
+        assert (status == NEAR_BOUNDARY).any() and not (status == TRAPPED).any()
+        assert "separatrices disabled" in ds["status"].attrs["comment"]
