@@ -192,6 +192,8 @@ def _stability_map(ds: xr.Dataset, x: str, y: str):
                 along, at = ds[other].values[[0, -1]], np.full(2, float(values))
             else:
                 continue
+            if not np.isfinite(at).any():  # nowhere on this map (no running cycle, say)
+                continue
             drawn.add(kind)
             colour, style = _DRAWN[kind]
             pair = (at, along) if value_axis == x else (along, at)

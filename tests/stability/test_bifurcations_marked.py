@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from atlas.cli import main
@@ -117,3 +118,39 @@ def test_the_closed_forms_agree_with_each_other():
     assert math.isnan(bif.focus_node_torque(1.2, 1.0))
     assert math.isnan(bif.saddle_node_omega0(0.0))
     assert bif.homoclinic_omega0(0.1, 0.0, 0.5, 1.5) is None
+
+
+def test_a_map_draws_each_bifurcation_once_where_it_lies(tmp_path):
+    """An ω0 × τ map (its focus–node curve was missing before it was read along τ): the
+    homoclinic, saddle-node and focus–node curves each drawn once, as the stored values; an
+    α × ω0 map without torque has no homoclinic or saddle-node curve to draw (NaN), and
+    shows none in its legend."""
+    from matplotlib.figure import Figure
+
+    from atlas.views.study_plot import _stability_map
+
+    def legend(name, pendulum):
+        cfg = write_config(tmp_path / f"{name}.yaml", (
+            f"pendulum: {pendulum}\n"
+            "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
+            "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
+            f"output: {tmp_path / name}.h5\n"))
+        assert main(["stability", str(cfg)]) == 0
+        ds = open_study(tmp_path / f"{name}.h5")
+        ax = Figure().add_subplot()
+        y, x = [d for d in ("alpha", "omega0", "torque") if d in ds.dims]
+        _stability_map(ds, x, y)(ax)
+        lines = {line.get_label(): line for line in ax.lines if line.get_color() != "white"}
+        return ds, lines
+
+    ds, lines = legend("wt", "{alpha: 0.1, omega0: {start: 0.8, stop: 1.2, num: 3}, "
+                             "torque: {start: 0.2, stop: 0.9, num: 3}}")
+    assert sorted(lines) == ["focus → node", "homoclinic τ_c", "saddle-node τ = ω0²"]
+    # torque across, ω0 up: each a torque over the ω0 values
+    for label, name in (("focus → node", "focus_node_torque"),
+                        ("homoclinic τ_c", "homoclinic_torque")):
+        np.testing.assert_array_equal(lines[label].get_xdata(), ds[name].values)
+        np.testing.assert_array_equal(lines[label].get_ydata(), ds["omega0"].values)
+    _, lines = legend("aw", "{alpha: {start: 0.5, stop: 1.5, num: 2}, "
+                            "omega0: {start: 0.8, stop: 1.2, num: 2}, torque: 0.0}")
+    assert sorted(lines) == ["focus → node"]

@@ -72,6 +72,17 @@ def test_ranges_work_in_grid_configs_too(tmp_path):
     values = np.array(atlas.load_config(cfg).pendulum.torques)
     assert values.size == 4 and values[0] == 0.1 and values[-1] == 0.4
     assert np.allclose(np.diff(values), 0.1, rtol=1e-14)
+    # a grid run of it: one point per value, each with the exact fractions a study stores
+    from atlas.stability.study import StudySettings, compute_point
+
+    run = atlas.load_config(cfg)
+    tree = atlas.basins(run)
+    np.testing.assert_array_equal(tree["/"].to_dataset()["torque"].values, values)
+    window = ((-np.pi, np.pi), (-3.0, 3.0))
+    for i, torque in enumerate(values):
+        point = compute_point(0.2, 1.0, float(torque), StudySettings(window=window))
+        stored = tree["/"].to_dataset().isel(torque=i)
+        assert abs(float(stored["running_fraction_exact"]) - point.running) < 1e-12
 
 
 def test_a_window_too_narrow_for_exact_fractions_is_refused(tmp_path, capsys):
