@@ -44,7 +44,7 @@ WRAP_EVERY = 16
 #: with no float→int conversion (NaN stays NaN; a NaN→int conversion would raise in the
 #: simulator and is undefined in LLVM).
 _ROUND_MAGIC = 6755399441055744.0
-_INSTALL_HINT = "install atlas[cuda] on a machine with an NVIDIA GPU"
+_INSTALL_HINT = "install pendulum-atlas[cuda] on a machine with an NVIDIA GPU"
 
 #: numba.cuda once imported by _import_cuda(). The kernels refer to it as a module global
 #: because the simulator substitutes its fake module only among a kernel's globals.

@@ -30,7 +30,7 @@ def _client(scheduler: str | None, workers: int | None):
         from distributed import Client, LocalCluster
     except ImportError:
         raise BackendUnavailable("backend 'dask': dask.distributed is not installed; "
-                                 "pip install 'atlas[dask]'") from None
+                                 "pip install 'pendulum-atlas[dask]'") from None
     if scheduler:
         try:
             return Client(scheduler, timeout="10s"), None

@@ -42,7 +42,7 @@ def _zarr():
         import zarr
     except ImportError:
         raise BackendUnavailable("a .zarr output needs the zarr package; "
-                                 "pip install 'atlas[zarr]'") from None
+                                 "pip install 'pendulum-atlas[zarr]'") from None
     return zarr
 
 

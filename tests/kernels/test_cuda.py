@@ -136,7 +136,7 @@ print(json.dumps({"ok": ok, "why": why, "message": message}))
         pytest.skip(f"a CUDA GPU is present: {out['why']}")
     message = out["message"]
     assert message is not None and "\n" not in message
-    assert message.startswith("backend 'cuda': ") and "atlas[cuda]" in message
+    assert message.startswith("backend 'cuda': ") and "pendulum-atlas[cuda]" in message
     assert out["why"] and out["why"] in message
 
 

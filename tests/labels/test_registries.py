@@ -191,7 +191,7 @@ def test_availability_is_reported_in_one_line():
             BACKENDS["cuda"].require()
         message = str(err.value)
         assert message.startswith("backend 'cuda': ") and "\n" not in message
-        assert "atlas[cuda]" in message
+        assert "pendulum-atlas[cuda]" in message
 
 
 def test_a_backend_hands_out_the_kernel_of_a_method():
