@@ -493,14 +493,32 @@ def _leaf_nearest(x, y, leaf, ax, ay, bx, by, near, best, best_seg, at, slack, s
         s = first + i
         if step.size and step[s] >= 0:
             if near[i] < _reach2(min(best, bound), slack):
-                dx, dy = bx[s] - ax[s], by[s] - ay[s]
-                f = ((x - ax[s]) * dx + (y - ay[s]) * dy) / max(dx * dx + dy * dy, _TINY)
-                d2, x_at = _curve_distance2(x, y, F, y_old, step[s], span[s, 0], span[s, 1],
-                                            shift[s], min(max(f, 0.0), 1.0))
-                if d2 < best:
-                    best, best_seg, at = d2, s, x_at
+                best, best_seg, at = _nearer_curve(x, y, s, ax, ay, bx, by, step, span, shift,
+                                                   F, y_old, best, best_seg, at)
         elif near[i] < best:
             best, best_seg, at = near[i], s, 0.0
+    if best > bound:  # Newton measured the bounding arc farther than its chord promised
+        # (it stopped short): the arcs skipped on the bound are measured after all
+        for i in range(count):
+            s = first + i
+            if step.size and step[s] >= 0 and _reach2(bound, slack) <= near[i] \
+                    < _reach2(best, slack):
+                best, best_seg, at = _nearer_curve(x, y, s, ax, ay, bx, by, step, span,
+                                                   shift, F, y_old, best, best_seg, at)
+    return best, best_seg, at
+
+
+@nb.njit(inline="always")
+def _nearer_curve(x, y, s, ax, ay, bx, by, step, span, shift, F, y_old, best, best_seg, at):
+    """Segment ``s``'s curve measured from (x, y) (:func:`_curve_distance2`, from the
+    chord's nearest fraction): (squared distance, s, foot parameter) where nearer than
+    ``best``, else (best, best_seg, at) unchanged."""
+    dx, dy = bx[s] - ax[s], by[s] - ay[s]
+    f = ((x - ax[s]) * dx + (y - ay[s]) * dy) / max(dx * dx + dy * dy, _TINY)
+    d2, x_at = _curve_distance2(x, y, F, y_old, step[s], span[s, 0], span[s, 1], shift[s],
+                                min(max(f, 0.0), 1.0))
+    if d2 < best:
+        return d2, s, x_at
     return best, best_seg, at
 
 

@@ -324,3 +324,37 @@ def test_walk_keeps_its_chords_within_the_spacing_and_curvature(branch):
     assert chord.max() > 0.5 * spacing  # and not far below it
     _, ok = kernel.walk(*args, 10)
     assert not ok
+
+
+def test_the_pruned_curve_search_is_the_wide_one():
+    """A leaf measures only the arcs that may be the nearest (the nearest chord + slack bounds
+    them): the same distances, nearest curves and feet as a search that measures every arc
+    within half a radian of the best (slack 0.5), over the swing window's boundaries at
+    τ = 0.5, half the points within 1e-3 of a vertex (where neighbouring arcs compete)."""
+    import math
+
+    from atlas.boundaries.tilted import TiltedBoundaries
+    from atlas.kernels.segments import nearer_curves
+    from atlas.physics.pendulum import Pendulum
+
+    p = Pendulum(0.05, 1.0, 0.5)
+    tb = TiltedBoundaries(p, (-math.pi + p.rest_angle, math.pi + p.rest_angle), (-10.0, 10.0))
+    index = tb._index(-4.0, 4.0)
+    F, y_old, _ = tb._branches.packed
+    rng = np.random.default_rng(7)
+    n = 20_000
+    px, py = rng.uniform(-2.5, 2.5, n), rng.uniform(-3.0, 3.0, n)
+    near = rng.integers(index.ax.size, size=n // 2)
+    px[: n // 2] = index.ax[near] + rng.normal(0.0, 1e-3, n // 2)
+    py[: n // 2] = index.ay[near] + rng.normal(0.0, 1e-3, n // 2)
+
+    def search(slack):
+        d2, k = np.full(n, np.inf), np.zeros(n, np.int64)
+        fx, fy = np.full(n, np.nan), np.full(n, np.nan)
+        nearer_curves(px, py, index.ax, index.ay, index.bx, index.by, index.tag, index.xlo,
+                      index.xhi, index.ylo, index.yhi, index.start, math.inf, -math.inf,
+                      slack, index.step, index.span, index.shift, F, y_old, d2, k, fx, fy)
+        return d2, k, fx, fy
+
+    for pruned, wide in zip(search(tb._slack), search(0.5)):
+        np.testing.assert_array_equal(pruned, wide)
