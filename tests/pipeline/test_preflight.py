@@ -69,26 +69,36 @@ def test_the_rate_is_the_per_orbit_cost_without_a_calls_fixed_cost(tmp_path, mon
 
 def test_every_kernel_the_timed_calls_take_is_loaded_before_timing(tmp_path, monkeypatch):
     """A batch's size chooses the kernel (one chunk runs a serial twin, compiled on its own:
-    atlas.kernels.lanes.n_chunks), so the untimed first call must be as large as the timed
-    ones, at every point timed; a small one left the timed calls to compile theirs (a first
-    big run once announced 37 min for a 5 s sweep)."""
+    atlas.kernels.lanes.n_chunks), and so does the point (τ = 0 without a running barrier
+    runs the untilted specialisation), so the untimed first calls must be as large as the
+    timed ones, at every point timed; a small one at the first point left the timed calls
+    to compile theirs (a first big run once announced 37 min for a 5 s sweep)."""
     import atlas.labels.labelling as labelling
     from atlas.kernels.lanes import n_chunks
+    from atlas.physics.pendulum import Pendulum
+    from atlas.physics.running import running_certificate
 
-    cfg = _small(tmp_path)
+    cfg = atlas.load_config(write_config(tmp_path / "c.yaml", SMALL.format(
+        sep="false", output=tmp_path / "small.h5").replace(
+        "pendulum: {alpha: 0.1, omega0: 1.0}",
+        "pendulum: {alpha: 0.1, omega0: 1.0, torque: [0.0, 0.1, 0.5, 0.9]}")))
     layout = sweep.layout_of(cfg)
+    barriers = [running_certificate(Pendulum(**layout.point(p)), cfg.integrator.dt)[1]
+                for p in range(layout.n_params)]
+    assert barriers[0] is None and barriers[-1] is not None
     loaded, late = set(), []
 
-    def fake_label(theta0, theta_dot0, *, t_max, torque, **kw):
-        kernel = (torque, n_chunks(theta0.size) == 1)
+    def fake_label(theta0, theta_dot0, *, t_max, torque, running, **kw):
+        kernel = (torque == 0.0 and running is None, n_chunks(theta0.size) == 1)
         if t_max == cfg.integrator.dt:
             loaded.add(kernel)
         elif kernel not in loaded:
             late.append(kernel)
 
     monkeypatch.setattr(labelling, "label", fake_label)
-    preflight.measure_rate(cfg, layout, [None] * layout.n_params)
-    assert loaded and not late, late
+    monkeypatch.setattr(preflight, "MAX_POINTS", layout.n_params)  # every point timed
+    preflight.measure_rate(cfg, layout, barriers)
+    assert len(loaded) == 2 and not late, (loaded, late)
 
 
 def test_the_sample_grows_to_about_one_call_of_call_s(tmp_path, monkeypatch):

@@ -96,20 +96,31 @@ def test_a_script_without_a_main_guard_runs_two_studies(tmp_path):
     assert proc.stdout.strip() == "True"
 
 
-def test_the_command_on_its_own_local_cluster_writes_the_same_study(tmp_path):
+def test_the_command_on_its_own_local_cluster_writes_the_same_study(tmp_path, monkeypatch):
     """``atlas stability --backend dask`` without a scheduler starts a local cluster of its
     own (and closes it): the study it writes holds the same numbers as on this machine's
     CPU."""
+    import distributed
+
     from atlas.cli import main
     from atlas.store.study import open_study
     from tests.helpers import STUDY_BODY, write_config
 
+    clusters = []
+
+    class Counted(distributed.LocalCluster):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            clusters.append(self)
+
+    monkeypatch.setattr(distributed, "LocalCluster", Counted)
     files = {}
     for backend in ("cpu", "dask"):
         cfg = write_config(tmp_path / f"{backend}.yaml", STUDY_BODY.format(
             torque="{start: 0.0, stop: 0.9, num: 6}", output=tmp_path / f"{backend}.h5"))
         assert main(["stability", str(cfg), "--backend", backend]) == 0
         files[backend] = open_study(tmp_path / f"{backend}.h5")
+    assert len(clusters) == 1 and clusters[0].status.name == "closed"
     cpu, dask = files["cpu"], files["dask"]
     assert set(cpu.data_vars) == set(dask.data_vars)
     for name in cpu.data_vars:

@@ -72,17 +72,32 @@ def test_ranges_work_in_grid_configs_too(tmp_path):
     values = np.array(atlas.load_config(cfg).pendulum.torques)
     assert values.size == 4 and values[0] == 0.1 and values[-1] == 0.4
     assert np.allclose(np.diff(values), 0.1, rtol=1e-14)
-    # a grid run of it: one point per value, each with the exact fractions a study stores
+
+
+def test_a_grid_run_over_a_range_has_a_point_per_value(tmp_path):
+    """A grid run of a torque range across the homoclinic torque (≈ 0.49 at α = 0.2): one
+    point per value, each with the exact fractions a study stores for it, the running
+    basin's where the cycle exists."""
+    import atlas
     from atlas.stability.study import StudySettings, compute_point
 
+    cfg = write_config(tmp_path / "g.yaml", BODY.format(
+        torque="{start: 0.3, stop: 0.9, num: 3}", output=tmp_path / "g.h5"))
     run = atlas.load_config(cfg)
-    tree = atlas.basins(run)
-    np.testing.assert_array_equal(tree["/"].to_dataset()["torque"].values, values)
+    ds = atlas.basins(run)["/"].to_dataset()
+    np.testing.assert_array_equal(ds["torque"].values, run.pendulum.torques)
+    np.testing.assert_allclose(ds["torque"].values, [0.3, 0.6, 0.9], rtol=1e-15)
     window = ((-np.pi, np.pi), (-3.0, 3.0))
-    for i, torque in enumerate(values):
+    running = []
+    for i, torque in enumerate(ds["torque"].values):
         point = compute_point(0.2, 1.0, float(torque), StudySettings(window=window))
-        stored = tree["/"].to_dataset().isel(torque=i)
+        stored = ds.isel(torque=i)
         assert abs(float(stored["running_fraction_exact"]) - point.running) < 1e-12
+        exact = stored["basin_fraction_exact"]
+        for k, fraction in zip(point.k, point.fraction):
+            assert abs(float(exact.sel(k=k)) - fraction) < 1e-12
+        running.append(point.running)
+    assert running[0] == 0.0 and 0.0 < running[1] < running[2] < 1.0
 
 
 def test_a_window_too_narrow_for_exact_fractions_is_refused(tmp_path, capsys):
