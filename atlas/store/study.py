@@ -109,8 +109,10 @@ STUDY_VARIABLES = {
     "homoclinic_omega0": (("alpha", "torque"), False, "homoclinic natural frequency",
                           "rad s-1", "the natural frequency below which the running cycle "
                           "exists, inside the study's omega0 range (NaN where it is "
-                          "outside); Brent's method on omega0, 1e-13 relative, on the "
-                          "homoclinic torque; only in studies over omega0 at fixed torque"),
+                          "outside); Brent's method on omega0 on the homoclinic torque, about "
+                          "1e-11 relative; sqrt(|torque|) where the damping is strong (the "
+                          "cycle is born at the saddle-node); only in studies over omega0 at "
+                          "fixed torque"),
     "saddle_node_omega0": (("torque",), False, "saddle-node natural frequency sqrt(|torque|)",
                            "rad s-1", "no rest state for omega0 <= sqrt(|torque|); only in "
                            "studies over omega0"),

@@ -67,23 +67,30 @@ def _bifurcations_at(ds: xr.Dataset, axis: str) -> list[tuple[str, float]]:
 
 def _bifurcation_lines(ax, ds: xr.Dataset, axis: str) -> int:
     """Every bifurcation of ``axis`` inside the plotted range: a labelled vertical line, the
-    labels above the axes, on rows of their own where they lie close (the focus–node torque
-    √(1 − α⁴) lies a hair from the saddle-node 1). Returns the rows of labels."""
+    labels above the axes, each on the lowest row where it overlaps no other (the
+    focus–node torque √(1 − α⁴) lies a hair from the saddle-node 1). Returns the rows of
+    labels."""
     lo, hi = float(ds[axis][0]), float(ds[axis][-1])
-    found = _bifurcations_at(ds, axis)
-    row, rows, last = 0, 0, -np.inf
-    for name, value in found:
-        # a label's own row unless the one before lies within a third of the axis
-        row = row + 1 if value - last < (hi - lo) / 3 else 0
-        rows, last = max(rows, row + 1), value
+    # a label's width in data units, from its characters (about 0.6 em each at 8 pt)
+    per_char = 0.6 * 8.0 / (ax.bbox.width * 72.0 / ax.figure.dpi) * (hi - lo)
+    taken: list[list[tuple[float, float]]] = []  # per row, the extents of its labels
+    for name, value in _bifurcations_at(ds, axis):
         colour, style = _DRAWN[BIFURCATIONS[name][1]]
         ax.axvline(value, color=colour, ls=style, lw=1.0)
+        text = f"{_LABELS_OF[name]} = {value:.10g}"
         right = value > lo + 0.7 * (hi - lo)  # above the axes, over nothing drawn
-        ax.annotate(f"{_LABELS_OF[name]} = {value:.10g}", (value, 1.0),
-                    xycoords=("data", "axes fraction"), xytext=(0, 2 + 10 * row),
-                    textcoords="offset points", va="bottom", fontsize=8, color=colour,
-                    ha="right" if right else "left", annotation_clip=False)
-    return rows
+        width = (len(text) + 1) * per_char
+        extent = (value - width, value) if right else (value, value + width)
+        row = next((i for i, row in enumerate(taken)
+                    if all(extent[1] < a or b < extent[0] for a, b in row)), len(taken))
+        if row == len(taken):
+            taken.append([])
+        taken[row].append(extent)
+        ax.annotate(text, (value, 1.0), xycoords=("data", "axes fraction"),
+                    xytext=(0, 2 + 10 * row), textcoords="offset points", va="bottom",
+                    fontsize=8, color=colour, ha="right" if right else "left",
+                    annotation_clip=False)
+    return len(taken)
 
 
 def _nan_points(ax, ds: xr.Dataset, axis: str) -> None:

@@ -94,6 +94,15 @@ def test_a_study_over_torque_marks_the_focus_node_torque(tmp_path, capsys):
     assert _is_focus(0.2, 1.0, fn * (1 - 1e-9)) and not _is_focus(0.2, 1.0, fn * (1 + 1e-9))
     drawn = _drawn(ds, "torque")
     assert {fn, float(ds["saddle_node_torque"]), float(ds["homoclinic_torque"])} <= drawn
+    # the two labels a hair apart (0.9992 and 1) sit on rows of their own
+    from matplotlib.figure import Figure
+
+    from atlas.views.study_plot import _stability_curves
+
+    ax = Figure().add_subplot()
+    _stability_curves(ds, "torque")(ax)
+    rows = {t.get_text().split(" = ")[0]: t.xyann[1] for t in ax.texts}
+    assert rows["focus → node"] != rows["saddle-node τ"], rows
     assert main(["info", str(tmp_path / "t.h5")]) == 0
     assert f"focus_node_torque: torque = {fn:.12g}" in capsys.readouterr().out
 
