@@ -41,8 +41,11 @@ def _client(scheduler: str | None, workers: int | None):
         for name in ("distributed", "dask"):
             logging.getLogger(name).setLevel(logging.WARNING)
     n = workers or max(1, min(4, os.cpu_count() or 1))
+    # the dashboard on a free port (None still binds its server to 8787, and warns where
+    # another cluster holds it); its address with --verbose
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=":0")
+    log.info("local Dask cluster of %d workers, dashboard %s", n, cluster.dashboard_link)
     return Client(cluster), cluster
 
 

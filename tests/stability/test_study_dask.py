@@ -32,7 +32,7 @@ def test_a_killed_worker_changes_nothing():
     settings = StudySettings(window=((-math.pi, math.pi), (-3.0, 3.0)), sigma=(0.5, 0.5))
     here = compute_points(points, settings)
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=":0")
     client = Client(cluster)
     killed = []
 

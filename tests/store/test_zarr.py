@@ -64,7 +64,7 @@ def test_dask_workers_write_their_own_tiles(cfg, tmp_path, monkeypatch):
     monkeypatch.setattr(TileStore, "record", lambda self, i, *a: (recorded.append(i),
                                                                    real_record(self, i, *a)))
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         dask_cfg = cfg.model_copy(update={"execution": cfg.execution.model_copy(
             update={"scheduler": cluster.scheduler_address})})
         z = atlas.run(dask_cfg, quiet=True, backend="dask")
