@@ -615,11 +615,21 @@ def _not_a_config(path: Path) -> str | None:
     or None where ``path`` is no atlas file: asked only once the file failed to read as a
     config, so a config is read without importing the store."""
     from atlas.store.reader import is_atlas_file
+    from atlas.store.study import is_study_file
 
-    if not is_atlas_file(path):
+    if is_atlas_file(path):
+        return (f"{path}: an atlas file, not a config; look at it with `atlas info {path}` "
+                "(`atlas run` reads a YAML config such as configs/default.yaml)")
+    if is_study_file(path):
+        return (f"{path}: a stability study, not a config; look at it with "
+                f"`atlas info {path}` (`atlas stability` reads a YAML config such as "
+                "configs/swing_stability.yaml)")
+    try:
+        with open(path, "rb") as f:
+            binary = f.read(8) == b"\x89HDF\r\n\x1a\n"
+    except OSError:
         return None
-    return (f"{path}: an atlas file, not a config; look at it with `atlas info {path}` "
-            "(`atlas run` reads a YAML config such as configs/default.yaml)")
+    return f"{path}: an HDF5 file, not a YAML config" if binary else None
 
 
 # ---------------------------------------------------------------------------- units

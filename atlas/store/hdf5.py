@@ -34,7 +34,7 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import Layout
 from atlas.store.durable import fsync
-from atlas.store.format import Format, reason
+from atlas.store.format import Format, not_an_atlas, reason
 from atlas.store.schema import FILLS, LABEL_VARIABLES, MAP_VARIABLES, SCHEMA, chunks_of
 
 __all__ = ["HDF5", "StoredRows", "encode_chunk", "decode_chunk", "DEFLATE_LEVEL", "root_attrs"]
@@ -93,8 +93,8 @@ class HDF5(Format):
             raise InputFileError(f"{path}: is a directory, not an atlas file")
         attrs, has_map = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA or not has_map:
-            raise InputFileError(f"{path}: an HDF5 file, but not an atlas (no atlas basin map "
-                                 "in it)")
+            raise InputFileError(not_an_atlas(path, attrs, "an HDF5 file",
+                                              " (no atlas basin map in it)"))
         return attrs
 
     def open(self, path: Path, chunks=None) -> xr.DataTree:

@@ -91,7 +91,8 @@ def _attrs(path: Path) -> dict:
     if path.is_file() and not any(fmt.recognises(path) for fmt in FORMATS.values()):
         if path.suffix.lower() in CONFIG_SUFFIXES:
             raise InputFileError(f"{path}: a config, not an atlas file; run it with "
-                                 f"`atlas run {path}`, then give the file it writes")
+                                 f"`atlas run {path}` (a grid) or `atlas stability {path}` "
+                                 "(a study), then give the file it writes")
         raise InputFileError(f"{path}: not an atlas file (an atlas file is the HDF5 file or "
                              "Zarr store that `atlas run` writes)")
     return format_for(path).attrs(path)

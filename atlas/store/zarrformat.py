@@ -28,7 +28,7 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import BackendUnavailable, InputFileError
 from atlas.layout import Layout
-from atlas.store.format import Format
+from atlas.store.format import Format, not_an_atlas
 from atlas.store.schema import MAP_VARIABLES, SCHEMA, chunks_of
 
 __all__ = ["Zarr", "DATA", "root_attrs"]
@@ -121,7 +121,7 @@ class Zarr(Format):
             raise InputFileError(f"{path}: is a directory, not an atlas file")
         attrs = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA:
-            raise InputFileError(f"{path}: a Zarr store, but not an atlas")
+            raise InputFileError(not_an_atlas(path, attrs, "a Zarr store"))
         return attrs
 
     def open(self, path: Path, chunks=None) -> xr.DataTree:

@@ -214,3 +214,27 @@ def test_a_window_in_degrees_runs_with_a_warning_on_stderr(tmp_path):
     with atlas.open(tmp_path / "deg.h5") as tree:
         assert tree["separatrices"].attrs["tol"] == pytest.approx(1.9e-12, rel=1e-12)
         assert tree.attrs["config"].count('"tol": 1.9e-12') == 1
+
+
+def test_a_study_file_given_for_a_config_or_an_atlas(capsys, tmp_path):
+    """``atlas stability STUDY.h5`` once said "cannot read config file (UnicodeDecodeError)",
+    and ``atlas.open(STUDY.h5)`` "not an atlas" without saying what reads it."""
+    import h5py
+
+    from atlas.errors import InputFileError
+    from tests.helpers import STUDY_BODY
+
+    cfg = write_config(tmp_path / "s.yaml", STUDY_BODY.format(torque="[0.0, 0.5]",
+                                                              output=tmp_path / "s.h5"))
+    assert main(["stability", str(cfg)]) == 0
+    capsys.readouterr()
+    study = tmp_path / "s.h5"
+    for command in ("stability", "run"):
+        _one_error_line(capsys, [command, study], f"{study}: a stability study, not a config",
+                        f"`atlas info {study}`")
+    with pytest.raises(InputFileError, match="a stability study, not an atlas file"):
+        atlas.open(study)
+    hdf5 = tmp_path / "other.h5"
+    with h5py.File(hdf5, "w") as f:
+        f["x"] = [1.0]
+    _one_error_line(capsys, ["run", hdf5], f"{hdf5}: an HDF5 file, not a YAML config")
