@@ -115,7 +115,7 @@ def not_an_atlas(path, attrs: dict, what: str, why: str = "") -> str:
     """The one line for a file of format ``what`` ("an HDF5 file") that is not an atlas file
     (``why``, appended): where it is a stability study (``atlas stability``'s file), how to
     read that instead."""
-    from atlas.store.study import STUDY_SCHEMA
+    from atlas.store.schema import STUDY_SCHEMA
 
     if attrs.get("atlas_schema") == STUDY_SCHEMA:
         return (f"{path}: a stability study, not an atlas file; `atlas info {path}` and "

@@ -23,7 +23,8 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.layout import Layout
 from atlas.status import ATTRACTOR_FILL, IN_FILE, STATUS_MEANINGS
 
-__all__ = ["FORMAT_VERSION", "OLDEST_FORMAT", "CERTIFICATE_FORMAT", "SCHEMA", "MapVariable",
+__all__ = ["FORMAT_VERSION", "OLDEST_FORMAT", "CERTIFICATE_FORMAT", "SCHEMA", "STUDY_SCHEMA",
+           "MapVariable",
            "LABEL_VARIABLES",
            "MAP_VARIABLES", "FILLS", "STATUS_FLAGS", "chunks_of", "BASIN_VARIABLES",
            "POINT_VARIABLES", "CERTIFICATE_POINT_VARIABLES", "summary_dataset",
@@ -40,6 +41,8 @@ OLDEST_FORMAT = 3
 CERTIFICATE_FORMAT = 4
 #: Root attribute ``atlas_schema`` of every atlas file, complete or not.
 SCHEMA = "atlas-basin-map/1"
+#: Root attribute ``atlas_schema`` of a stability study file (:mod:`atlas.store.study`).
+STUDY_SCHEMA = "atlas-stability-study/1"
 
 #: ``status``'s CF flags and comment, from :data:`atlas.status.STATUS_MEANINGS` and
 #: :data:`atlas.status.IN_FILE`.

@@ -26,14 +26,13 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import PARAMETERS
+from atlas.store.schema import STUDY_SCHEMA
 
 __all__ = ["STUDY_SCHEMA", "STUDY_FORMAT", "STUDY_VARIABLES", "BIFURCATIONS",
            "POINT_STATUS_MEANINGS",
            "write_study", "open_study", "is_study_file", "check_study", "swept_dims",
            "variable_attrs", "RUNNING_BASIN"]
 
-#: Root attribute ``atlas_schema`` of a study file.
-STUDY_SCHEMA = "atlas-stability-study/1"
 #: Version of the study file's layout (root attribute ``format_version``).
 STUDY_FORMAT = 1
 #: ``point_status``'s flags: what the numbers of a parameter point are.
