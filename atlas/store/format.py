@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
     from atlas.layout import Layout
 
-__all__ = ["Format", "reason", "not_an_atlas"]
+__all__ = ["Format", "reason"]
 
 
 class Format:
@@ -110,15 +110,3 @@ def reason(exc: BaseException) -> str:
     text = str(exc).strip()
     return text.splitlines()[0][:200] if text else exc.__class__.__name__
 
-
-def not_an_atlas(path, attrs: dict, what: str, why: str = "") -> str:
-    """The one line for a file of format ``what`` ("an HDF5 file") that is not an atlas file
-    (``why``, appended): where it is a stability study (``atlas stability``'s file), how to
-    read that instead."""
-    from atlas.store.schema import STUDY_SCHEMA
-
-    if attrs.get("atlas_schema") == STUDY_SCHEMA:
-        return (f"{path}: a stability study, not an atlas file; `atlas info {path}` and "
-                f"`atlas plot {path}` read it, and in Python atlas.store.study.open_study or "
-                "xr.open_dataset(path, engine='h5netcdf')")
-    return f"{path}: {what}, but not an atlas{why}"

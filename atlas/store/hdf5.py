@@ -34,8 +34,15 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import Layout
 from atlas.store.durable import fsync
-from atlas.store.format import Format, not_an_atlas, reason
-from atlas.store.schema import FILLS, LABEL_VARIABLES, MAP_VARIABLES, SCHEMA, chunks_of
+from atlas.store.format import Format, reason
+from atlas.store.schema import (
+    FILLS,
+    LABEL_VARIABLES,
+    MAP_VARIABLES,
+    SCHEMA,
+    chunks_of,
+    not_an_atlas,
+)
 
 __all__ = ["HDF5", "StoredRows", "encode_chunk", "decode_chunk", "DEFLATE_LEVEL", "root_attrs"]
 

@@ -24,6 +24,7 @@ from atlas.layout import Layout
 from atlas.status import ATTRACTOR_FILL, IN_FILE, STATUS_MEANINGS
 
 __all__ = ["FORMAT_VERSION", "OLDEST_FORMAT", "CERTIFICATE_FORMAT", "SCHEMA", "STUDY_SCHEMA",
+           "not_an_atlas",
            "MapVariable",
            "LABEL_VARIABLES",
            "MAP_VARIABLES", "FILLS", "STATUS_FLAGS", "chunks_of", "BASIN_VARIABLES",
@@ -205,3 +206,14 @@ def with_barrier(cycle: xr.Dataset, barrier) -> xr.Dataset:
              "barrier_direction": np.int8(barrier.direction)}
     attrs.update({f"{name}_units": units for name, units in BARRIER_ATTRS.items()})
     return cycle.assign(barrier_g=(BARRIER_DIM, g, BARRIER_G)).assign_attrs(attrs)
+
+
+def not_an_atlas(path, attrs: dict, what: str, why: str = "") -> str:
+    """The one line for a file of format ``what`` ("an HDF5 file") that is not an atlas file
+    (``why``, appended): where it is a stability study (``atlas stability``'s file), how to
+    read that instead."""
+    if attrs.get("atlas_schema") == STUDY_SCHEMA:
+        return (f"{path}: a stability study, not an atlas file; `atlas info {path}` and "
+                f"`atlas plot {path}` read it, and in Python atlas.store.study.open_study or "
+                "xr.open_dataset(path, engine='h5netcdf')")
+    return f"{path}: {what}, but not an atlas{why}"

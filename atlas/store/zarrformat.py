@@ -28,8 +28,8 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import BackendUnavailable, InputFileError
 from atlas.layout import Layout
-from atlas.store.format import Format, not_an_atlas
-from atlas.store.schema import MAP_VARIABLES, SCHEMA, chunks_of
+from atlas.store.format import Format
+from atlas.store.schema import MAP_VARIABLES, SCHEMA, chunks_of, not_an_atlas
 
 __all__ = ["Zarr", "DATA", "root_attrs"]
 
