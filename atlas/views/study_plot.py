@@ -31,8 +31,8 @@ _LABELS_OF = {"homoclinic_torque": "homoclinic τ_c", "homoclinic_damping": "hom
               "homoclinic_omega0": "homoclinic ω0_c",
               "saddle_node_torque": "saddle-node τ = ω0²",
               "saddle_node_omega0": "saddle-node ω0 = √|τ|",
-              "focus_node_damping": "focus → node", "focus_node_torque": "focus → node",
-              "focus_node_omega0": "focus → node"}
+              "focus_node_damping": "focus → node α", "focus_node_torque": "focus → node τ",
+              "focus_node_omega0": "focus → node ω0"}
 _DRAWN = {"homoclinic": ("#b2182b", "--"), "saddle-node": ("#2166ac", ":"),
           "focus-node": ("#5e3c99", "-.")}
 #: The bifurcations where the basin stability jumps (a curve is broken there).
@@ -179,31 +179,39 @@ def _shock_curve(ds: xr.Dataset, axis: str):
     return draw
 
 
+def _map_curves(ds: xr.Dataset, x: str, y: str) -> dict[str, tuple]:
+    """{variable: (θ-axis values, θ̇-axis values) of its curve} on an x × y map: each
+    bifurcation once, as the variable that is a value of one axis over the other (or a
+    constant) with the most values inside its axis's range (the focus–node read along τ over
+    α is smooth where the one along α over τ has one sample in range), none for a bifurcation
+    outside the map."""
+    best = {}
+    for name, (value_axis, kind) in BIFURCATIONS.items():
+        if name not in ds or value_axis not in (x, y):
+            continue
+        other = y if value_axis == x else x
+        values = ds[name]
+        if values.dims == (other,):
+            along, at = ds[other].values, values.values
+        elif values.dims == ():
+            along, at = ds[other].values[[0, -1]], np.full(2, float(values))
+        else:
+            continue
+        lo, hi = float(ds[value_axis][0]), float(ds[value_axis][-1])
+        inside = int(np.count_nonzero(np.isfinite(at) & (at >= lo) & (at <= hi)))
+        if inside and inside > best.get(kind, (0, None, None))[0]:
+            best[kind] = (inside, name, (at, along) if value_axis == x else (along, at))
+    return {name: pair for _, name, pair in best.values()}
+
+
 def _stability_map(ds: xr.Dataset, x: str, y: str):
     def draw(ax):
         total = ds["basin_stability"].sum("k", skipna=False).transpose(y, x)
         mesh = ax.pcolormesh(ds[x].values, ds[y].values, total.values, shading="nearest",
                              cmap="viridis", vmin=0.0, vmax=1.0)
         ax.figure.colorbar(mesh, ax=ax, label="basin stability of the rest states")
-        drawn = set()
-        for name, (value_axis, kind) in BIFURCATIONS.items():
-            # a bifurcation value along one axis of the map, over the other one (each
-            # bifurcation once: the first of its variables that is such a curve)
-            if name not in ds or value_axis not in (x, y) or kind in drawn:
-                continue
-            other = y if value_axis == x else x
-            values = ds[name]
-            if values.dims == (other,):
-                along, at = ds[other].values, values.values
-            elif values.dims == ():
-                along, at = ds[other].values[[0, -1]], np.full(2, float(values))
-            else:
-                continue
-            if not np.isfinite(at).any():  # nowhere on this map (no running cycle, say)
-                continue
-            drawn.add(kind)
-            colour, style = _DRAWN[kind]
-            pair = (at, along) if value_axis == x else (along, at)
+        for name, pair in _map_curves(ds, x, y).items():
+            colour, style = _DRAWN[BIFURCATIONS[name][1]]
             ax.plot(*pair, color="white", lw=2.4)
             ax.plot(*pair, color=colour, ls=style, lw=1.3, label=_LABELS_OF[name])
         ax.set_xlim(ds[x].values[0], ds[x].values[-1])
@@ -218,7 +226,7 @@ def _stability_map(ds: xr.Dataset, x: str, y: str):
             ax.add_artist(ax.legend(handles=[Patch(fc="white", ec="0.3", label="no exact "
                                                    "value (saddle-node / failed)")],
                                     loc="lower right", frameon=True))
-        ax.legend(loc="upper right", frameon=True)
+        ax.legend(loc="best", frameon=True)
 
     return draw
 

@@ -102,7 +102,7 @@ def test_a_study_over_torque_marks_the_focus_node_torque(tmp_path, capsys):
     ax = Figure().add_subplot()
     _stability_curves(ds, "torque")(ax)
     rows = {t.get_text().split(" = ")[0]: t.xyann[1] for t in ax.texts}
-    assert rows["focus → node"] != rows["saddle-node τ"], rows
+    assert rows["focus → node τ"] != rows["saddle-node τ"], rows
     assert main(["info", str(tmp_path / "t.h5")]) == 0
     assert f"focus_node_torque: torque = {fn:.12g}" in capsys.readouterr().out
 
@@ -145,13 +145,13 @@ def test_a_map_draws_each_bifurcation_once_where_it_lies(tmp_path):
 
     ds, lines = legend("wt", "{alpha: 0.1, omega0: {start: 0.8, stop: 1.2, num: 3}, "
                              "torque: {start: 0.2, stop: 0.9, num: 3}}")
-    assert sorted(lines) == ["focus → node", "homoclinic τ_c", "saddle-node τ = ω0²"]
+    assert sorted(lines) == ["focus → node τ", "homoclinic τ_c", "saddle-node τ = ω0²"]
     # torque across, ω0 up: each a torque over the ω0 values
-    for label, name in (("focus → node", "focus_node_torque"),
+    for label, name in (("focus → node τ", "focus_node_torque"),
                         ("homoclinic τ_c", "homoclinic_torque"),
                         ("saddle-node τ = ω0²", "saddle_node_torque")):
         np.testing.assert_array_equal(lines[label].get_xdata(), ds[name].values)
         np.testing.assert_array_equal(lines[label].get_ydata(), ds["omega0"].values)
     _, lines = legend("aw", "{alpha: {start: 0.5, stop: 1.5, num: 2}, "
                             "omega0: {start: 0.8, stop: 1.2, num: 2}, torque: 0.0}")
-    assert sorted(lines) == ["focus → node"]
+    assert sorted(lines) == ["focus → node α"]
