@@ -93,6 +93,17 @@ def _bifurcation_lines(ax, ds: xr.Dataset, axis: str) -> int:
     return len(taken)
 
 
+def _x_range(ds: xr.Dataset, axis: str) -> tuple[float, float]:
+    """The x limits of a 1-D figure: the parameter's range, 1 % wider on a side where a
+    bifurcation lies at its end (its line would hide under the frame: the saddle-node τ = ω0²
+    at the end of a torque range)."""
+    lo, hi = float(ds[axis][0]), float(ds[axis][-1])
+    pad = 0.01 * (hi - lo)
+    at = [v for _, v in _bifurcations_at(ds, axis)]
+    return (lo - pad if any(v - lo < pad for v in at) else lo,
+            hi + pad if any(hi - v < pad for v in at) else hi)
+
+
 def _nan_points(ax, ds: xr.Dataset, axis: str) -> None:
     bad = np.atleast_1d(ds["point_status"].values) != 0
     for x in np.atleast_1d(ds[axis].values)[bad]:
@@ -103,11 +114,14 @@ def _nan_points(ax, ds: xr.Dataset, axis: str) -> None:
 _SYMBOLS = {"alpha": "α", "omega0": "ω0", "torque": "τ"}
 
 
-def _curve(ds: xr.Dataset, axis: str, values) -> tuple[np.ndarray, np.ndarray]:
+def _curve(ds: xr.Dataset, axis: str, values, jumps: bool = True
+           ) -> tuple[np.ndarray, np.ndarray]:
     """(x, y) of a curve against ``axis``, broken (a NaN) between the two points on either
-    side of each bifurcation: a jump there is not drawn as a slope."""
+    side of each bifurcation where the basin stability jumps (``jumps``): a jump there is
+    not drawn as a slope. (The fatal shocks do not jump: ``jumps`` false.)"""
     x, y = np.asarray(ds[axis].values, float), np.asarray(values, float)
-    cuts = [v for name, v in _bifurcations_at(ds, axis) if BIFURCATIONS[name][1] in _JUMPS]
+    cuts = [v for name, v in _bifurcations_at(ds, axis)
+            if jumps and BIFURCATIONS[name][1] in _JUMPS]
     at = sorted({int(i) for v in cuts if x[0] < v < x[-1]
                  for i in [np.searchsorted(x, v)] if x[i] != v})
     return np.insert(x, at, np.nan), np.insert(y, at, np.nan)
@@ -126,7 +140,6 @@ def _stability_curves(ds: xr.Dataset, axis: str):
     marker = "." if ds.sizes[axis] <= 60 else None
 
     def draw(ax):
-        x = ds[axis].values
         ax.plot(*_curve(ds, axis, ds["basin_stability"].sum("k", skipna=False).values),
                 color="#1b7837", lw=1.6, marker=marker, label="rest states (all wells)")
         if 0 in ds["k"].values:
@@ -142,10 +155,11 @@ def _stability_curves(ds: xr.Dataset, axis: str):
                     f"{ds.attrs['sigma_theta']:g}, σθ̇ = {ds.attrs['sigma_theta_dot']:g}")
         rows = _bifurcation_lines(ax, ds, axis)
         _nan_points(ax, ds, axis)
-        ax.set_xlim(x[0], x[-1])
+        ax.set_xlim(*_x_range(ds, axis))
         ax.set_ylim(-0.02, 1.02)
         ax.set_xlabel(_LABELS[axis])
-        ax.set_ylabel("basin stability (exact area fraction)")
+        ax.set_ylabel("basin stability (exact area fraction"
+                      + ("; Gaussian: probability)" if "gaussian_stability" in ds else ")"))
         ax.set_title(f"basin stability: {_parameter_title(ds, (axis,))}", fontsize=9,
                      pad=4 + 10 * max(rows, 1))
         handles, labels = ax.get_legend_handles_labels()
@@ -158,23 +172,23 @@ def _stability_curves(ds: xr.Dataset, axis: str):
 def _shock_curve(ds: xr.Dataset, axis: str):
     def draw(ax):
         x = ds[axis].values
-        ax.plot(*_curve(ds, axis, ds["minimal_fatal_shock"].isel(k=0).values),
+        ax.plot(*_curve(ds, axis, ds["minimal_fatal_shock"].isel(k=0).values, jumps=False),
                 color="#1b7837", lw=1.6, marker="." if x.size <= 60 else None,
                 label="of the rest states")
         if "running_fatal_shock" in ds and np.isfinite(ds["running_fatal_shock"].values).any():
-            ax.plot(*_curve(ds, axis, ds["running_fatal_shock"].values), color="#525252",
+            ax.plot(*_curve(ds, axis, ds["running_fatal_shock"].values, jumps=False),
+                    color="#525252",
                     lw=1.6, ls="--", marker="." if x.size <= 60 else None,
                     label="of the running cycle")
         rows = _bifurcation_lines(ax, ds, axis)
         _nan_points(ax, ds, axis)
-        ax.set_xlim(x[0], x[-1])
+        ax.set_xlim(*_x_range(ds, axis))
         ax.set_ylim(bottom=0.0)
         ax.set_xlabel(_LABELS[axis])
-        ax.set_ylabel("minimal fatal shock √(Δθ² + Δθ̇²)")
+        ax.set_ylabel("minimal fatal shock √(Δθ² + Δθ̇²)  (θ in rad, θ̇ in rad/s)")
         ax.set_title(f"minimal fatal shock: {_parameter_title(ds, (axis,))}", fontsize=9,
                      pad=4 + 10 * max(rows, 1))
-        ax.legend(loc="upper center", title="minimal fatal shock", fontsize=8,
-                  title_fontsize=8)
+        ax.legend(loc="best", title="minimal fatal shock", fontsize=8, title_fontsize=8)
 
     return draw
 
