@@ -386,6 +386,12 @@ class Config(_Strict):
                                    (g.theta_dot0.start, g.theta_dot0.stop))
             except ValueError as exc:
                 raise ValueError(f"grid.{exc}") from None
+            swept = self.pendulum.swept
+            if self.stability is not None and self.stability.tipping and len(swept) != 1:
+                over = " and ".join(swept) if swept else "no parameter"
+                raise ValueError("stability.tipping: tipping probabilities are between "
+                                 "consecutive points of a 1-D study (one swept parameter); "
+                                 f"this study sweeps {over}")
             return self
         g = self.grid
         theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))

@@ -247,15 +247,22 @@ def _stability_map(ds: xr.Dataset, x: str, y: str):
 
 def plot_study(path: str | Path, outdir=None, fmt: str = "png", dpi=None) -> list[Path]:
     """The figures of the study file at ``path`` (module docstring), written into ``outdir``
-    (default: next to the file) as NAME_<figure>.<fmt>."""
+    (default: next to the file) as NAME_<figure>.<fmt>. A study of one point, or over three
+    parameters, has no figure: InputFileError (one line)."""
     from atlas.store.study import open_study, swept_dims
 
     path = Path(path)
     ds = open_study(path)
+    swept = swept_dims(ds)
+    if len(swept) not in (1, 2):
+        from atlas.errors import InputFileError
+
+        what = "one parameter point" if not swept else f"{len(swept)} swept parameters"
+        raise InputFileError(f"{path}: a study of {what} has no figure (`atlas plot` draws "
+                             "1-D curves and 2-D maps); `atlas info` prints its numbers")
     folder = Path(outdir) if outdir is not None else path.parent
     folder.mkdir(parents=True, exist_ok=True)
     stem = path.name.removesuffix(path.suffix)
-    swept = swept_dims(ds)
     written = []
     if len(swept) == 1:
         axis = swept[0]

@@ -113,3 +113,28 @@ def test_a_window_too_narrow_for_exact_fractions_is_refused(tmp_path, capsys):
     assert not out.exists()
     cfg.write_text(cfg.read_text().replace("3.14159265358980", "3.14259265358979"))
     assert main(["stability", str(cfg)]) == 0 and out.exists()
+
+
+def test_what_a_study_cannot_give_is_refused_in_one_line(tmp_path, capsys):
+    """Tipping probabilities need a 1-D study (a 2-D one is refused before any point is
+    computed: it once computed the polygons for nothing); a study of one point has no
+    figure (`atlas plot` says so instead of exiting 0 with nothing written)."""
+    from atlas.cli import main
+
+    out = tmp_path / "t.h5"
+    cfg = write_config(tmp_path / "t.yaml", (
+        "pendulum: {alpha: [0.1, 0.2], omega0: 1.0, torque: [0.3, 0.5]}\n"
+        "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
+        "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
+        f"stability: {{tipping: true}}\noutput: {out}\n"))
+    assert main(["stability", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "stability.tipping" in err and "alpha and torque" in err
+    assert not out.exists()
+    one = write_config(tmp_path / "one.yaml", BODY.format(torque="0.3", output=tmp_path / "o.h5"))
+    assert main(["stability", str(one)]) == 0
+    capsys.readouterr()
+    assert main(["plot", str(tmp_path / "o.h5"), "--outdir", str(tmp_path / "fig")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "has no figure" in err
+    assert not (tmp_path / "fig").exists()
