@@ -71,11 +71,18 @@ def study_lines(ds: xr.Dataset) -> list[str]:
         coord = np.atleast_1d(ds[swept[0]].values) if swept else [None]
         exact = np.flatnonzero(np.atleast_1d(ds["point_status"].values) == 0)
         for i in sorted({int(exact[0]), int(exact[-1])} if exact.size else ()):
-            at = f"at {swept[0]} = {coord[i]:g}" if swept else "  "
+            at = f"at {swept[0]} = {coord[i]:g}" if swept else "at the point"
             lines.append(f"basin stability {at}: rest states {values[i]:.10f} "
                          f"± {errors[i]:.1e}, running cycle "
                          f"{np.atleast_1d(ds['running_stability'].values)[i]:.10f} "
                          "(exact area fractions)")
+    elif np.isfinite(fp.values).any():  # a map: its extremes, and where
+        for word, pick in (("lowest", np.nanargmin), ("highest", np.nanargmax)):
+            index = np.unravel_index(pick(fp.values), fp.shape)
+            where = ", ".join(f"{d} = {float(ds[d][i]):g}" for d, i in zip(fp.dims, index))
+            lines.append(f"basin stability of the rest states, {word}: "
+                         f"{float(fp.values[index]):.10f} ± {float(err.values[index]):.1e} "
+                         f"at {where} (exact area fraction)")
     shock = ds["minimal_fatal_shock"].isel(k=0) if ds.sizes["k"] else None
     if shock is not None and np.isfinite(shock.values).any():
         v = shock.values[np.isfinite(shock.values)]

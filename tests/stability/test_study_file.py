@@ -120,6 +120,10 @@ def test_a_two_dimensional_study_draws_its_map(tmp_path, capsys):
     np.testing.assert_array_equal(ds["focus_node_damping"].values, ds["omega0"].values)
     assert main(["plot", str(tmp_path / "m.h5")]) == 0
     assert (tmp_path / "m_stability_map.png").exists()
+    capsys.readouterr()
+    assert main(["info", str(tmp_path / "m.h5")]) == 0
+    out = capsys.readouterr().out  # untilted: the wells fill the window at every point
+    assert "basin stability of the rest states, lowest: 1.0000000000" in out
 
 
 def test_gaussian_and_tipping_are_stored_when_asked(tmp_path, capsys):
