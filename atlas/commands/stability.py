@@ -123,5 +123,6 @@ def cost_lines(results, phases) -> list[str]:
         times = np.array([r.seconds[phase] for r in results if phase in r.seconds])
         if times.size:
             lines.append(f"per point, {phase:<10} mean {1e3 * times.mean():8.2f} ms, "
-                         f"max {1e3 * times.max():8.2f} ms ({times.size} points)")
+                         f"max {1e3 * times.max():8.2f} ms ({times.size} of "
+                         f"{len(results)} points: those it ran at)")
     return lines

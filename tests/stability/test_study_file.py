@@ -192,7 +192,7 @@ def test_verbose_reports_each_phase_per_point(tmp_path):
     assert proc.returncode == 0, proc.stderr
     found = {m.group(1): (float(m.group(2)), float(m.group(3)), int(m.group(4)))
              for m in re.finditer(r"per point, (\w+)\s+mean\s+([0-9.]+) ms, max\s+([0-9.]+) "
-                                  r"ms \((\d+) points\)", proc.stderr)}
+                                  r"ms \((\d+) of 4 points", proc.stderr)}
     assert set(found) == set(PHASES), proc.stderr
     for mean, most, points in found.values():
         assert 0.0 <= mean <= most and points == 4
