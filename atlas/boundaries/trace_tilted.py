@@ -82,8 +82,9 @@ def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
     saddle_j, branch, vertex, arc, base, sagitta = _vertices(exact, window, max_spacing)
     normal = np.column_stack(field_normal(p, base[:, 0], base[:, 1])) if base.size \
         else base.copy()
-    below = exact.side(base[:, 0] - PROBE * normal[:, 0], base[:, 1] - PROBE * normal[:, 1])
-    above = exact.side(base[:, 0] + PROBE * normal[:, 0], base[:, 1] + PROBE * normal[:, 1])
+    # the exact sides at ±PROBE along the normal, from one search
+    below, above = exact.side(base[:, 0] + np.array([[-PROBE], [PROBE]]) * normal[:, 0],
+                              base[:, 1] + np.array([[-PROBE], [PROBE]]) * normal[:, 1])
     # a vertex whose exact sides agree at ±PROBE (a tongue thinner than that, or a fold)
     # has no boundary to bisect across there: it is left out, and counted
     keep = below != above
