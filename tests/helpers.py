@@ -71,6 +71,16 @@ output: {output}
 """
 
 
+def study_config(path: Path, pendulum: str, output, extra: str = "") -> Path:
+    """A small study's config at ``path``: ``pendulum`` the body of its flow mapping (e.g.
+    ``"alpha: 0.1, omega0: {start: 0.5, stop: 1.5, num: 5}, torque: 0.3"``), STUDY_BODY's
+    2π × 6 window, the lines ``extra`` (``"stability: {tipping: true}\\n"``) and ``output``."""
+    return write_config(path, (f"pendulum: {{{pendulum}}}\n"
+                               "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
+                               "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
+                               f"{extra}output: {output}\n"))
+
+
 def run_cli(*args, cwd=None, env=None, timeout=300):
     """Run the real ``atlas`` CLI in a subprocess."""
     return subprocess.run([sys.executable, "-m", "atlas.cli", *map(str, args)], cwd=cwd,

@@ -14,7 +14,7 @@ from atlas.cli import main
 from atlas.physics.pendulum import Pendulum
 from atlas.stability import bifurcations as bif
 from atlas.store.study import open_study
-from tests.helpers import write_config
+from tests.helpers import study_config
 
 pytestmark = pytest.mark.slow  # runs the CLI in-process, computes a study
 
@@ -43,12 +43,8 @@ def over_omega0(tmp_path_factory):
     """A study over ω0 from 0.5 to 1.5 at α = 0.1, τ = 0.3: the saddle-node √τ ≈ 0.548, the
     focus–node (α⁴ + τ²)^(1/4) just above it and the homoclinic ω0_c ≈ 1.2 all inside."""
     tmp = tmp_path_factory.mktemp("omega0")
-    cfg = write_config(tmp / "w.yaml", (
-        f"pendulum:\n  alpha: {ALPHA}\n  omega0: {{start: 0.5, stop: 1.5, num: 5}}\n"
-        f"  torque: {TORQUE}\n"
-        "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
-        "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
-        f"output: {tmp / 'w.h5'}\n"))
+    cfg = study_config(tmp / "w.yaml", f"alpha: {ALPHA}, omega0: {{start: 0.5, stop: 1.5, "
+                       f"num: 5}}, torque: {TORQUE}", tmp / "w.h5")
     assert main(["stability", str(cfg)]) == 0
     return tmp / "w.h5"
 
@@ -83,11 +79,8 @@ def test_a_study_over_omega0_prints_and_draws_them(over_omega0, capsys):
 def test_a_study_over_torque_marks_the_focus_node_torque(tmp_path, capsys):
     """At α = 0.2, ω0 = 1 the rest state turns node at τ = √(1 − α⁴) ≈ 0.9992, inside a
     study up to 1 (with the saddle-node) — as the eigenvalues say."""
-    cfg = write_config(tmp_path / "t.yaml", (
-        "pendulum: {alpha: 0.2, omega0: 1.0, torque: [0.0, 0.5, 1.0]}\n"
-        "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
-        "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
-        f"output: {tmp_path / 't.h5'}\n"))
+    cfg = study_config(tmp_path / "t.yaml", "alpha: 0.2, omega0: 1.0, torque: [0.0, 0.5, 1.0]",
+                       tmp_path / "t.h5")
     assert main(["stability", str(cfg)]) == 0
     ds = open_study(tmp_path / "t.h5")
     fn = float(ds["focus_node_torque"])
@@ -128,11 +121,7 @@ def test_a_map_draws_each_bifurcation_once_where_it_lies(tmp_path):
     from atlas.views.study_plot import _stability_map
 
     def legend(name, pendulum):
-        cfg = write_config(tmp_path / f"{name}.yaml", (
-            f"pendulum: {pendulum}\n"
-            "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
-            "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
-            f"output: {tmp_path / name}.h5\n"))
+        cfg = study_config(tmp_path / f"{name}.yaml", pendulum, tmp_path / f"{name}.h5")
         assert main(["stability", str(cfg)]) == 0
         ds = open_study(tmp_path / f"{name}.h5")
         ax = Figure().add_subplot()
@@ -143,8 +132,8 @@ def test_a_map_draws_each_bifurcation_once_where_it_lies(tmp_path):
         assert len(labels) == len(set(labels)), labels  # each bifurcation drawn once
         return ds, dict(zip(labels, drawn))
 
-    ds, lines = legend("wt", "{alpha: 0.1, omega0: {start: 0.8, stop: 1.2, num: 3}, "
-                             "torque: {start: 0.2, stop: 0.9, num: 3}}")
+    ds, lines = legend("wt", "alpha: 0.1, omega0: {start: 0.8, stop: 1.2, num: 3}, "
+                             "torque: {start: 0.2, stop: 0.9, num: 3}")
     assert sorted(lines) == ["focus → node τ", "homoclinic τ_c", "saddle-node τ = ω0²"]
     # torque across, ω0 up: each a torque over the ω0 values
     for label, name in (("focus → node τ", "focus_node_torque"),
@@ -152,6 +141,6 @@ def test_a_map_draws_each_bifurcation_once_where_it_lies(tmp_path):
                         ("saddle-node τ = ω0²", "saddle_node_torque")):
         np.testing.assert_array_equal(lines[label].get_xdata(), ds[name].values)
         np.testing.assert_array_equal(lines[label].get_ydata(), ds["omega0"].values)
-    _, lines = legend("aw", "{alpha: {start: 0.5, stop: 1.5, num: 2}, "
-                            "omega0: {start: 0.8, stop: 1.2, num: 2}, torque: 0.0}")
+    _, lines = legend("aw", "alpha: {start: 0.5, stop: 1.5, num: 2}, "
+                            "omega0: {start: 0.8, stop: 1.2, num: 2}, torque: 0.0")
     assert sorted(lines) == ["focus → node α"]

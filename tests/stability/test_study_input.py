@@ -10,7 +10,7 @@ import pytest
 
 from atlas.cli import main
 from tests.helpers import STUDY_BODY as BODY
-from tests.helpers import write_config
+from tests.helpers import study_config, write_config
 
 
 @pytest.mark.parametrize("torque, message", [
@@ -122,11 +122,8 @@ def test_what_a_study_cannot_give_is_refused_in_one_line(tmp_path, capsys):
     from atlas.cli import main
 
     out = tmp_path / "t.h5"
-    cfg = write_config(tmp_path / "t.yaml", (
-        "pendulum: {alpha: [0.1, 0.2], omega0: 1.0, torque: [0.3, 0.5]}\n"
-        "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
-        "  theta_dot0: {start: -3, stop: 3, num: 2}\n"
-        f"stability: {{tipping: true}}\noutput: {out}\n"))
+    cfg = study_config(tmp_path / "t.yaml", "alpha: [0.1, 0.2], omega0: 1.0, "
+                       "torque: [0.3, 0.5]", out, "stability: {tipping: true}\n")
     assert main(["stability", str(cfg)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "stability.tipping" in err and "alpha and torque" in err
