@@ -387,8 +387,10 @@ class Config(_Strict):
             except ValueError as exc:
                 raise ValueError(f"grid.{exc}") from None
             swept = self.pendulum.swept
-            if self.stability is not None and self.stability.tipping and len(swept) != 1:
-                over = " and ".join(swept) if swept else "no parameter"
+            if self.stability is not None and self.stability.tipping and (
+                    len(swept) != 1 or len(self.pendulum.values(swept[0])) < 2):
+                over = (" and ".join(swept) if len(swept) != 1 else
+                        f"one value of {swept[0]}") if swept else "no parameter"
                 raise ValueError("stability.tipping: tipping probabilities are between "
                                  "consecutive points of a 1-D study (one swept parameter); "
                                  f"this study sweeps {over}")
@@ -630,12 +632,9 @@ def _not_a_config(path: Path) -> str | None:
         return (f"{path}: a stability study, not a config; look at it with "
                 f"`atlas info {path}` (`atlas stability` reads a YAML config such as "
                 "configs/swing_stability.yaml)")
-    try:
-        with open(path, "rb") as f:
-            binary = f.read(8) == b"\x89HDF\r\n\x1a\n"
-    except OSError:
-        return None
-    return f"{path}: an HDF5 file, not a YAML config" if binary else None
+    from atlas.store.hdf5 import HDF5
+
+    return f"{path}: an HDF5 file, not a YAML config" if HDF5().recognises(path) else None
 
 
 # ---------------------------------------------------------------------------- units

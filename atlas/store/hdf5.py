@@ -100,8 +100,9 @@ class HDF5(Format):
             raise InputFileError(f"{path}: is a directory, not an atlas file")
         attrs, has_map = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA or not has_map:
-            raise InputFileError(not_an_atlas(path, attrs, "an HDF5 file",
-                                              " (no atlas basin map in it)"))
+            raise InputFileError(not_an_atlas(
+                path, attrs, "an HDF5 file", " (no atlas basin map in it)",
+                "xr.open_dataset('{path}', engine='h5netcdf')"))
         return attrs
 
     def open(self, path: Path, chunks=None) -> xr.DataTree:

@@ -208,12 +208,12 @@ def with_barrier(cycle: xr.Dataset, barrier) -> xr.Dataset:
     return cycle.assign(barrier_g=(BARRIER_DIM, g, BARRIER_G)).assign_attrs(attrs)
 
 
-def not_an_atlas(path, attrs: dict, what: str, why: str = "") -> str:
+def not_an_atlas(path, attrs: dict, what: str, why: str = "", xarray: str = "") -> str:
     """The one line for a file of format ``what`` ("an HDF5 file") that is not an atlas file
     (``why``, appended): where it is a stability study (``atlas stability``'s file), how to
-    read that instead."""
+    read that instead (``xarray``: the xarray call that opens it, ``{path}`` for its path)."""
     if attrs.get("atlas_schema") == STUDY_SCHEMA:
         return (f"{path}: a stability study, not an atlas file; `atlas info {path}` and "
-                f"`atlas plot {path}` read it, and in Python atlas.store.study.open_study or "
-                "xr.open_dataset(path, engine='h5netcdf')")
+                f"`atlas plot {path}` read it, and in Python "
+                f"atlas.store.study.open_study('{path}') or {xarray.format(path=path)}")
     return f"{path}: {what}, but not an atlas{why}"

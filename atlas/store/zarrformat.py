@@ -121,7 +121,8 @@ class Zarr(Format):
             raise InputFileError(f"{path}: is a directory, not an atlas file")
         attrs = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA:
-            raise InputFileError(not_an_atlas(path, attrs, "a Zarr store"))
+            raise InputFileError(not_an_atlas(path, attrs, "a Zarr store",
+                                              xarray="xr.open_zarr('{path}')"))
         return attrs
 
     def open(self, path: Path, chunks=None) -> xr.DataTree:

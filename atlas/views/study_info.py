@@ -76,9 +76,10 @@ def study_lines(ds: xr.Dataset) -> list[str]:
                          f"± {errors[i]:.1e}, running cycle "
                          f"{np.atleast_1d(ds['running_stability'].values)[i]:.10f} "
                          "(exact area fractions)")
-    elif np.isfinite(fp.values).any():  # a map: its extremes, and where
+    elif (ds["point_status"].values == 0).any():  # a map: its extremes, and where
+        exact = np.where(ds["point_status"].transpose(*fp.dims).values == 0, fp.values, np.nan)
         for word, pick in (("lowest", np.nanargmin), ("highest", np.nanargmax)):
-            index = np.unravel_index(pick(fp.values), fp.shape)
+            index = np.unravel_index(pick(exact), fp.shape)
             where = ", ".join(f"{d} = {float(ds[d][i]):g}" for d, i in zip(fp.dims, index))
             lines.append(f"basin stability of the rest states, {word}: "
                          f"{float(fp.values[index]):.10f} ± {float(err.values[index]):.1e} "

@@ -194,7 +194,7 @@ def _shock_curve(ds: xr.Dataset, axis: str):
 
 
 def _map_curves(ds: xr.Dataset, x: str, y: str) -> dict[str, tuple]:
-    """{variable: (θ-axis values, θ̇-axis values) of its curve} on an x × y map: each
+    """{variable: (x values, y values) of its curve} on an x × y map: each
     bifurcation once, as the variable that is a value of one axis over the other (or a
     constant) with the most values inside its axis's range (the focus–node read along τ over
     α is smooth where the one along α over τ has one sample in range), none for a bifurcation
@@ -253,8 +253,8 @@ def plot_study(path: str | Path, outdir=None, fmt: str = "png", dpi=None) -> lis
 
     path = Path(path)
     ds = open_study(path)
-    swept = swept_dims(ds)
-    if len(swept) not in (1, 2):
+    swept = tuple(d for d in swept_dims(ds) if ds.sizes[d] >= 2)  # a curve needs two points
+    if len(swept) not in (1, 2) or len(swept) != len(swept_dims(ds)):
         from atlas.errors import InputFileError
 
         what = "one parameter point" if not swept else f"{len(swept)} swept parameters"

@@ -232,8 +232,9 @@ def test_a_study_file_given_for_a_config_or_an_atlas(capsys, tmp_path):
     for command in ("stability", "run"):
         _one_error_line(capsys, [command, study], f"{study}: a stability study, not a config",
                         f"`atlas info {study}`")
-    with pytest.raises(InputFileError, match="a stability study, not an atlas file"):
+    with pytest.raises(InputFileError, match="a stability study, not an atlas file") as raised:
         atlas.open(study)
+    assert f"xr.open_dataset('{study}', engine='h5netcdf')" in str(raised.value)
     hdf5 = tmp_path / "other.h5"
     with h5py.File(hdf5, "w") as f:
         f["x"] = [1.0]

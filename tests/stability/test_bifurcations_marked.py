@@ -141,6 +141,14 @@ def test_a_map_draws_each_bifurcation_once_where_it_lies(tmp_path):
                         ("saddle-node τ = ω0²", "saddle_node_torque")):
         np.testing.assert_array_equal(lines[label].get_xdata(), ds[name].values)
         np.testing.assert_array_equal(lines[label].get_ydata(), ds["omega0"].values)
+    # α × τ: the focus–node read along α over τ, (1 − τ²)^(1/4), has no sample inside
+    # α ∈ [0.3, 0.5] on these torques; read along τ over α, √(1 − α⁴), every one is inside
+    ds, lines = legend("at", "alpha: {start: 0.3, stop: 0.5, num: 3}, omega0: 1.0, "
+                             "torque: {start: 0.0, stop: 1.2, num: 4}")
+    np.testing.assert_array_equal(lines["focus → node τ"].get_xdata(),
+                                  ds["focus_node_torque"].values)
+    np.testing.assert_array_equal(lines["focus → node τ"].get_ydata(), ds["alpha"].values)
+    assert "focus → node α" not in lines
     _, lines = legend("aw", "alpha: {start: 0.5, stop: 1.5, num: 2}, "
                             "omega0: {start: 0.8, stop: 1.2, num: 2}, torque: 0.0")
     assert sorted(lines) == ["focus → node α"]

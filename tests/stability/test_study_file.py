@@ -81,6 +81,10 @@ def test_zarr_study_reads_back_equal(study, tmp_path):
     a, b = open_study(study), open_study(tmp_path / "z.zarr")
     for name in ("basin_stability", "minimal_fatal_shock", "point_status"):
         np.testing.assert_array_equal(a[name].values, b[name].values)
+    import atlas  # a Zarr study where an atlas is expected: the Zarr way to open it
+
+    with pytest.raises(InputFileError, match=r"a stability study.*xr\.open_zarr"):
+        atlas.open(tmp_path / "z.zarr")
 
 
 @pytest.mark.parametrize("change, message", [

@@ -128,10 +128,18 @@ def test_what_a_study_cannot_give_is_refused_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "stability.tipping" in err and "alpha and torque" in err
     assert not out.exists()
-    one = write_config(tmp_path / "one.yaml", BODY.format(torque="0.3", output=tmp_path / "o.h5"))
-    assert main(["stability", str(one)]) == 0
-    capsys.readouterr()
-    assert main(["plot", str(tmp_path / "o.h5"), "--outdir", str(tmp_path / "fig")]) == 2
+    cfg = study_config(tmp_path / "t1.yaml", "alpha: 0.1, omega0: 1.0, torque: [0.3]", out,
+                       "stability: {tipping: true}\n")
+    assert main(["stability", str(cfg)]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "has no figure" in err
-    assert not (tmp_path / "fig").exists()
+    assert err.count("\n") == 1 and "one value of torque" in err
+    assert not out.exists()
+    for torque in ("0.3", "[0.3]"):  # one point, as a number or a list of one
+        one = write_config(tmp_path / "one.yaml", BODY.format(torque=torque,
+                                                              output=tmp_path / "o.h5"))
+        assert main(["stability", str(one), "--force"]) == 0
+        capsys.readouterr()
+        assert main(["plot", str(tmp_path / "o.h5"), "--outdir", str(tmp_path / "fig")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "has no figure" in err
+        assert not (tmp_path / "fig").exists()
