@@ -17,7 +17,8 @@ help: ## list the targets
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip uninstall --quiet --yes atlas  # the distribution's name before pendulum-atlas
+	! $(BIN)/python -m pip show --quiet atlas >/dev/null 2>&1 \
+	    || $(BIN)/python -m pip uninstall --quiet --yes atlas  # pendulum-atlas's old name
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $@
 
