@@ -109,4 +109,3 @@ def reason(exc: BaseException) -> str:
     :class:`~atlas.errors.InputFileError`."""
     text = str(exc).strip()
     return text.splitlines()[0][:200] if text else exc.__class__.__name__
-

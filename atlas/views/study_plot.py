@@ -247,14 +247,17 @@ def _stability_map(ds: xr.Dataset, x: str, y: str):
 
 def plot_study(path: str | Path, outdir=None, fmt: str = "png", dpi=None) -> list[Path]:
     """The figures of the study file at ``path`` (module docstring), written into ``outdir``
-    (default: next to the file) as NAME_<figure>.<fmt>. A study of one point, or over three
-    parameters, has no figure: InputFileError (one line)."""
+    (default: next to the file) as NAME_<figure>.<fmt>; a parameter listed with one value is a
+    fixed one. A study of one point, or over three parameters, has no figure:
+    InputFileError (one line)."""
     from atlas.store.study import open_study, swept_dims
 
     path = Path(path)
     ds = open_study(path)
-    swept = tuple(d for d in swept_dims(ds) if ds.sizes[d] >= 2)  # a curve needs two points
-    if len(swept) not in (1, 2) or len(swept) != len(swept_dims(ds)):
+    # a parameter given as a list of one value is a fixed one
+    ds = ds.isel({d: 0 for d in swept_dims(ds) if ds.sizes[d] == 1})
+    swept = swept_dims(ds)
+    if len(swept) not in (1, 2):
         from atlas.errors import InputFileError
 
         what = "one parameter point" if not swept else f"{len(swept)} swept parameters"

@@ -143,3 +143,15 @@ def test_what_a_study_cannot_give_is_refused_in_one_line(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "has no figure" in err
         assert not (tmp_path / "fig").exists()
+
+
+def test_a_parameter_listed_with_one_value_is_plotted_as_fixed(tmp_path, capsys):
+    """α: [0.1] with a torque range is a curve over τ at α = 0.1, not a map one row high."""
+    from atlas.cli import main
+
+    cfg = study_config(tmp_path / "a.yaml", "alpha: [0.1], omega0: 1.0, torque: [0.2, 0.5]",
+                       tmp_path / "a.h5")
+    assert main(["stability", str(cfg)]) == 0
+    assert main(["plot", str(tmp_path / "a.h5")]) == 0
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["a_fatal_shock.png",
+                                                            "a_stability.png"]
