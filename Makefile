@@ -3,7 +3,11 @@ SHELL := /bin/bash
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-STAMP := $(VENV)/.installed
+# Two stamps: RUN, atlas and its runtime dependencies (`make run`, what a user of atlas needs);
+# DEV, those and the dev extras (`make test`, lint, docs, notebook, faults: pytest, ruff, mkdocs,
+# Playwright, Jupyter, Dask). DEV implies RUN, so either order installs each thing once.
+RUN := $(VENV)/.installed-run
+DEV := $(VENV)/.installed
 CONFIG ?= configs/default.yaml
 # The output file named inside a config (its `output:` key), so outputs are targets of configs.
 output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
@@ -14,15 +18,24 @@ output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -e 's/:.*## /\t/' | expand -t 10
 
-$(STAMP): pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	! $(BIN)/python -m pip show --quiet atlas >/dev/null 2>&1 \
-	    || $(BIN)/python -m pip uninstall --quiet --yes atlas  # pendulum-atlas's old name
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+# .venv made if missing, pip upgraded, pendulum-atlas's old distribution name removed if there.
+VENV_READY := { test -x $(BIN)/python || $(PYTHON) -m venv $(VENV); } \
+	&& $(BIN)/python -m pip install --quiet --upgrade pip \
+	&& { ! $(BIN)/python -m pip show --quiet atlas >/dev/null 2>&1 \
+	     || $(BIN)/python -m pip uninstall --quiet --yes atlas; }
+
+# Up to date after a dev install: nothing installed, and nothing downstream recomputed.
+$(RUN): pyproject.toml
+	[ $(DEV) -nt pyproject.toml ] || { $(VENV_READY) && $(BIN)/python -m pip install --quiet -e .; }
 	touch $@
 
-venv: $(STAMP) ## create .venv and install atlas with its dev tools
+$(DEV): pyproject.toml
+	$(VENV_READY)
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $@
+	[ $(RUN) -nt pyproject.toml ] || touch $(RUN)
+
+venv: $(DEV) ## create .venv and install atlas with its dev tools (make run installs the runtime only)
 
 # The atlas file is a target of its config: recomputed only when the config (or the
 # installed package) changed. A config without `output:` writes atlas's default path. Its
@@ -32,7 +45,7 @@ venv: $(STAMP) ## create .venv and install atlas with its dev tools
 OUT := $(or $(call output_of,$(CONFIG)),outputs/default.h5)
 FIGURE := $(basename $(OUT)).png
 
-$(OUT): $(CONFIG) $(STAMP)
+$(OUT): $(CONFIG) $(RUN)
 	$(BIN)/atlas run $(CONFIG) -o $@
 
 $(FIGURE): $(OUT)
@@ -47,41 +60,41 @@ atlas: $(FIGURE) ## compute any config and draw its figures: make atlas CONFIG=c
 # idle, the whole suite takes about 5 min 30 s in one process and 3 min 20 s in two.
 TEST_WORKERS ?= auto
 
-test: $(STAMP) ## import rules, the docs (--strict), then the whole test suite (TEST_WORKERS=0: one process)
+test: $(DEV) ## import rules, the docs (--strict), then the whole test suite (TEST_WORKERS=0: one process)
 	$(BIN)/lint-imports --no-cache
 	$(MKDOCS) build --strict --quiet
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
-test-fast: $(STAMP) ## the fast subset: every test not marked slow (under a minute)
+test-fast: $(DEV) ## the fast subset: every test not marked slow (under a minute)
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile -m "not slow"
 
-stability: $(STAMP) ## Menck's figure, exact: configs/swing_stability.yaml (1,001 torques) → outputs/swing_stability*.png
+stability: $(RUN) ## Menck's figure, exact: configs/swing_stability.yaml (1,001 torques) → outputs/swing_stability*.png
 	$(BIN)/atlas stability configs/swing_stability.yaml -v
 	$(BIN)/atlas plot outputs/swing_stability.h5
 
-figures: $(STAMP) ## the essay's Figures 1-12 → outputs/figures/
+figures: $(RUN) ## the essay's Figures 1-12 → outputs/figures/
 	$(BIN)/atlas figures
 
-bench: $(STAMP) ## benchmark table → outputs/bench.json
+bench: $(RUN) ## benchmark table → outputs/bench.json
 	$(BIN)/atlas bench
 
-faults: $(STAMP) ## soak: kill -9, SIGTERM, disk full, lock races, Dask faults; prints one table
+faults: $(DEV) ## soak: kill -9, SIGTERM, disk full, lock races, Dask faults; prints one table
 	$(BIN)/python -m tools.faults
 
 # The documentation site (mkdocs.yml → site/). --strict: a broken link, anchor or API reference
 # (mkdocstrings reads the docstrings from the sources) fails the build.
 MKDOCS := NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs
 
-docs: $(STAMP) ## the documentation site → site/index.html (mkdocs build --strict)
+docs: $(DEV) ## the documentation site → site/index.html (mkdocs build --strict)
 	$(MKDOCS) build --strict
 
 # docs/tutorial.ipynb is stored with its outputs (a code host shows its figures): this runs it
 # in a fresh kernel and stores them, stamped with the hash of its code (the tests check it).
 .PHONY: notebook
-notebook: $(STAMP) ## run docs/tutorial.ipynb and store it with its outputs (figures, printouts)
+notebook: $(DEV) ## run docs/tutorial.ipynb and store it with its outputs (figures, printouts)
 	$(BIN)/python tests/commands/test_tutorial.py
 
-lint: $(STAMP) ## ruff
+lint: $(DEV) ## ruff
 	$(BIN)/ruff check atlas tests tools
 
 clean: ## remove generated outputs and caches (keeps .venv)

@@ -16,7 +16,8 @@ pytestmark = pytest.mark.skipif(shutil.which("make") is None, reason="no make")
 
 def _dry_run(config) -> list[str]:
     """The commands ``make atlas CONFIG=config`` would run (the venv taken as installed)."""
-    proc = subprocess.run(["make", "-n", "atlas", f"CONFIG={config}", "-o", ".venv/.installed"],
+    proc = subprocess.run(["make", "-n", "atlas", f"CONFIG={config}",
+                           "-o", ".venv/.installed-run"],
                           cwd=REPO, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     return [line for line in proc.stdout.splitlines() if "atlas " in line]
