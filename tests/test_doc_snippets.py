@@ -2,9 +2,10 @@
 
 Every fenced block whose info string is ``python`` (or ``py``) in ``README.md`` and
 ``docs/**/*.md`` runs, the blocks of one page in order in one namespace (a later block may use
-the names of an earlier one), in a folder laid out as a checkout after ``make run``: the
-repository's ``configs/`` as shipped and ``outputs/default.h5``, the atlas of
-``configs/default.yaml``. A block written as an interactive session (its first line starts
+the names of an earlier one), in a folder laid out as a checkout after ``make run`` and
+``make stability``: the repository's ``configs/`` as shipped, ``outputs/default.h5`` (the
+atlas of ``configs/default.yaml``) and ``outputs/swing_stability.h5`` (the study of
+``configs/swing_stability.yaml``). A block written as an interactive session (its first line starts
 with ``>>>``) runs as a doctest: what it prints must be what the page shows
 (``NORMALIZE_WHITESPACE`` and ``ELLIPSIS``: ``...`` stands for any text). Other blocks must
 run without an exception.
@@ -78,14 +79,18 @@ def test_blocks_are_found_and_the_marker_leaves_one_out():
 
 @pytest.fixture(scope="module")
 def checkout(tmp_path_factory) -> Path:
-    """A folder like a checkout after ``make run`` (module docstring)."""
+    """A folder like a checkout after ``make run`` and ``make stability`` (module
+    docstring)."""
     import atlas
+    from atlas.commands.stability import run_study
 
     root = tmp_path_factory.mktemp("checkout")
     shutil.copytree(REPO / "configs", root / "configs")
     (root / "outputs").mkdir()
     atlas.run(atlas.load_config(root / "configs" / "default.yaml",
                                 output=root / "outputs" / "default.h5"), quiet=True)
+    run_study(root / "configs" / "swing_stability.yaml",
+              output=root / "outputs" / "swing_stability.h5")
     return root
 
 
@@ -113,7 +118,7 @@ def test_a_session_block_must_print_what_it_shows():
         run_block(">>> print(6 * 9)\n42", "page.md:9", {})
 
 
-@pytest.mark.slow  # the default atlas (512 × 512 orbits), and the pages' own runs of it
+@pytest.mark.slow  # the default atlas (512² orbits), the 1,001-point study, the pages' runs
 @pytest.mark.parametrize("page", _pages_with_snippets(),
                          ids=lambda page: str(page.relative_to(REPO)))
 def test_the_python_snippets_of_a_page_run(page, checkout, tmp_path, monkeypatch):

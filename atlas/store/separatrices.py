@@ -5,8 +5,9 @@ RK4 map (:func:`atlas.boundaries.trace.trace`): per ``point`` the located bounda
 (``theta`` [rad], ``theta_dot`` [rad s⁻¹], ``bracket_width``) with their saddle, branch and
 vertex; per ``crossing`` of the axis θ0 = 0 the speed, its bracket and the basins on either
 side; the trace's settings and checks as attributes. :func:`node` builds it (the tracers
-call it), :func:`branches`, :func:`warnings` and :func:`max_discrepancy` read it (the views
-and ``atlas info``). Conventions: CF-1.10, as the rest of the file (:mod:`atlas.store.schema`).
+call it), :func:`branches`, :func:`curves`, :func:`warnings` and :func:`max_discrepancy` read
+it (the views, ``atlas info`` and users: :func:`curves` lays the polylines out for xarray).
+Conventions: CF-1.10, as the rest of the file (:mod:`atlas.store.schema`).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 
-__all__ = ["BRANCHES", "node", "branches", "warnings", "max_discrepancy"]
+__all__ = ["BRANCHES", "node", "branches", "curves", "warnings", "max_discrepancy"]
 
 #: Branch names, in the order of the ``branch`` flag values 0, 1.
 BRANCHES = ("left", "right")
@@ -69,17 +70,63 @@ def node(*, theta, theta_dot, width, crossing, crossing_width, k_below, k_above,
     )
 
 
-def branches(ds: xr.Dataset) -> Iterator[tuple[int, str, np.ndarray, np.ndarray]]:
-    """Yield (saddle_n, "left"|"right", theta [rad], theta_dot [rad s⁻¹]) per polyline, the
-    arrays ordered from the saddle outward; for plotting. A branch that leaves the window and
-    comes back (its ``vertex`` skips the points outside) yields one polyline per visit."""
+def _pieces(ds: xr.Dataset) -> Iterator[tuple[int, int, np.ndarray]]:
+    """(saddle_n, branch flag, indices along ``point``) per polyline of the node ``ds``, the
+    indices ordered from the saddle outward (by ``vertex``) and split where ``vertex`` skips
+    (the branch left the window and came back), whatever the order of the stored points."""
     n, b, vtx = (ds[name].values for name in ("saddle_n", "branch", "vertex"))
-    theta, theta_dot = ds["theta"].values, ds["theta_dot"].values
     for key in sorted(set(zip(n.tolist(), b.tolist(), strict=True))):
         sel = np.flatnonzero((n == key[0]) & (b == key[1]))
         sel = sel[np.argsort(vtx[sel], kind="stable")]
         for piece in np.split(sel, np.flatnonzero(np.diff(vtx[sel]) != 1) + 1):
-            yield key[0], BRANCHES[key[1]], theta[piece], theta_dot[piece]
+            yield key[0], key[1], piece
+
+
+def branches(ds: xr.Dataset) -> Iterator[tuple[int, str, np.ndarray, np.ndarray]]:
+    """Yield (saddle_n, "left"|"right", theta [rad], theta_dot [rad s⁻¹]) per polyline, the
+    arrays ordered from the saddle outward; for plotting. A branch that leaves the window and
+    comes back (its ``vertex`` skips the points outside) yields one polyline per visit.
+
+    ``ds`` is one ``/separatrices`` node: ``tree["separatrices"].to_dataset(inherit=False)``
+    for an atlas of one parameter point, ``atlas.layout.point_group(tree, "separatrices",
+    point)`` for a point of a parameter atlas."""
+    theta, theta_dot = ds["theta"].values, ds["theta_dot"].values
+    for n, b, piece in _pieces(ds):
+        yield n, BRANCHES[b], theta[piece], theta_dot[piece]
+
+
+def curves(ds: xr.Dataset) -> xr.Dataset:
+    """The polylines of :func:`branches` as one Dataset over (``curve``, ``along``), so that
+    xarray and matplotlib draw them in one line.
+
+    ``theta`` [rad] and ``theta_dot`` [rad s⁻¹] run from the saddle outward along ``along``
+    and are NaN after a curve's last point; ``vertex`` (curve, along) is each point's index
+    in the file's ``vertex`` (−1 in the padding); ``saddle_n`` and ``branch`` (curve) name
+    its saddle nπ and branch with the file's flags (0 left, 1 right). The curves come in the
+    order of :func:`branches`. Matplotlib draws each column of a 2-D array as a line and
+    leaves NaN out, so ``ax.plot(c.theta.T, c.theta_dot.T)`` draws every boundary of the
+    node and ``ax.plot(c.theta[i], c.theta_dot[i])`` one. A reader only: the file keeps its
+    flat ``point`` list. ``ds``: one node, as for :func:`branches`.
+    """
+    pieces = list(_pieces(ds))
+    length = max((piece.size for *_, piece in pieces), default=0)
+    shape = (len(pieces), length)
+    theta, theta_dot = np.full(shape, np.nan), np.full(shape, np.nan)
+    vertex = np.full(shape, -1, np.int32)
+    for i, (*_, piece) in enumerate(pieces):
+        theta[i, :piece.size] = ds["theta"].values[piece]
+        theta_dot[i, :piece.size] = ds["theta_dot"].values[piece]
+        vertex[i, :piece.size] = ds["vertex"].values[piece]
+    dims = ("curve", "along")
+    return xr.Dataset(
+        data_vars={"theta": (dims, theta, ds["theta"].attrs),
+                   "theta_dot": (dims, theta_dot, ds["theta_dot"].attrs)},
+        coords={"saddle_n": ("curve", np.array([n for n, *_ in pieces], np.int32),
+                             ds["saddle_n"].attrs),
+                "branch": ("curve", np.array([b for _, b, _ in pieces], np.int8),
+                           ds["branch"].attrs),
+                "vertex": (dims, vertex, {**ds["vertex"].attrs, "comment": "-1 after the "
+                                          "curve's last point"})})
 
 
 def warnings(ds: xr.Dataset) -> list[str]:
