@@ -7,10 +7,12 @@
 
 What the curves mean, drawn so that they say it:
 
-* the grid error bound (``basin_fraction_grid_error_bound``, a proven bound, first order in
-  the cell size) is drawn as error bars only where it is informative, below
-  INFORMATIVE_BOUND, and clipped to [0, 1] (a fraction never leaves it): at 64² it reaches
-  0.36, while the measured error is 10⁻³, shown in the panel below;
+* the grid count's error is drawn as measured: grid count − exact fraction, in the panel
+  below. The grid error bound (``basin_fraction_grid_error_bound``, a proven worst case,
+  first order in the cell size, some 20 times the measured error) is drawn as error bars
+  only at points without an exact value, where it is all that is known, and there only
+  where informative (below INFORMATIVE_BOUND), clipped to [0, 1] (a fraction never leaves
+  it); the legend says what the bars are, or that the bound is not drawn, and its size;
 * where the window is symmetric about (0, 0) and there is no torque, the point reflection
   (θ, θ̇) → (−θ, −θ̇) maps the basin of k onto that of −k, so their fractions are equal:
   k and −k are merged into one curve "k = ±j" (their sum), as the legend says;
@@ -42,8 +44,9 @@ __all__ = ["fraction_curves", "basin_stability", "PARAMETER_AXES", "CURVE_FIGURE
 #: Axis labels of the parameters.
 PARAMETER_AXES = {"alpha": "damping α [1/s]", "omega0": "natural frequency ω0 [rad/s]",
                   "torque": "torque τ [rad/s²]"}
-#: The grid error bound is drawn (as error bars) only where it is below this: a bar longer
-#: than a tenth of the [0, 1] axis says less than the measured error in the panel below.
+#: At a point without an exact value the grid error bound is drawn (as an error bar) only
+#: where it is below this: a bar longer than a tenth of the [0, 1] axis says nothing a
+#: reader can use.
 INFORMATIVE_BOUND = 0.1
 #: The colour of the basins beyond the ``max_curves`` largest (thin lines, one each).
 _OTHERS_COLOR = "0.65"
@@ -165,10 +168,14 @@ def _broken(x, y, marks, onset=None):
     return np.insert(x, at, np.nan), np.insert(y, at, np.nan)
 
 
-def _error_bars(ax, x, grid, bound, color):
-    """The grid error bound as error bars about the grid counts, where it is below
-    INFORMATIVE_BOUND, clipped to [0, 1]; returns whether any bar was drawn."""
-    shown = np.isfinite(bound) & (bound < INFORMATIVE_BOUND) & np.isfinite(grid)
+def _error_bars(ax, x, exact, grid, bound, color):
+    """The grid error bound as error bars about the grid counts at the points without an
+    exact value (NaN ``exact``: there the bound is all that is known of the count's error;
+    where the exact area is drawn, the measured error is in the panel below and a worst-case
+    bar, some 20 times longer, would say nothing), where it is below INFORMATIVE_BOUND,
+    clipped to [0, 1]; returns whether any bar was drawn."""
+    shown = (~np.isfinite(exact) & np.isfinite(bound) & (bound < INFORMATIVE_BOUND)
+             & np.isfinite(grid))
     if not shown.any():
         return False
     g, b = grid[shown], bound[shown]
@@ -176,6 +183,21 @@ def _error_bars(ax, x, grid, bound, color):
     ax.errorbar(x[shown], g, yerr=[g - lower, upper - g], fmt="none", capsize=2, lw=0.8,
                 color=color)
     return True
+
+
+def _bound_note(triples) -> str | None:
+    """The legend's line on the grid error bound where it is not drawn, at the points with
+    an exact value (``triples``: (exact, grid count, bound) per curve): its largest value
+    beside the largest measured error |grid − exact| (the panel below); None where every
+    point lacks an exact value or a bound."""
+    bound = [b[np.isfinite(e) & np.isfinite(b)] for e, _, b in triples]
+    measured = [np.abs(g - e)[np.isfinite(e) & np.isfinite(g)] for e, g, _ in triples]
+    bound, measured = np.concatenate(bound), np.concatenate(measured)
+    if not bound.size or not measured.size:
+        return None
+    return (f"no bar on an exact point: its measured\nerror |grid − exact| ≤ "
+            f"{measured.max():.2g} is drawn\nbelow; the proven grid error bound\n"
+            f"(≤ {bound.max():.2g}, worst case) is not")
 
 
 def _residual_axes(ax, errors: list[np.ndarray]):
@@ -216,10 +238,11 @@ def _draw_marks(axs, marks, onset=None) -> None:
                         ha="right", fontsize=7, color="0.25")
 
 
-def _finish(ax, below, x, xlabel, title, bars: bool, generic: bool = True) -> None:
+def _finish(ax, below, x, xlabel, title, bars: bool, generic: bool = True,
+            note: str | None = None) -> None:
     """Scales, labels, title and legend of a curve figure (``bars``: whether error bars
     were drawn, which the legend then explains; ``generic``: add what a line and a dot
-    mean)."""
+    mean; ``note``: a last legend line without a symbol, :func:`_bound_note`)."""
     from matplotlib.lines import Line2D
 
     ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
@@ -233,8 +256,11 @@ def _finish(ax, below, x, xlabel, title, bars: bool, generic: bool = True) -> No
                            label="grid count (dot)")]
     if bars:
         handles.append(Line2D([], [], color="0.3", marker="|", ls="none", ms=8,
-                              label=f"grid error bound\n(where < {INFORMATIVE_BOUND:g}; "
+                              label="grid error bound where no exact value\n"
+                                    f"(proven worst case; where < {INFORMATIVE_BOUND:g}; "
                                     "clipped to [0, 1])"))
+    if note:
+        handles.append(Line2D([], [], ls="none", label=note))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0),
               borderaxespad=0)
 
@@ -251,11 +277,11 @@ def _draw_fractions(ax, x, curves, others, marks, xlabel: str, title: str, onset
     for e, g, b, label, color in curves:
         ax.plot(*_broken(x, e, marks, onset), "-", color=color, label=label, zorder=3)
         ax.plot(x, g, "o", ms=3.5, color=color, zorder=4)
-        bars |= _error_bars(ax, x, g, b, color)
+        bars |= _error_bars(ax, x, e, g, b, color)
         below.plot(x, (g - e) / unit, "o-", ms=3, lw=0.6, color=color)
     _draw_marks((ax, below), marks, onset)
     ax.set_ylabel("basin fraction of the window")
-    _finish(ax, below, x, xlabel, title, bars)
+    _finish(ax, below, x, xlabel, title, bars, note=_bound_note([c[:3] for c in curves]))
     top = max([np.nanmax(np.r_[e, g, 0.0]) for e, g, *_ in curves] + [0.0])
     ax.set_ylim(-0.02 * max(top, 0.1), min(1.02, 1.1 * max(top, 0.1)))
     return ax
@@ -264,9 +290,10 @@ def _draw_fractions(ax, x, curves, others, marks, xlabel: str, title: str, onset
 def fraction_curves(tree: xr.DataTree, ax=None, dim: str = "alpha", max_curves: int = 7,
                     homoclinic_torque: float | None = None):
     """Exact basin fraction of each k against the swept parameter ``dim`` (lines), the grid
-    counts (dots; error bars: the grid error bound where below INFORMATIVE_BOUND, clipped to
-    [0, 1]) and, in a panel below, the measured error (grid count − exact fraction); any
-    other swept parameter is held at its first value (named in the title).
+    counts (dots) and, in a panel below, their measured error (grid count − exact fraction);
+    error bars only at points without an exact value (the grid error bound, where below
+    INFORMATIVE_BOUND, clipped to [0, 1]); any other swept parameter is held at its first
+    value (named in the title).
 
     The ``max_curves`` largest basins get a curve each (k and −k merged where the window is
     symmetric, as the title says); the rest are thin grey lines. Bifurcations in the range
@@ -307,17 +334,18 @@ def _draw_stability(ax, x, exact, grid, bound, running, running_exact, running_b
     below, unit = _residual_axes(ax, [grid - exact, running - running_exact])
     bars = False
     nothing = np.full_like(np.asarray(grid, float), np.nan)
-    for e, g, b, color, name in ((exact, grid, bound, colours[0], "rest states"),
-                                 (running_exact, running,
-                                  nothing if running_bound is None else running_bound,
-                                  colours[1], "running")):
+    drawn = ((exact, grid, bound, colours[0], "rest states"),
+             (running_exact, running, nothing if running_bound is None else running_bound,
+              colours[1], "running"))
+    for e, g, b, color, name in drawn:
         ax.plot(*_broken(x, e, marks, onset), "-", color=color, label=f"{name}, exact area")
         ax.plot(x, g, "o", ms=3.5, color=color, label=f"{name}, grid count")
-        bars |= _error_bars(ax, x, g, b, color)
+        bars |= _error_bars(ax, x, e, g, b, color)
         below.plot(x, (g - e) / unit, "o-", ms=3, lw=0.6, color=color)
     _draw_marks((ax, below), marks, onset)
     ax.set_ylabel("basin stability\n(fraction of the window)")
-    _finish(ax, below, x, xlabel, title, bars, generic=False)
+    _finish(ax, below, x, xlabel, title, bars, generic=False,
+            note=_bound_note([d[:3] for d in drawn]))
     return ax
 
 

@@ -7,7 +7,8 @@ every bifurcation inside the range drawn as a labelled vertical line (NAME_stabi
 the minimal fatal shock against the parameter, with the same lines (NAME_fatal_shock.png).
 2-D study: the rest states' basin stability over the two parameters, with the bifurcation
 curves drawn on it (NAME_stability_map.png). Points whose numbers are NaN (the saddle-node,
-failures) are marked.
+failures) are marked where they lie, never at a value: a grey band over the whole height on
+the curves, a white cell on the map, each named in the legend.
 """
 
 from __future__ import annotations
@@ -65,19 +66,43 @@ def _bifurcations_at(ds: xr.Dataset, axis: str) -> list[tuple[str, float]]:
     return sorted(found, key=lambda item: item[1])
 
 
+#: Bifurcation lines closer than this on the page [pt] are one line to the eye (the
+#: focus–node torque √(ω0⁴ − α⁴) lies 3·10⁻⁶ below the saddle-node ω0² at α = 0.05): they
+#: are drawn as one line, whose one label names each.
+_COINCIDE_PT = 3.0
+
+
+def _per_point(ax, lo: float, hi: float) -> float:
+    """Data units of the x range [lo, hi] per typographic point across ``ax``."""
+    return (hi - lo) / (ax.bbox.width * 72.0 / ax.figure.dpi)
+
+
+def _coinciding(found: list[tuple[str, float]], apart: float) -> list[list[tuple[str, float]]]:
+    """``found`` (by value) in groups whose neighbours lie less than ``apart`` from each other,
+    in data units: the lines that one line stands for."""
+    groups: list[list[tuple[str, float]]] = []
+    for name, value in found:
+        if groups and value - groups[-1][-1][1] < apart:
+            groups[-1].append((name, value))
+        else:
+            groups.append([(name, value)])
+    return groups
+
+
 def _bifurcation_lines(ax, ds: xr.Dataset, axis: str) -> int:
-    """Every bifurcation of ``axis`` inside the plotted range: a labelled vertical line, the
-    labels above the axes, each on the lowest row where it overlaps no other (the
-    focus–node torque √(1 − α⁴) lies a hair from the saddle-node 1). Returns the rows of
-    labels."""
+    """Every bifurcation of ``axis`` inside the plotted range: a labelled vertical line,
+    lines that coincide on the page (_COINCIDE_PT) drawn as one, in the look of one where the
+    basin stability jumps, its label naming each; the labels above the axes, each on the
+    lowest row where it overlaps no other. Returns the rows of labels."""
     lo, hi = float(ds[axis][0]), float(ds[axis][-1])
-    # a label's width in data units, from its characters (about 0.6 em each at 8 pt)
-    per_char = 0.6 * 8.0 / (ax.bbox.width * 72.0 / ax.figure.dpi) * (hi - lo)
+    per_pt = _per_point(ax, lo, hi)
+    per_char = 0.6 * 8.0 * per_pt  # a label's character at 8 pt: about 0.6 em wide
     taken: list[list[tuple[float, float]]] = []  # per row, the extents of its labels
-    for name, value in _bifurcations_at(ds, axis):
-        colour, style = _DRAWN[BIFURCATIONS[name][1]]
+    for group in _coinciding(_bifurcations_at(ds, axis), _COINCIDE_PT * per_pt):
+        lead, value = next((m for m in group if BIFURCATIONS[m[0]][1] in _JUMPS), group[0])
+        colour, style = _DRAWN[BIFURCATIONS[lead][1]]
         ax.axvline(value, color=colour, ls=style, lw=1.0)
-        text = f"{_LABELS_OF[name]} = {value:.10g}"
+        text = "; ".join(f"{_LABELS_OF[name]} = {v:.10g}" for name, v in group)
         right = value > lo + 0.7 * (hi - lo)  # above the axes, over nothing drawn
         width = (len(text) + 1) * per_char
         extent = (value - width, value) if right else (value, value + width)
@@ -104,11 +129,37 @@ def _x_range(ds: xr.Dataset, axis: str) -> tuple[float, float]:
             hi + pad if any(hi - v < pad for v in at) else hi)
 
 
+#: A band marking a point without an exact value is at least this wide on the page [pt]
+#: (at 1,001 torques half the spacing each side is a fraction of a point).
+_NAN_BAND_PT = 4.0
+
+
 def _nan_points(ax, ds: xr.Dataset, axis: str) -> None:
-    bad = np.atleast_1d(ds["point_status"].values) != 0
-    for x in np.atleast_1d(ds[axis].values)[bad]:
-        ax.plot([x], [0.0], marker="x", color="black", ms=6, clip_on=False, ls="none",
-                label="no exact value (saddle-node / failed)")
+    """The points without an exact value (``point_status`` ≠ 0: the saddle-node, a failure)
+    as grey bands over the whole height, halfway to each neighbour and at least _NAN_BAND_PT
+    wide, named in the legend by what they are: a band marks where, never a value (a marker
+    at y = 0 read as a basin stability of 0)."""
+    from atlas.store.study import POINT_STATUS_MEANINGS
+
+    status = np.atleast_1d(ds["point_status"].values)
+    if not status.any():
+        return
+    x = np.atleast_1d(ds[axis].values).astype(float)
+    mid = 0.5 * (x[1:] + x[:-1])
+    left, right = np.r_[1.5 * x[0] - 0.5 * x[1], mid], np.r_[mid, 1.5 * x[-1] - 0.5 * x[-2]]
+    half = 0.5 * _NAN_BAND_PT * _per_point(ax, x[0], x[-1])
+    what = " / ".join(POINT_STATUS_MEANINGS[int(v)].replace("_", "-")
+                      for v in np.unique(status[status != 0]))
+    for i in np.flatnonzero(status):
+        ax.axvspan(min(left[i], x[i] - half), max(right[i], x[i] + half), color="0.82", lw=0,
+                   zorder=0, label=f"no exact value ({what})")
+
+
+def _legend(ax, **options) -> None:
+    """The legend of ``ax``, each label once (a band per failed point shares one)."""
+    handles, labels = ax.get_legend_handles_labels()
+    unique = dict(zip(labels, handles))
+    ax.legend(unique.values(), unique.keys(), **options)
 
 
 _SYMBOLS = {"alpha": "α", "omega0": "ω0", "torque": "τ"}
@@ -162,9 +213,7 @@ def _stability_curves(ds: xr.Dataset, axis: str):
                       + ("; Gaussian: probability)" if "gaussian_stability" in ds else ")"))
         ax.set_title(f"basin stability: {_parameter_title(ds, (axis,))}", fontsize=9,
                      pad=4 + 10 * max(rows, 1))
-        handles, labels = ax.get_legend_handles_labels()
-        unique = dict(zip(labels, handles))
-        ax.legend(unique.values(), unique.keys(), loc="best")
+        _legend(ax, loc="best")
 
     return draw
 
@@ -188,7 +237,7 @@ def _shock_curve(ds: xr.Dataset, axis: str):
         ax.set_ylabel("minimal fatal shock √(Δθ² + Δθ̇²)  (θ in rad, θ̇ in rad/s)")
         ax.set_title(f"minimal fatal shock: {_parameter_title(ds, (axis,))}", fontsize=9,
                      pad=4 + 10 * max(rows, 1))
-        ax.legend(loc="best", title="minimal fatal shock", fontsize=8, title_fontsize=8)
+        _legend(ax, loc="best", title="minimal fatal shock", fontsize=8, title_fontsize=8)
 
     return draw
 

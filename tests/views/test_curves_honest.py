@@ -34,22 +34,44 @@ def _bar_ends(ax) -> np.ndarray:
     return np.concatenate(ends) if ends else np.empty(0)
 
 
-def test_error_bars_never_leave_the_unit_interval_and_only_say_something():
-    """Grid counts near 0 and 1 with bounds of 0.05 and 0.09: bars clipped to [0, 1]; a bound
-    of 0.5 (a 64² grid's, which once ran from −0.36 to 1.26) says nothing and gets none."""
-    x = np.array([0.1, 0.2, 0.3])
-    low = (np.array([0.02, 0.03, 0.3]), np.array([0.021, 0.03, 0.301]),
-           np.array([0.05, 0.09, 0.5]), "k = 0", "#000000")
-    high = (np.array([0.97, 0.96, 0.6]), np.array([0.971, 0.959, 0.6]),
-            np.array([0.05, 0.09, 0.5]), "k = ±1", "#ff0000")
+def _legend(ax) -> list[str]:
+    return [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_error_bars_only_where_no_exact_value_inside_the_unit_interval():
+    """Bars only at points without an exact value (NaN), where the bound is all there is:
+    clipped to [0, 1] (grid counts near 0 and 1, bounds 0.05 and 0.09), none for a bound
+    of 0.5 (a 64² grid's, which once ran from −0.36 to 1.26), none at the exact points
+    (bound 0.07 there, 35 times the measured 0.002); the legend says what the bars are."""
+    x = np.array([0.1, 0.2, 0.3, 0.4])
+    low = (np.array([np.nan, np.nan, np.nan, 0.3]), np.array([0.021, 0.03, 0.301, 0.302]),
+           np.array([0.05, 0.09, 0.5, 0.07]), "k = 0", "#000000")
+    high = (np.array([np.nan, np.nan, np.nan, 0.6]), np.array([0.971, 0.959, 0.6, 0.599]),
+            np.array([0.05, 0.09, 0.5, 0.07]), "k = ±1", "#ff0000")
     ax = _ax()
     _draw_fractions(ax, x, [low, high], [], [], "α", "t")
     ends = _bar_ends(ax)
-    assert ends.size == 8  # two bars per curve, two ends each: none at the 0.5 bound
+    assert ends.size == 8  # two bars per curve, two ends each: none at 0.5, none where exact
     assert ends.min() == 0.0 and ends.max() == 1.0  # clipped, not dropped
-    assert np.all((ends >= 0.0) & (ends <= 1.0))
-    texts = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert any("clipped to [0, 1]" in t and f"< {INFORMATIVE_BOUND:g}" in t for t in texts)
+    xs = {float(seg[0, 0]) for c in ax.containers if c.has_yerr for col in c.lines[2]
+          for seg in col.get_segments()}
+    assert xs == {0.1, 0.2}
+    assert any("no exact value" in t and f"< {INFORMATIVE_BOUND:g}" in t
+               and "clipped to [0, 1]" in t for t in _legend(ax))
+
+
+def test_no_bars_on_exact_points_and_the_legend_says_why():
+    """Every point exact (to 1e-13): no error bar, however small the bound; the legend
+    names the largest measured error and the largest bound, as read from the curves."""
+    x = np.array([0.1, 0.2, 0.3])
+    exact = np.array([0.2, 0.4, 0.6])
+    grid = exact + np.array([0.0013, -0.0021, 0.0004])
+    bound = np.array([0.031, 0.047, 0.012])
+    ax = _ax()
+    _draw_fractions(ax, x, [(exact, grid, bound, "k = 0", "#000000")], [], [], "α", "t")
+    assert _bar_ends(ax).size == 0
+    (note,) = [t for t in _legend(ax) if "not" in t and "bound" in t]
+    assert "≤ 0.0021" in note and "≤ 0.047" in note
 
 
 @pytest.fixture(scope="module")
@@ -79,12 +101,12 @@ _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 
 @pytest.mark.slow
 def test_curves_of_a_real_sweep_are_honest(sweep):
-    """On a real atlas: bars inside [0, 1]; one colour per curve; the lower panel is the
+    """On a real atlas: no bars (every point exact); one colour per curve; the lower panel is the
     measured error; ±k merged and said so (the window is symmetric), each merged curve the
     sum of the two exact fractions; α = ω0 marked and named."""
     ds = sweep.to_dataset(inherit=False)
     ax = fraction_curves(sweep, ax=_ax(), max_curves=20)
-    assert np.all((_bar_ends(ax) >= 0.0) & (_bar_ends(ax) <= 1.0))
+    assert _bar_ends(ax).size == 0  # every point exact: the measured error is below
     curves = {ln.get_label(): ln for ln in ax.lines if ln.get_label().startswith("k =")}
     colours = [to_hex(ln.get_color()) for ln in curves.values()]
     assert len(set(colours)) == len(colours) >= 3
@@ -162,30 +184,37 @@ def test_bifurcations_are_read_from_the_file_or_passed_in():
 
 
 def test_basin_stability_marks_the_homoclinic_torque_and_keeps_bars_in_range():
-    """A torque sweep drawn with the homoclinic torque passed in: marked; bars in [0, 1]
-    (rest states near 1, running near 0, bounds 0.05: clipped; bound 0.4: none); the rest
+    """A torque sweep drawn with the homoclinic torque passed in: marked; bars only where
+    there is no exact value (the running basin's first three points), in [0, 1] (running
+    near 0, bound 0.05: clipped; bound 0.4: none), none on the exact rest states; the rest
     states and the running basin in two colours; the lower panel their measured errors."""
     torque = np.array([0.06, 0.11, 0.16, 0.21])
     rest = np.array([[0.98, 0.0], [0.97, 0.01], [0.7, 0.05], [0.5, 0.1]])
+    running_exact = 1 - rest.sum(axis=1)
     ds = _torque_ds(
         torque,
         basin_fraction_exact=(("torque", "k"), rest),
         basin_fraction=(("torque", "k"), rest + 0.001),
         basin_fraction_grid_error_bound=(("torque", "k"), np.full((4, 2), 0.025)),
-        running_fraction_exact=("torque", 1 - rest.sum(axis=1)),
-        running_fraction=("torque", 1 - rest.sum(axis=1) - 0.002),
+        running_fraction_exact=("torque", np.r_[np.full(3, np.nan), running_exact[3]]),
+        running_fraction=("torque", running_exact - 0.002),
         running_fraction_grid_error_bound=("torque", [0.05, 0.05, 0.05, 0.4]),
     ).assign_coords(k=[0, 1])
     ax = basin_stability(xr.DataTree(dataset=ds), ax=_ax(), homoclinic_torque=0.13)
     ends = _bar_ends(ax)
-    assert ends.size == 2 * 7 and ends.min() == 0.0 and ends.max() == 1.0
+    # running 0.018, 0.018, 0.248 ± 0.05: the first two clipped at 0
+    np.testing.assert_allclose(np.sort(ends), [0.0, 0.0, 0.068, 0.068, 0.198, 0.298])
     exact = {ln.get_label(): ln for ln in ax.lines if ln.get_label().endswith("exact area")}
     assert to_hex(exact["rest states, exact area"].get_color()) != to_hex(
         exact["running, exact area"].get_color())
     assert [ln.get_xdata()[0] for ln in ax.lines if ln.get_linestyle() == ":"] == [0.13]
     below = ax.figure.axes[-1]
-    np.testing.assert_allclose(sorted(np.round(ln.get_ydata()[0], 9) for ln in below.lines
-                                      if len(ln.get_xdata()) == 4), [-2.0, 2.0])
+    residuals = {to_hex(ln.get_color()): ln.get_ydata() for ln in below.lines
+                 if len(ln.get_xdata()) == 4}
+    np.testing.assert_allclose(residuals[to_hex(exact["rest states, exact area"].get_color())],
+                               2.0)
+    np.testing.assert_allclose(residuals[to_hex(exact["running, exact area"].get_color())],
+                               [np.nan] * 3 + [-2.0])
     assert "[10⁻³]" in below.get_ylabel()
 
 
