@@ -187,8 +187,10 @@ def _cmd_figures(args) -> int:
 
 def _cmd_bench(args) -> int:
     from atlas.commands.bench import bench_to_json
+    from atlas.store.outputs import check_output
 
     output = Path(args.output)
+    check_output(output, "bench", option="--output")
     _output_folder(output.parent)
     bench_to_json(output, backend=args.backend, quick=args.quick,
                   gpu_sweeps=tuple(args.gpu_sweep or ()))
@@ -196,29 +198,50 @@ def _cmd_bench(args) -> int:
 
 
 def _cmd_view(args) -> int:
+    from atlas.store.outputs import check_output
     from atlas.views.page import write_view
 
-    print(f"wrote {write_view(args.file, args.output)}")
+    output = Path(args.output) if args.output else Path(args.file).with_suffix(".html")
+    check_output(output, "page", inputs=(args.file,))
+    print(f"wrote {write_view(args.file, output)}")
     return 0
 
 
-def _cmd_orbit(args) -> int:
-    from atlas.commands.orbit import check_file_argument, default_output, parse_number, report
-    from atlas.commands.orbit_figure import plot_orbit
+def _orbit_values(values: list[str]) -> tuple[str | None, str, str]:
+    """(FILE or None, THETA0, THETA_DOT0) of ``atlas orbit``'s positional arguments, or one
+    AtlasError saying which is missing (``atlas orbit FILE 1`` lacks THETA_DOT0: the file is
+    not a number)."""
+    from atlas.commands.orbit import check_file_argument, looks_like_file
 
-    if len(args.values) not in (2, 3):
+    if len(values) == 2 and looks_like_file(values[0]):
+        raise AtlasError(f"orbit: THETA_DOT0 is missing: give {values[0]} THETA0 THETA_DOT0 "
+                         "(the initial angle [rad] and angular velocity [rad/s])")
+    if len(values) not in (2, 3):
+        missing = ("THETA0 and THETA_DOT0 are missing" if len(values) == 1 and
+                   looks_like_file(values[0]) else f"got {len(values)} values")
         raise AtlasError("orbit: give THETA0 THETA_DOT0, or FILE THETA0 THETA_DOT0 "
-                         f"(got {len(args.values)} values)")
-    file = args.values[0] if len(args.values) == 3 else None
+                         f"({missing})")
+    file = values[0] if len(values) == 3 else None
     if file is not None:
         check_file_argument(file)
+    return file, values[-2], values[-1]
+
+
+def _cmd_orbit(args) -> int:
+    from atlas.commands.orbit import default_output, parse_number, report
+    from atlas.commands.orbit_figure import plot_orbit
+    from atlas.store.outputs import check_output
+
+    file, theta0, theta_dot0 = _orbit_values(args.values)
     theta0, theta_dot0 = (parse_number(text, name) for text, name in
-                          zip(args.values[-2:], ("theta0", "theta_dot0")))
+                          ((theta0, "theta0"), (theta_dot0, "theta_dot0")))
     opts = {name: None if getattr(args, name) is None else parse_number(getattr(args, name),
                                                                          f"--{name}")
             for name in ("alpha", "omega0", "torque", "dt", "t_max")}
+    output = Path(args.output) if args.output else default_output(
+        file, theta0, theta_dot0, {name: opts[name] for name in ("alpha", "omega0", "torque")})
+    check_output(output, "figure", inputs=(file,) if file else ())
     orbit, lines, context = report(theta0, theta_dot0, file=file, **opts)
-    output = Path(args.output) if args.output else default_output(file)
     _output_folder(output.parent)
     try:
         plot_orbit(orbit, output, context["tree"], context["index"])
@@ -276,8 +299,9 @@ def _add_view_orbit_zoom(sub) -> None:
     p.add_argument("--torque", help="torque [rad/s^2] (default 0; with a file: selects a point)")
     p.add_argument("--dt", help="RK4 step [s] (default 0.01; with a file: the file's)")
     p.add_argument("--t-max", dest="t_max", help="t_max [s] (default 200; a file: the file's)")
-    p.add_argument("-o", "--output", help="the PNG (default: FILE_orbit.png next to the "
-                   "file, else outputs/orbit.png)")
+    p.add_argument("-o", "--output", help="the figure, .png, .svg or .pdf (default: "
+                   "FILE_orbit_THETA0_THETA_DOT0.png next to the file, else "
+                   "outputs/orbit_THETA0_THETA_DOT0.png, with the parameters given)")
     p.set_defaults(func=_cmd_orbit)
 
     p = sub.add_parser("zoom",

@@ -35,7 +35,7 @@ from atlas.labels.labelling import check_integration
 from atlas.labels.trap import CHECK_EVERY
 from atlas.status import RUNNING, TRAPPED
 
-__all__ = ["report", "running_barrier_for", "parse_number", "default_output",
+__all__ = ["report", "running_barrier_for", "parse_number", "default_output", "looks_like_file",
            "check_file_argument"]
 
 
@@ -169,12 +169,32 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
     return orbit, lines, context
 
 
-def default_output(file: str | Path | None) -> Path:
-    """Where ``atlas orbit`` writes its PNG by default: next to the atlas, else outputs/."""
+def default_output(file: str | Path | None, theta0: float, theta_dot0: float,
+                   parameters: dict[str, float | None] | None = None) -> Path:
+    """Where ``atlas orbit`` writes its PNG by default: next to the atlas, else in outputs/,
+    named by the orbit's initial condition and the parameters given on the command line
+    (``default_orbit_-1_2.5.png``, ``orbit_alpha_0.2_omega0_1_-1.571_3.3.png``), so that the
+    orbits of different points keep their own figures."""
+    given = [f"{name}_{value:.6g}" for name, value in (parameters or {}).items()
+             if value is not None]
+    tag = "_".join([*given, f"{theta0:.6g}", f"{theta_dot0:.6g}"])
     if file is not None:
         file = Path(file)
-        return file.with_name(file.stem + "_orbit.png")
-    return Path("outputs") / "orbit.png"
+        return file.with_name(f"{file.stem}_orbit_{tag}.png")
+    return Path("outputs") / f"orbit_{tag}.png"
+
+
+def looks_like_file(text: str) -> bool:
+    """Whether a positional argument of ``atlas orbit`` is meant as the atlas file: not a
+    number or π expression, and an existing path or a name with a suffix or a folder."""
+    from atlas.pipeline.config import parse_pi_expression
+
+    try:
+        parse_pi_expression(str(text))
+    except ValueError:
+        path = Path(text)
+        return path.exists() or bool(path.suffix) or len(path.parts) > 1
+    return False
 
 
 def check_file_argument(text: str) -> None:

@@ -61,12 +61,10 @@ def _cmd_stability(args) -> int:
     return 0
 
 
-def _check_output(path: Path, force: bool) -> None:
-    from atlas.store.study import is_study_file
+def _check_output(path: Path, force: bool, config) -> None:
+    from atlas.store.outputs import check_output
 
-    if path.exists() and not force and not is_study_file(path):
-        raise OutputInTheWay(f"{path}: exists and is not a study file; --force writes over "
-                             "it")
+    check_output(path, "study", inputs=(config,), force=force)
     if not path.parent.is_dir():
         raise OutputInTheWay(f"{path.parent}: no such folder for the output")
 
@@ -86,7 +84,7 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
                          f"than {MAX_POINTS:,}; --force computes it anyway")
     points = cfg.pendulum.points
     path = Path(cfg.output)
-    _check_output(path, force)
+    _check_output(path, force, config)
     g = cfg.grid
     stab = cfg.stability
     settings = StudySettings(

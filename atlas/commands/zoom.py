@@ -150,18 +150,14 @@ def _yaml_text(text: str) -> str:
 
 def write_zoom(zoom: Zoom, target: str | Path, source: str | Path) -> Path:
     """Write ``zoom``'s YAML to ``target`` (whole or not at all); AtlasError, nothing
-    written, where ``target`` is the atlas file ``source`` or any other atlas file."""
-    from atlas.errors import OutputInTheWay
+    written, where ``target`` is the atlas file ``source``, not a .yaml or .yml name, or
+    holds anything but a config that ``atlas zoom`` wrote
+    (:func:`atlas.store.outputs.check_output`)."""
     from atlas.store.durable import write_durably
-    from atlas.store.reader import is_atlas_file
+    from atlas.store.outputs import check_output
 
     target = Path(target)
-    if target.exists() and (target.resolve() == Path(source).resolve()
-                            or is_atlas_file(target)):
-        raise OutputInTheWay(f"{target}: an atlas file; the config would write over it "
-                             "(give -o a .yaml path)")
-    if target.is_dir():
-        raise OutputInTheWay(f"{target}: a folder; give -o a file path such as zoom.yaml")
+    check_output(target, "config", inputs=(source,))
     if not target.parent.is_dir():
         raise AtlasError(f"{target.parent}: no such folder")
     write_durably(target, lambda fh: fh.write(zoom.text.encode()))

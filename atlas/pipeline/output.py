@@ -21,6 +21,7 @@ import numpy as np
 from atlas.errors import AtlasError, OutputInTheWay
 from atlas.layout import Layout
 from atlas.store.formats import format_for
+from atlas.store.outputs import check_suffix
 from atlas.store.reader import is_atlas_file
 from atlas.store.schema import MAP_VARIABLES
 
@@ -37,6 +38,9 @@ def check_output_target(output, config=None, *, force: bool = False) -> None:
     """Refuse an output path that holds something a run must not write over:
 
     * the config file being run (``atlas run c.yaml -o c.yaml``), whatever ``force`` says;
+    * a name without an atlas format's suffix (``atlas run c.yaml -o q.png``: ``atlas plot``
+      would write the basin map over the atlas), whatever ``force`` says
+      (:func:`atlas.store.outputs.check_suffix`);
     * an existing file (or Zarr store) that atlas did not write, unless ``force``.
 
     An atlas file at the output (a finished run of this or another config) may be written
@@ -51,6 +55,7 @@ def check_output_target(output, config=None, *, force: bool = False) -> None:
         if same:
             raise OutputInTheWay(f"{output}: the output path is the config file being run; "
                                  "name another output with -o")
+    check_suffix(output, "atlas")
     if force or not output.exists():
         return
     fmt = format_for(output)

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 from atlas.errors import AtlasError
 from atlas.layout import PARAMETERS, points
+from atlas.store.outputs import check_output, figure_metadata
 from atlas.views.coarsen import read_maps, workers
 from atlas.views.curves import CURVE_FIGURES, basin_stability, fraction_curves
 from atlas.views.maps import MAP_FIGURES, basin_map, boundary_distance_map, trap_time_map
@@ -102,8 +103,9 @@ def _draw_figure(out: Path, size: tuple[float, float], draw, scene: dict,
         # laid out once: without this, savefig would draw the figure once more first
         # (for tight_layout's placeholder engine) before drawing it into the PNG
         fig.set_layout_engine(None)
-        png = not isinstance(out, (str, Path)) or Path(out).suffix.lower() == ".png"
-        fig.savefig(out, dpi=dpi, **({"pil_kwargs": PNG_OPTIONS} if png else {}))
+        suffix = Path(out).suffix.lower() if isinstance(out, (str, Path)) else ".png"
+        fig.savefig(out, dpi=dpi, metadata=figure_metadata(suffix),
+                    **({"pil_kwargs": PNG_OPTIONS} if suffix == ".png" else {}))
     return out
 
 
@@ -127,6 +129,9 @@ def plot_file(path: str | Path, outdir: str | Path | None = None, fmt: str = "pn
     150]; ``selectors`` (``point``, ``alpha``, ``omega0``, ``torque``: lists, as
     :func:`atlas.views.selectors.choose_points` takes them): only the maps of the points
     they choose.
+
+    A figure is written only where nothing is or a figure atlas wrote
+    (:func:`atlas.store.outputs.check_output`): never over the atlas itself or another file.
 
     On Linux the figures are drawn by forked processes (:class:`atlas.views.forked.ForkedJobs`):
     one is started first and imports matplotlib (:func:`_warm_up`) while this one opens and
@@ -158,6 +163,8 @@ def plot_file(path: str | Path, outdir: str | Path | None = None, fmt: str = "pn
             jobs = _figure_jobs(tree, path, outdir, fmt, dpi, chosen)
         finally:
             tree.close()
+        for job in jobs:  # before any figure is written
+            check_output(job[0], "figure", inputs=(path,), option="--outdir")
         if outdir is not None:
             Path(outdir).mkdir(parents=True, exist_ok=True)
         if drawers is None:

@@ -59,7 +59,7 @@ def test_an_output_that_is_not_a_study_is_kept(tmp_path, capsys):
     out.write_text("precious")
     cfg = write_config(tmp_path / "x.yaml", BODY.format(torque="[0.0, 1.5]", output=out))
     assert main(["stability", str(cfg)]) == 2
-    assert "not a study file" in capsys.readouterr().err
+    assert "a file that atlas did not write is in the way of a study" in capsys.readouterr().err
     assert out.read_text() == "precious"
 
 
