@@ -45,13 +45,15 @@ def _figure(out: Path, size, draw, dpi) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from atlas.store.outputs import figure_metadata
+
     with matplotlib.rc_context(STYLE):
         fig = Figure(figsize=size, dpi=dpi or STYLE["savefig.dpi"])
         FigureCanvasAgg(fig)
         draw(fig.add_subplot())
         fig.tight_layout()
         options = {"pil_kwargs": PNG_OPTIONS} if out.suffix == ".png" else {}
-        fig.savefig(out, **options)
+        fig.savefig(out, metadata=figure_metadata(out.suffix), **options)
     return out
 
 
@@ -312,18 +314,18 @@ def plot_study(path: str | Path, outdir=None, fmt: str = "png", dpi=None) -> lis
         what = "one parameter point" if not swept else f"{len(swept)} swept parameters"
         raise InputFileError(f"{path}: a study of {what} has no figure (`atlas plot` draws "
                              "1-D curves and 2-D maps); `atlas info` prints its numbers")
+    from atlas.store.outputs import check_output
+
     folder = Path(outdir) if outdir is not None else path.parent
-    folder.mkdir(parents=True, exist_ok=True)
     stem = path.name.removesuffix(path.suffix)
-    written = []
     if len(swept) == 1:
-        axis = swept[0]
-        written.append(_figure(folder / f"{stem}_stability.{fmt}", CURVE_SIZE,
-                               _stability_curves(ds, axis), dpi))
-        written.append(_figure(folder / f"{stem}_fatal_shock.{fmt}", CURVE_SIZE,
-                               _shock_curve(ds, axis), dpi))
-    elif len(swept) == 2:
+        figures = [(f"{stem}_stability", CURVE_SIZE, _stability_curves(ds, swept[0])),
+                   (f"{stem}_fatal_shock", CURVE_SIZE, _shock_curve(ds, swept[0]))]
+    else:
         y, x = swept  # alpha before torque: torque across, alpha up
-        written.append(_figure(folder / f"{stem}_stability_map.{fmt}", MAP_SIZE,
-                               _stability_map(ds, x, y), dpi))
-    return written
+        figures = [(f"{stem}_stability_map", MAP_SIZE, _stability_map(ds, x, y))]
+    paths = [folder / f"{name}.{fmt}" for name, _, _ in figures]
+    for out in paths:  # before any figure is written: never over the study or another file
+        check_output(out, "figure", inputs=(path,), option="--outdir")
+    folder.mkdir(parents=True, exist_ok=True)
+    return [_figure(out, size, draw, dpi) for out, (_, size, draw) in zip(paths, figures)]

@@ -174,3 +174,18 @@ def test_bench_and_figures_refuse_other_files(tmp_path):
     (tmp_path / f"{stem}.png").write_text("mine")
     refused(cli("figures", "--outdir", tmp_path), f"{stem}.png", "atlas did not write")
     assert set(listing(tmp_path)) == set(folder_before) | {f"{stem}.png"}
+
+
+def test_a_study_plot_writes_no_figure_where_one_would_replace_a_foreign_file(tmp_path):
+    out = tmp_path / "s.h5"
+    cfg = write_config(tmp_path / "s.yaml", STUDY_BODY.format(torque="[0.1, 0.2, 0.3]",
+                                                              output=out))
+    assert cli("stability", cfg)[0] == 0
+    (tmp_path / "s_fatal_shock.png").write_text("mine")
+    before = listing(tmp_path)
+    refused(cli("plot", out), "s_fatal_shock.png", "atlas did not write")
+    assert listing(tmp_path) == before  # not even s_stability.png, drawn first
+    (tmp_path / "s_fatal_shock.png").unlink()
+    code, printed, _ = cli("plot", out)
+    assert code == 0 and all(KINDS["figure"].recognises(Path(line.removeprefix("wrote ")))
+                             for line in printed.splitlines())
