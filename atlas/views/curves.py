@@ -1,7 +1,8 @@
 """Figures against a swept parameter, read from the file and drawn (no computing).
 
 * :func:`fraction_curves`: the exact basin fraction of each k (lines), the grid counts
-  (markers) and, in a panel below, their *measured* error (grid count − exact fraction);
+  (markers, a shape per curve) and, in a panel below, their *measured* error (grid count −
+  exact fraction);
 * :func:`basin_stability`: the share of the window that settles at a rest state and the
   running basin's share against the torque, drawn the same way.
 
@@ -28,6 +29,7 @@ Reader (``_*_scene``) and drawer (``_draw_*``) apart, as in :mod:`atlas.views.ma
 
 from __future__ import annotations
 
+import itertools
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -50,6 +52,9 @@ PARAMETER_AXES = {"alpha": "damping α [1/s]", "omega0": "natural frequency ω0 
 INFORMATIVE_BOUND = 0.1
 #: The colour of the basins beyond the ``max_curves`` largest (thin lines, one each).
 _OTHERS_COLOR = "0.65"
+#: The grid counts' marker of each curve, in turn: the shape tells two curves apart where
+#: their colours are near (wells of one parity; a projector; a colour-blind reader).
+_SHAPES = ("o", "s", "^", "D", "v", "P", "X", "<", ">", "h")
 
 
 def _held(full: xr.Dataset, ds: xr.Dataset, dim: str) -> str:
@@ -239,10 +244,11 @@ def _draw_marks(axs, marks, onset=None) -> None:
 
 
 def _finish(ax, below, x, xlabel, title, bars: bool, generic: bool = True,
-            note: str | None = None) -> None:
+            note: str | None = None, shapes: dict[str, str] | None = None) -> None:
     """Scales, labels, title and legend of a curve figure (``bars``: whether error bars
-    were drawn, which the legend then explains; ``generic``: add what a line and a dot
-    mean; ``note``: a last legend line without a symbol, :func:`_bound_note`)."""
+    were drawn, which the legend then explains; ``generic``: add what a line and a marker
+    mean; ``note``: a last legend line without a symbol, :func:`_bound_note`; ``shapes``:
+    label → the marker its legend entry shows with its line)."""
     from matplotlib.lines import Line2D
 
     ax.set_xscale("log" if x.min() > 0 and x.max() / x.min() > 20 else "linear")
@@ -250,10 +256,13 @@ def _finish(ax, below, x, xlabel, title, bars: bool, generic: bool = True,
     below.set_xlabel(xlabel)
     ax.set_title(title, fontsize=10)
     handles, labels = ax.get_legend_handles_labels()
+    shapes = shapes or {}
+    handles = [Line2D([], [], color=h.get_color(), marker=shapes[name], ms=4, label=name)
+               if name in shapes else h for h, name in zip(handles, labels)]
     if generic:
         handles += [Line2D([], [], color="0.3", label="exact area (line)"),
                     Line2D([], [], color="0.3", marker="o", ls="none", ms=4,
-                           label="grid count (dot)")]
+                           label="grid count (marker)")]
     if bars:
         handles.append(Line2D([], [], color="0.3", marker="|", ls="none", ms=8,
                               label="grid error bound where no exact value\n"
@@ -274,14 +283,17 @@ def _draw_fractions(ax, x, curves, others, marks, xlabel: str, title: str, onset
     if others:
         ax.plot([], [], "-", color=_OTHERS_COLOR, lw=0.6,
                 label=f"{len(others)} smaller basins\n(one thin line each)")
-    for e, g, b, label, color in curves:
+    shapes = {}
+    for (e, g, b, label, color), shape in zip(curves, itertools.cycle(_SHAPES)):
         ax.plot(*_broken(x, e, marks, onset), "-", color=color, label=label, zorder=3)
-        ax.plot(x, g, "o", ms=3.5, color=color, zorder=4)
+        ax.plot(x, g, shape, ms=3.5, color=color, zorder=4)
         bars |= _error_bars(ax, x, e, g, b, color)
-        below.plot(x, (g - e) / unit, "o-", ms=3, lw=0.6, color=color)
+        below.plot(x, (g - e) / unit, "-", marker=shape, ms=3, lw=0.6, color=color)
+        shapes[label] = shape
     _draw_marks((ax, below), marks, onset)
     ax.set_ylabel("basin fraction of the window")
-    _finish(ax, below, x, xlabel, title, bars, note=_bound_note([c[:3] for c in curves]))
+    _finish(ax, below, x, xlabel, title, bars, note=_bound_note([c[:3] for c in curves]),
+            shapes=shapes)
     top = max([np.nanmax(np.r_[e, g, 0.0]) for e, g, *_ in curves] + [0.0])
     ax.set_ylim(-0.02 * max(top, 0.1), min(1.02, 1.1 * max(top, 0.1)))
     return ax

@@ -167,6 +167,27 @@ def test_the_smaller_basins_are_thin_single_lines_never_one_sum():
     assert len(thin) == 2 and max(ln.get_ydata().max() for ln in thin) == 0.02
 
 
+def test_each_curve_has_a_marker_shape_of_its_own():
+    """Three curves in one colour (as near as wells of one parity can be): their grid
+    counts, their measured errors and their legend entries (line and marker) tell them
+    apart by shape."""
+    x = np.array([1.0, 2.0])
+    curves = [(np.array([v, v]), np.array([v, v]), np.full(2, 0.5), f"k = ±{j}", "#555500")
+              for j, v in enumerate((0.5, 0.3, 0.1))]
+    ax = _ax()
+    _draw_fractions(ax, x, curves, [], [], "α", "t")
+    dots = {ln.get_ydata()[0]: ln.get_marker() for ln in ax.lines
+            if ln.get_linestyle() == "None" and len(ln.get_xdata()) == 2}
+    assert len(set(dots.values())) == 3
+    residuals = [ln.get_marker() for ln in ax.figure.axes[-1].lines
+                 if ln.get_marker() not in ("None", "")]
+    assert sorted(residuals) == sorted(dots.values())
+    handles = dict(zip(_legend(ax), ax.get_legend().legend_handles))
+    for j, v in enumerate((0.5, 0.3, 0.1)):
+        handle = handles[f"k = ±{j}"]
+        assert handle.get_marker() == dots[v] and handle.get_linestyle() == "-"
+
+
 def _torque_ds(torque=(0.06, 0.26, 0.46, 0.66, 0.86, 0.96), **extra) -> xr.Dataset:
     return xr.Dataset({**extra}, coords={"torque": np.asarray(torque), "omega0": 1.0,
                                          "alpha": 0.05})
