@@ -183,3 +183,65 @@ def test_an_atlas_with_torque_in_memory_is_its_file(swing_atlas):
         assert any(node.path.startswith("/limit_cycle") for node in mem.subtree)
         assert (mem["status"].values == 4).any()  # running orbits, certified
         _same_trees(mem, disk)
+
+
+# ------------------------------------------------- reading and drawing, as the docs show them
+
+def test_attractor_is_float32_in_plain_xarray_and_int16_as_the_docs_say(tmp_path):
+    """README and docs/output.md: plain ``xr.open_dataset`` decodes ``attractor``'s fill value
+    to NaN (float32); ``mask_and_scale={"attractor": False}`` and ``atlas.open`` keep the
+    stored int16 and its fill value, with the same labels. t_max = 2 s leaves some orbits
+    without a label, so that the fill value is met."""
+    import xarray as xr
+
+    from tests.helpers import small_atlas
+
+    small_atlas(tmp_path, "short", {"alpha": 0.1, "omega0": 1.0}, theta=("-3pi", "3pi"),
+                speed=(-4.0, 4.0), num=(12, 8), t_max=2.0, separatrices=False)
+    path = tmp_path / "short.h5"
+    with xr.open_dataset(path, engine="h5netcdf") as plain, \
+            xr.open_dataset(path, engine="h5netcdf",
+                            mask_and_scale={"attractor": False}) as kept, \
+            atlas.open(path) as tree:
+        decoded, stored, opened = (plain["attractor"].values, kept["attractor"].values,
+                                   tree["attractor"].values)
+        fill = kept["attractor"].attrs["_FillValue"]
+        assert plain["t_trap"].dtype == kept["t_trap"].dtype == np.float32  # others as stored
+    assert decoded.dtype == np.float32 and stored.dtype == opened.dtype == np.int16
+    assert fill == -32768
+    np.testing.assert_array_equal(stored, opened)
+    labelled = stored != fill
+    assert 0 < labelled.sum() < labelled.size  # both kinds of orbit are there
+    np.testing.assert_array_equal(decoded[labelled], stored[labelled])
+    assert np.isnan(decoded[~labelled]).all()
+
+
+def test_basin_map_draws_the_point_asked_into_the_axes_given(tmp_path):
+    """``atlas.views.maps.basin_map(tree, ax=ax, alpha=i)`` (README, docs/output.md): it draws
+    into ``ax`` (no figure of its own), returns it, and shows the i-th α of a parameter atlas:
+    its title, and its labels pixel for pixel (a grid this small is not coarsened)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from atlas.views.maps import basin_map
+    from tests.helpers import small_atlas
+
+    tree = small_atlas(tmp_path, "two", {"alpha": [0.1, 0.3], "omega0": 1.0},
+                       theta=("-3pi", "3pi"), speed=(-4.0, 4.0), num=(12, 8), t_max=200.0,
+                       separatrices=False)
+    fig, axes = plt.subplots(1, 2)
+    figures = plt.get_fignums()
+    try:
+        for i, ax in enumerate(axes):
+            assert basin_map(tree, ax=ax, alpha=i) is ax
+            assert f"α = {(0.1, 0.3)[i]:g} s⁻¹" in ax.get_title()
+            drawn = np.ma.filled(ax.images[0].get_array().astype(float), np.nan)
+            k = tree["attractor"].isel(alpha=i).values
+            np.testing.assert_array_equal(drawn, np.where(k == -32768, np.nan, k))
+        assert plt.get_fignums() == figures
+        # the two points differ, so that drawing the wrong one shows
+        assert (tree["attractor"].isel(alpha=0) != tree["attractor"].isel(alpha=1)).any()
+    finally:
+        plt.close(fig)
