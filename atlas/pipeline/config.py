@@ -335,7 +335,7 @@ class Config(_Strict):
     """A whole sweep (see ``configs/default.yaml`` for a commented example).
 
     ``check_radians`` (default true): warn when the θ0 window looks like degrees or spans
-    more than :data:`RADIANS_WARNING_TURNS` turns (:func:`radians_warnings`); ``false``
+    more than :data:`RADIANS_WARNING_TURNS` turns (:func:`radians_warning`); ``false``
     silences that warning (it changes no result).
     """
 
@@ -348,15 +348,23 @@ class Config(_Strict):
     output: Path = Path(defaults.OUTPUT)
     stability: StabilityConfig | None = None
     check_radians: bool = True
-    #: What validation changed, one line each (a tol raised to what the window resolves).
+    #: What validation changed: a ``separatrices.tol`` raised to what the window resolves.
     _adjusted: tuple[str, ...] = PrivateAttr(default=())
 
     @property
     def warnings(self) -> tuple[str, ...]:
         """What a user should hear about this valid config, one line each (:func:`load_config`
-        logs them): a ``separatrices.tol`` raised to what double precision resolves in the
-        window, and a θ0 window that looks like degrees (:func:`radians_warnings`)."""
-        return (*self._adjusted, *radians_warnings(self))
+        logs them): a θ0 window that looks like degrees (:func:`radians_warning`), and a
+        ``separatrices.tol`` raised to what double precision resolves in the window. Where a
+        window in degrees raised the tol, that is one warning, degrees first: the tol follows
+        from the window, and is fixed with it."""
+        degrees = radians_warning(self)
+        if degrees is None:
+            return self._adjusted
+        if self._adjusted:
+            degrees += f"{'' if degrees.endswith('?') else '.'} With this window, " \
+                       f"{self._adjusted[0]}"
+        return (f"{degrees} (`check_radians: false` silences the warning about radians)",)
 
     @model_validator(mode="after")
     def _runnable(self, info):
@@ -659,20 +667,20 @@ def _in_pi(degrees: float) -> str:
     return f"{factor}pi" + (f"/{ratio.denominator}" if ratio.denominator > 1 else "")
 
 
-def radians_warnings(cfg: Config) -> list[str]:
+def radians_warning(cfg: Config) -> str | None:
     """The warning, if any, that ``cfg``'s θ0 window may have been written in degrees: it
     spans more than :data:`RADIANS_WARNING_TURNS` turns, or an end is one of
     :data:`DEGREE_LIKE_ENDS` (±90, ±180, …); with the window in radians as a hint ("did you
     mean -pi/2 … pi/2?") where both ends are whole numbers. None where ``check_radians``
-    is false. A warning, not an error: such a window is valid, only unlikely."""
+    is false. A warning, not an error: such a window is valid, only unlikely.
+    (:attr:`Config.warnings` adds how to silence it.)"""
     start, stop = cfg.grid.theta0.start, cfg.grid.theta0.stop
     turns = (stop - start) / (2 * math.pi)
     looks_like_degrees = any(abs(end) in DEGREE_LIKE_ENDS for end in (start, stop))
     if not cfg.check_radians or (turns <= RADIANS_WARNING_TURNS and not looks_like_degrees):
-        return []
+        return None
     hint = ""
     if float(start).is_integer() and float(stop).is_integer():
         hint = f"; did you mean {_in_pi(start)} … {_in_pi(stop)}?"
-    return [f"grid.theta0: θ0 is in radians: the window {start:g} … {stop:g} spans "
-            f"{turns:.1f} turns (a turn is 2pi = 6.283 rad){hint} (`check_radians: false` "
-            "silences this warning)"]
+    return (f"grid.theta0: θ0 is in radians: the window {start:g} … {stop:g} spans "
+            f"{turns:.1f} turns (a turn is 2pi = 6.283 rad){hint}")

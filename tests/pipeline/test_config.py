@@ -266,6 +266,26 @@ def test_a_tol_finer_than_doubles_resolve_is_raised_with_a_warning(tmp_path, cap
     assert f"tol = {cfg.separatrices.tol:.2g}" in line
 
 
+def test_a_window_in_degrees_warns_once_degrees_first(tmp_path, caplog):
+    """±180 with a tol of 1e-12 once gave two warnings, the tol's first (a consequence) and
+    the degrees' second (the cause): now one, the degrees first, the tol it raised after.
+    With ``check_radians: false`` the window is meant, and the tol's warning stands alone."""
+    path = tmp_path / "deg.yaml"
+    path.write_text("grid: {theta0: {start: -180, stop: 180, num: 8}}\n"
+                    "separatrices: {tol: 1.0e-12}\n")
+    cfg = load_config(path)
+    (line,) = _warnings(caplog)
+    degrees, tol = line.index("θ0 is in radians"), line.index("separatrices.tol = 1e-12")
+    assert line.startswith(f"warning: {path}: grid.theta0:") and degrees < tol
+    assert "did you mean -pi … pi?" in line and f"tol = {cfg.separatrices.tol:.2g}" in line
+    caplog.clear()
+    path.write_text(path.read_text() + "check_radians: false\n")
+    load_config(path)
+    (line,) = _warnings(caplog)
+    assert line.startswith(f"warning: {path}: separatrices.tol = 1e-12 is finer")
+    assert "radians" not in line
+
+
 def test_a_tol_the_window_resolves_is_kept(tmp_path, caplog):
     path = tmp_path / "c.yaml"
     path.write_text("grid: {theta0: {start: -180, stop: 180, num: 8}}\n"
