@@ -98,6 +98,18 @@ def _run(args: list, **kwargs) -> subprocess.CompletedProcess:
     return done
 
 
+def _venv_with_these_dependencies(venv: Path) -> tuple[Path, Path]:
+    """A new venv without pip whose dependencies are this venv's site-packages, after its own
+    (a path in a .pth file is appended to sys.path; that folder's own .pth files, such as an
+    editable install's that points at the checkout, are not processed): the venv and its
+    site-packages."""
+    _run([sys.executable, "-m", "venv", "--without-pip", venv])
+    site = Path(_run([venv / "bin" / "python", "-c",
+                      "import sysconfig; print(sysconfig.get_paths()['purelib'])"]).stdout.strip())
+    (site / "dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    return venv, site
+
+
 @pytest.mark.slow  # builds a wheel, makes a venv, computes the default atlas: about a minute
 def test_the_wheel_installs_and_runs_atlas_in_a_fresh_venv(tmp_path):
     """``python -m build`` makes a wheel of pendulum-atlas (this version, the page's assets,
@@ -121,14 +133,7 @@ def test_the_wheel_installs_and_runs_atlas_in_a_fresh_venv(tmp_path):
         f"pendulum_atlas-{atlas.__version__}.dist-info/METADATA").decode()
     assert "Name: pendulum-atlas" in metadata and f"Version: {atlas.__version__}" in metadata
 
-    venv = tmp_path / "venv"
-    _run([sys.executable, "-m", "venv", "--without-pip", venv])
-    site = Path(_run([venv / "bin" / "python", "-c",
-                      "import sysconfig; print(sysconfig.get_paths()['purelib'])"]).stdout.strip())
-    # the dependencies: this venv's site-packages, after the new venv's own (a path in a .pth
-    # file is appended to sys.path; its own .pth files, such as an editable install's finder
-    # that points at the checkout, are not processed)
-    (site / "dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    venv, site = _venv_with_these_dependencies(tmp_path / "venv")
     _run([sys.executable, "-m", "pip", "--python", venv / "bin" / "python", "install",
           "--no-deps", "--no-index", "--quiet", wheel], timeout=300)
 
@@ -148,3 +153,21 @@ def test_the_wheel_installs_and_runs_atlas_in_a_fresh_venv(tmp_path):
     # the page, from the installed assets
     _run([venv / "bin" / "atlas", "view", "out.h5"], cwd=outside, env=env, timeout=300)
     assert (outside / "out.html").stat().st_size > 0
+
+
+@pytest.mark.slow  # an editable install into a new venv: about 15 s
+def test_an_editable_install_wins_over_a_clone_folder_named_atlas(tmp_path):
+    """A checkout cloned into a folder named ``atlas`` (its natural name) and installed with
+    ``pip install -e`` (what ``make run`` does); a script run from the folder above sees that
+    folder as a namespace package ``atlas`` on its path. The installed package must win, there
+    as anywhere: ``import atlas`` is the checkout's ``atlas/__init__.py``, with ``atlas.label``."""
+    parent = tmp_path / "projects"
+    root = _source_tree(parent / "atlas")
+    venv, _ = _venv_with_these_dependencies(tmp_path / "venv")
+    _run([sys.executable, "-m", "pip", "--python", venv / "bin" / "python", "install",
+          "--no-deps", "--quiet", "-e", root], timeout=300)
+    (parent / "script.py").write_text("import atlas\nprint(atlas.__file__, atlas.label.__name__)\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    for command in (["script.py"], ["-c", "exec(open('script.py').read())"]):
+        out = _run([venv / "bin" / "python", *command], cwd=parent, env=env).stdout.split()
+        assert out == [str(root / "atlas" / "__init__.py"), "label"]
