@@ -22,6 +22,7 @@ from atlas.errors import AtlasError
 from atlas.physics.pendulum import Pendulum, critical_points
 from atlas.status import RUNNING, TRAPPED
 from atlas.views.style import (
+    SADDLE_MARKER,
     STYLE,
     basin_colours,
     critical_point_markers,
@@ -92,7 +93,7 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
         lo, hi = float(orbit.theta.min()), float(orbit.theta.max())
         if hi - lo <= MAX_TURNS_MARKED * TWO_PI:
             for p in critical_points(pendulum, lo - math.pi, hi + math.pi):
-                ax_t.axhline(p.theta, color="red" if p.is_saddle else "0.5",
+                ax_t.axhline(p.theta, color=SADDLE_MARKER["mec"] if p.is_saddle else "0.5",
                              ls=":" if p.is_saddle else "--", lw=0.8)
             pi_ticks(ax_t, lo - 0.5, hi + 0.5, axis="y")
         if orbit.status in (TRAPPED, RUNNING):

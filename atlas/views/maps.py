@@ -1,14 +1,19 @@
 """The basin-map figures of one parameter point, read from the file and drawn (no computing).
 
-* :func:`basin_map`: colour by attractor k (:func:`atlas.views.style.basin_colours`: the
-  running basin grey, no certified label white; past LABELLED_WELLS wells each band also
-  named "k = …"), separatrices as thin dark outlines, saddles as open circles, attractors
-  as filled dots, the running limit cycle dashed;
-* :func:`trap_time_map`: the time at which each label was certified, on a log colour scale,
-  the separatrices faint;
+* :func:`basin_map`: colour by attractor k (:func:`atlas.views.style.well_colour`, one
+  colour per k in every figure; the running basin grey, no certified label white; past
+  LABELLED_WELLS wells each band also named "k = …"), separatrices as thin dark outlines,
+  saddles and attractors as :data:`atlas.views.style.SADDLE_MARKER` and ``ATTRACTOR_MARKER``,
+  the running limit cycle dashed;
+* :func:`trap_time_map`: the time at which each label was certified, on a log colour scale
+  (``T_TRAP_CMAP``; t = 0 at its dark end, no label white), the separatrices faint;
 * :func:`boundary_distance_map`: each state's distance to the nearest basin boundary (how far
-  it is from tipping into another well) on a log scale spanning its 1st to 99th percentile,
-  white within d_cert (labels for the RK4 map only), the separatrices faint.
+  it is from tipping into another well) on a log scale spanning its 1st to 99th percentile
+  (``DISTANCE_CMAP``), black within d_cert (labels for the RK4 map only), white where none
+  is stored, the separatrices faint.
+
+Every title names the parameter point (:func:`atlas.views.style.point_title`), so that a map
+of a parameter atlas says which α (ω0, τ) it shows.
 
 Each figure is read, then drawn: a reader (``_*_scene``) takes what it shows out of the tree
 as plain arrays and strings (the map through :func:`atlas.views.coarsen.read_maps`), a drawer
@@ -26,12 +31,16 @@ from atlas.layout import first_point, point_group, point_of
 from atlas.views.coarsen import read_maps
 from atlas.views.style import (
     CYCLE_COLOR,
+    DISTANCE_CMAP,
     LABELLED_WELLS,
     MAP_SIZE,
+    NEAR_BOUNDARY_COLOR,
+    NO_LABEL_COLOR,
     SEPARATRIX_ALPHA,
     SEPARATRIX_COLOR,
     SEPARATRIX_FAINT,
     SEPARATRIX_WIDTH,
+    T_TRAP_CMAP,
     axes,
     basin_colours,
     critical_point_markers,
@@ -43,7 +52,7 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "MAP_FIGURES",
-           "draw_limit_cycle"]
+           "draw_limit_cycle", "basin_key"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -51,8 +60,9 @@ TWO_PI = 2.0 * np.pi
 def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
                ) -> tuple[xr.Dataset, dict]:
     """The point drawn (its dataset) and what every map figure shows of it: the grid (θ0
-    [rad], θ̇0 [rad/s]), the map ``name`` as :func:`read_maps` reads it, and the separatrix
-    branches (θ [rad], θ̇ [rad/s]; none where not stored)."""
+    [rad], θ̇0 [rad/s]), the map ``name`` as :func:`read_maps` reads it, the separatrix
+    branches (θ [rad], θ̇ [rad/s]; none where not stored) and the point's parameters as a
+    title line (:func:`point_title`)."""
     from atlas.store.separatrices import branches
 
     ds = first_point(tree.to_dataset(inherit=False), **index)
@@ -60,7 +70,8 @@ def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
     return ds, {"grid": (ds["theta0"].values, ds["theta_dot0"].values),
                 "image": (maps or read_maps(tree, name, **index))[name],
                 "separatrices": [] if sep is None else
-                [(theta, theta_dot) for _, _, theta, theta_dot in branches(sep)]}
+                [(theta, theta_dot) for _, _, theta, theta_dot in branches(sep)],
+                "point": point_title(point_of(ds))}
 
 
 def _grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kwargs):
@@ -114,12 +125,12 @@ def _basin_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
     point = point_of(ds)
     cp = point_group(tree, "critical_points", point)
     cycle = point_group(tree, "limit_cycle", point)
-    return scene | {
+    return {name: value for name, value in scene.items() if name != "point"} | {
         "critical": None if cp is None else  # odd n: saddles
         (cp["theta"].values, cp["n"].values % 2 != 0, bool(float(ds["torque"]))),
         "cycle": None if cycle is None else
         (cycle["theta"].values, cycle["theta_dot"].values, float(cycle.attrs["period"])),
-        "title": f"Basins of attraction, {point_title(point)}"}
+        "title": f"Basins of attraction, {scene['point']}"}
 
 
 def _run_depth(mask: np.ndarray) -> np.ndarray:
@@ -172,28 +183,39 @@ def _label_bands(ax, grid, image: np.ndarray, ks: list[int]) -> None:
                 path_effects=[pe.withStroke(linewidth=1.8, foreground="white")])
 
 
-def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
-    """Draw :func:`_basin_scene` (as :func:`basin_map`)."""
+def basin_key(wells: list[int], running: bool, unlabelled: bool):
+    """The colour key of basin maps showing ``wells`` (contiguous k), with the running basin
+    and "no label" where present: (colormap, norm, tick values, tick names, what the colours
+    mean, in a line). Each well has its own fixed colour (:func:`basin_colours`). An image
+    holds k for a well, ``wells[-1] + 1`` for the running basin, NaN for no label."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    k, kmin, kmax, running = image
-    wells = list(range(kmin, kmax + 1))
     palette = basin_colours(wells, running=running)
-    colors = [palette[j] for j in wells]
-    names = [_well_name(j) for j in wells]
+    colors, names = [palette[k] for k in wells], [_well_name(k) for k in wells]
     if running:  # the running basin: one more colour after the wells
         colors.append(palette["running"])
         names.append("running")
-    unlabelled = bool(np.isnan(k).any())
     if unlabelled:  # no certified label (NaN, drawn as "bad"): one more entry of the key
         colors.append(palette["none"])
         names.append("no label")
-    ticks = list(range(kmin, kmin + len(colors)))
+    start = wells[0] if wells else 0
     cmap = ListedColormap(colors).with_extremes(bad=palette["none"])
-    levels = np.arange(kmin, kmin + len(colors) + 1) - 0.5
-    mesh = _grid_image(ax, grid, k, cmap=cmap, norm=BoundaryNorm(levels, cmap.N))
+    norm = BoundaryNorm(np.arange(start, start + len(colors) + 1) - 0.5, cmap.N)
+    meaning = ("colour: the well k at whose rest state the orbit settles"
+               + ("; running: it rotates (the running limit cycle)" if running else "")
+               + ("; no label: unresolved by t_max, or not finite" if unlabelled else ""))
+    return cmap, norm, list(range(start, start + len(colors))), names, meaning
+
+
+def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
+    """Draw :func:`_basin_scene` (as :func:`basin_map`)."""
+    k, kmin, kmax, running = image
+    wells = list(range(kmin, kmax + 1))
+    unlabelled = bool(np.isnan(k).any())
+    cmap, norm, ticks, names, _ = basin_key(wells, running, unlabelled)
+    mesh = _grid_image(ax, grid, k, cmap=cmap, norm=norm)
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
-    cbar.ax.set_yticklabels(names, fontsize=8 if len(colors) <= 24 else 6)
+    cbar.ax.set_yticklabels(names, fontsize=8 if len(names) <= 24 else 6)
     cbar.set_label("attractor k: orbit settles at the rest state of well k"
                    + (";\nrunning: orbit rotates (the running limit cycle)" if running else "")
                    + (";\nno label: unresolved by t_max, or not finite" if unlabelled else ""))
@@ -203,7 +225,7 @@ def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
     if cycle is not None:
         draw_limit_cycle(ax, grid[0][0], grid[0][-1], *cycle)
     if critical is not None:
-        critical_point_markers(ax, *critical, on_map=True)
+        critical_point_markers(ax, *critical)
     ax.set_title(title)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.06), ncol=3, borderaxespad=0)
@@ -221,8 +243,9 @@ def _trap_time_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> di
     return _map_scene(tree, "t_trap", maps, index)[1]
 
 
-def _draw_trap_time(ax, grid, image, separatrices):
-    """Draw :func:`_trap_time_scene` (as :func:`trap_time_map`)."""
+def _draw_trap_time(ax, grid, image, separatrices, point: str):
+    """Draw :func:`_trap_time_scene` (as :func:`trap_time_map`); ``point``: the parameter
+    point's title line."""
     from matplotlib import colormaps
     from matplotlib.colors import LogNorm
 
@@ -231,20 +254,22 @@ def _draw_trap_time(ax, grid, image, separatrices):
     t, lo, hi = image
     lo = lo if lo == lo else 1e-2
     hi = max(hi if hi == hi else 1.0, lo * 10)
-    cmap = colormaps["magma"].with_extremes(under="0.8", bad="white")
-    # t_trap = 0 (already inside the trap) is drawn below the scale, in grey
-    mesh = _grid_image(ax, grid, np.where(t > 0, t, lo / 2), cmap=cmap, norm=LogNorm(lo, hi))
+    cmap = colormaps[T_TRAP_CMAP]
+    # t_trap = 0 (certified at once: the orbit starts inside the trap) is the shortest time
+    # there is: drawn below the scale in the scale's own dark end, not in a colour of its own
+    cmap = cmap.with_extremes(under=cmap(0.0), bad=NO_LABEL_COLOR)
+    mesh = _grid_image(ax, grid, np.where(t == 0, lo / 2, t), cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
         "t_trap [s]: time at which the label was certified\n(trapped in a well, or running)")
     _draw_separatrices(ax, separatrices, faint=True)
-    ax.set_title("Time to a certified label (grey: certified at t = 0;\n"
-                 "white: no label certified by t_max)")
+    ax.set_title(f"Time to a certified label, {point}\n(darkest: certified at t = 0, inside "
+                 "the trap; white: no label certified by t_max)")
     return ax
 
 
 def trap_time_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
-    """Draw the certified trapping time t_trap [s] on a log colour scale (``maps`` as
-    :func:`basin_map`)."""
+    """Draw the certified trapping time t_trap [s] on a log colour scale, white where no label
+    was certified (``maps`` as :func:`basin_map`)."""
     return _draw_trap_time(axes(ax, MAP_SIZE), **_trap_time_scene(tree, maps, **index))
 
 
@@ -255,30 +280,32 @@ def _boundary_distance_scene(tree: xr.DataTree, maps: dict | None = None, **inde
     return scene | {"d_cert": float(ds["d_cert"])}
 
 
-def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float):
-    """Draw :func:`_boundary_distance_scene` (as :func:`boundary_distance_map`)."""
+def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point: str):
+    """Draw :func:`_boundary_distance_scene` (as :func:`boundary_distance_map`); ``point``:
+    the parameter point's title line."""
     from matplotlib import colormaps
     from matplotlib.colors import ListedColormap, LogNorm
 
     d = image[0]
     measured = d_cert == d_cert
     lo, hi = _spread(d[np.isfinite(d) & (d > (d_cert if measured else 0.0))])
-    cmap = colormaps["viridis"].with_extremes(bad="0.5")
+    cmap = colormaps[DISTANCE_CMAP].with_extremes(bad=NO_LABEL_COLOR)
     mesh = _grid_image(ax, grid, d, cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="both").set_label(
         "distance to the nearest basin boundary\n[rad (θ) and rad/s (θ̇) as one Euclidean "
         "unit];\ncolours span its 1st to 99th percentile")
     near = measured and bool(np.any(d <= d_cert))
-    if near:  # closer than d_cert: white, over the map
+    if near:  # closer than d_cert: black, over the map
         ax.imshow(np.ma.masked_where(~(d <= d_cert), np.ones_like(d)), origin="lower",
                   extent=ax.images[0].get_extent(), aspect="auto", interpolation="nearest",
-                  cmap=ListedColormap(["white"]), zorder=1)
+                  cmap=ListedColormap([NEAR_BOUNDARY_COLOR]), zorder=1)
     _draw_separatrices(ax, separatrices, faint=True)
-    note = (f"white: closer than d_cert = {d_cert:.1e} (labels certified for the RK4 map "
+    note = (f"black: closer than d_cert = {d_cert:.1e} (labels certified for the RK4 map "
             "only)" if near else f"none closer than d_cert = {d_cert:.1e}: every label "
             "certified for the exact equation" if measured else
             "d_cert not measured: labels certified for the RK4 map only")
-    ax.set_title(f"Distance to tipping into another well\n({note})")
+    notes = ["white: no distance stored"] * bool(np.isnan(d).any()) + [note]
+    ax.set_title(f"Distance to tipping into another well, {point}\n({'; '.join(notes)})")
     return ax
 
 
@@ -293,7 +320,7 @@ def _spread(values: np.ndarray) -> tuple[float, float]:
 
 def boundary_distance_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
     """Draw ``boundary_distance`` on a log colour scale spanning its 1st to 99th percentile,
-    the separatrices faint, and in white the states closer than d_cert (labels certified for
+    the separatrices faint, and in black the states closer than d_cert (labels certified for
     the RK4 map only); ``maps`` as :func:`basin_map`."""
     return _draw_boundary_distance(axes(ax, MAP_SIZE),
                                    **_boundary_distance_scene(tree, maps, **index))

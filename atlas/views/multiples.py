@@ -5,10 +5,11 @@ point, one colour key for all.
 MAX_PANELS panels, the points chosen evenly across the atlas (its first and last always
 among them) and listed in the title, each panel titled with its swept parameters' values and
 units and its point number (``#i``, the index ``atlas plot --point I`` takes). Every panel
-is coloured with one palette, :func:`atlas.views.style.basin_colours` of every well any
-panel shows (so a colour means one k across the figure), the running basin and "no
-certified label" included; the separatrices, the running limit cycle and the critical points
-are drawn as on the single map (:mod:`atlas.views.maps`), whose pieces these panels reuse.
+is coloured with the one basin palette, :func:`atlas.views.style.well_colour` (a colour
+means one k across the figure, and in every other figure), the running basin and "no
+certified label" included, in one key (:func:`atlas.views.maps.basin_key`); the
+separatrices, the running limit cycle and the critical points are drawn as on the single
+map (:mod:`atlas.views.maps`), whose pieces these panels reuse.
 
 As every figure of ``atlas plot``, it is read (:func:`multiples_scene`: each panel's map
 band by band, coarsened, through the basin map's own reader) and then drawn
@@ -29,17 +30,17 @@ from atlas.views.maps import (
     _draw_separatrices,
     _grid_image,
     _label_bands,
-    _well_name,
+    basin_key,
     draw_limit_cycle,
 )
 from atlas.views.selectors import point_index, swept, value_text
-from atlas.views.style import LABELLED_WELLS, basin_colours, critical_point_markers
+from atlas.views.style import LABELLED_WELLS, critical_point_markers
 
 if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["MAX_PANELS", "chosen_panels", "multiples_scene", "draw_multiples",
-           "multiples_size", "basin_key"]
+           "multiples_size"]
 
 #: The most panels a small-multiples figure draws: past it, the points drawn are chosen
 #: evenly across the atlas (``atlas plot --point I`` draws any other as a full map).
@@ -116,30 +117,6 @@ def multiples_scene(tree: xr.DataTree) -> dict:
                      + (", " + ", ".join(fixed) if fixed else "")}
 
 
-def basin_key(wells: list[int], running: bool, unlabelled: bool):
-    """The colour key of basin maps showing ``wells`` (contiguous k), with the running basin
-    and "no label" where present: (colormap, norm, tick values, tick names, what the colours
-    mean, in a line). An image holds k for a well, ``wells[-1] + 1`` for the running basin,
-    NaN for no label."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-
-    palette = basin_colours(wells, running=running)
-    colors, names = [palette[k] for k in wells], [_well_name(k) for k in wells]
-    if running:
-        colors.append(palette["running"])
-        names.append("running")
-    if unlabelled:
-        colors.append(palette["none"])
-        names.append("no label")
-    start = wells[0] if wells else 0
-    cmap = ListedColormap(colors).with_extremes(bad=palette["none"])
-    norm = BoundaryNorm(np.arange(start, start + len(colors) + 1) - 0.5, cmap.N)
-    meaning = ("colour: the well k at whose rest state the orbit settles"
-               + ("; running: it rotates (the running limit cycle)" if running else "")
-               + ("; no label: unresolved by t_max, or not finite" if unlabelled else ""))
-    return cmap, norm, list(range(start, start + len(colors))), names, meaning
-
-
 def draw_multiples(ax, panels: list[dict], wells: list[int], running: bool, title: str):
     """Draw :func:`multiples_scene` into the figure of ``ax`` (which it replaces by a grid of
     panels and a colour key spanning their rows); returns the panels' Axes."""
@@ -161,7 +138,7 @@ def draw_multiples(ax, panels: list[dict], wells: list[int], running: bool, titl
         if panel["cycle"] is not None:
             draw_limit_cycle(ax, panel["grid"][0][0], panel["grid"][0][-1], *panel["cycle"])
         if panel["critical"] is not None:
-            critical_point_markers(ax, *panel["critical"], on_map=True)
+            critical_point_markers(ax, *panel["critical"])
         ax.set_title(panel["title"], fontsize=9)
         ax.tick_params(labelsize=8)
         if i + cols < len(panels):  # the panel below shows the θ axis

@@ -2,12 +2,16 @@
 
 The page (no server, no network: every script, style and image is inline) shows the basin map
 of each parameter point as a PNG at the grid's native resolution, in the basin palette of
-:func:`atlas.views.style.basin_colours` (every well of the point its own colour, named in a
+:func:`atlas.views.style.well_colour` (each well k the colour it has in every PNG, named in a
 colour key; past LABELLED_WELLS wells each band is also named on the map), with its
-separatrices and critical points (and, with a torque τ, the running basin and the running
-limit cycle). The map fills the window's width (a 1920 px screen and a 400 px phone alike);
-it is drawn before the page's load event ends. A layer switch shows t_trap or the boundary
-distance instead (log colour scales between the 1st and 99th percentiles); a hover line reads
+separatrices and critical points (the figures' markers, :data:`atlas.views.style.SADDLE_MARKER`
+and ``ATTRACTOR_MARKER``; and, with a torque τ, the running basin and the running limit
+cycle). The palette, the colour maps and the markers come from :mod:`atlas.views.style` in
+the page's data: the script keeps no colours of its own. The map fills the window's width (a
+1920 px screen and a 400 px phone alike); it is drawn before the page's load event ends. A
+layer switch shows t_trap or the boundary distance instead, in the PNGs' colour maps
+(``T_TRAP_CMAP``, ``DISTANCE_CMAP``; log scales between the 1st and 99th percentiles); a hover
+line reads
 the stored label, status, t_trap and distance of the grid point under the pointer. A click, or
 a point typed in exact coordinates, integrates that orbit in the browser
 (``view_assets/view.js``): the RK4 step of θ̈ = −ω0² sin θ − 2αθ̇ + τ of the file's method,
@@ -55,17 +59,24 @@ from atlas.store.schema import LABEL_VARIABLES
 from atlas.store.separatrices import branches
 from atlas.store.validate import file_method
 from atlas.views.style import (
+    ATTRACTOR_MARKER,
+    DISTANCE_CMAP,
     LABELLED_WELLS,
+    NEAR_BOUNDARY_COLOR,
     NO_LABEL_COLOR,
     RUNNING_COLOR_HEX,
+    SADDLE_MARKER,
     SEPARATRIX_ALPHA,
     SEPARATRIX_COLOR,
     SEPARATRIX_FAINT,
-    basin_colours,
+    T_TRAP_CMAP,
+    colormap_table,
+    well_colour,
+    well_palette,
 )
 
 __all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe_json",
-           "well_colours", "DIST_STEPS"]
+           "page_style", "DIST_STEPS"]
 
 #: Steps per octave of the log2-quantised boundary distance.
 DIST_STEPS = 256
@@ -111,14 +122,6 @@ def _uniform(values: np.ndarray, name: str, path) -> list[float]:
     return [float(values[0]), float(values[-1]), int(values.size)]
 
 
-def well_colours(wells) -> list[str]:
-    """The colour of each well k in ``wells`` (the page's key and its PNG alike), as
-    "#rrggbb": :func:`atlas.views.style.basin_colours` of the point's wells, every one
-    distinct (the one place the page picks a basin colour)."""
-    colours = basin_colours(wells)
-    return [colours[int(k)] for k in wells]
-
-
 def _labelled_wells(attractor: np.ndarray, status: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(where a well label is certified, the wells k that occur there, ascending)."""
     labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
@@ -127,7 +130,8 @@ def _labelled_wells(attractor: np.ndarray, status: np.ndarray) -> tuple[np.ndarr
 
 def _map_png(attractor: np.ndarray, status: np.ndarray, wells: np.ndarray) -> str:
     """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward: the i-th
-    well of ``wells`` in palette entry i (:func:`well_colours`), no certified label white,
+    well of ``wells`` in palette entry i (:func:`atlas.views.style.well_colour`, as the
+    page's key), no certified label white,
     running in the running basin's grey. At most 254 wells fit a palette; the rest (never
     met in practice) share the last well's entry."""
     from PIL import Image
@@ -138,7 +142,7 @@ def _map_png(attractor: np.ndarray, status: np.ndarray, wells: np.ndarray) -> st
     index = np.where(labelled, where, len(wells)).astype(np.uint8)
     index[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = len(wells) + 1
     image = Image.fromarray(index[::-1], mode="P")
-    palette = ([v for c in well_colours(wells) for v in _rgb(c)] + _rgb(NO_LABEL_COLOR)
+    palette = ([v for k in wells for v in _rgb(well_colour(k))] + _rgb(NO_LABEL_COLOR)
                + _rgb(RUNNING_COLOR_HEX))
     image.putpalette(palette)
     buffer = io.BytesIO()
@@ -278,8 +282,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
             "png": _map_png(attractor, status, wells),
             "band_labels": _band_labels(attractor, labelled, wells, distance,
                                         point["theta0"].values, point["theta_dot0"].values),
-            "key": {"wells": wells.tolist(), "colors": well_colours(wells),
-                    "running": bool(running.any()),
+            "key": {"wells": wells.tolist(), "running": bool(running.any()),
                     "unlabelled": bool((~labelled & ~running).any())},
             "attractor": _blob(attractor), "status": _blob(status),
             "t_trap": _blob(n_check), "distance": _blob(pack_distance(distance)),
@@ -298,11 +301,34 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         "theta_dot0": _uniform(ds["theta_dot0"].values, "theta_dot0", path),
         "dist_steps": DIST_STEPS, "dist_offset": _DIST_OFFSET,
         "status_names": {str(k): v for k, v in STATUS_MEANINGS.items()},
-        "running_color": RUNNING_COLOR_HEX, "no_label_color": NO_LABEL_COLOR,
+        **page_style(),
+        "points": points,
+    }
+
+
+def _marker(style: dict) -> dict:
+    """A matplotlib marker of :mod:`atlas.views.style` as the page draws it: fill and edge
+    colours, the diameter and the edge width in points (the page draws 1 pt as 1 CSS px)."""
+    return {"fill": style["mfc"], "edge": style["mec"], "size": style["ms"],
+            "width": style["mew"]}
+
+
+def page_style() -> dict:
+    """The page's whole look, from :mod:`atlas.views.style` (the script keeps no colour of its
+    own): the well palette's tables (:func:`atlas.views.style.well_palette`), the running and
+    "no label" colours, the t_trap and distance colour maps as 256-entry tables
+    (:func:`atlas.views.style.colormap_table`, packed as one string of "rrggbb" each: 1.5 kB,
+    not 2.5) with the distance map's d_cert colour, the separatrices and the critical-point
+    markers."""
+    return {
+        "palette": well_palette(), "running_color": RUNNING_COLOR_HEX,
+        "no_label_color": NO_LABEL_COLOR, "near_boundary_color": NEAR_BOUNDARY_COLOR,
+        "colormaps": {layer: "".join(c[1:] for c in colormap_table(name))
+                      for layer, name in (("t_trap", T_TRAP_CMAP), ("distance", DISTANCE_CMAP))},
         "separatrix": {"color": SEPARATRIX_COLOR, "alpha": SEPARATRIX_ALPHA},
         "separatrix_faint": {"color": SEPARATRIX_FAINT["color"],
                              "alpha": SEPARATRIX_FAINT["alpha"]},
-        "points": points,
+        "markers": {"saddle": _marker(SADDLE_MARKER), "attractor": _marker(ATTRACTOR_MARKER)},
     }
 
 

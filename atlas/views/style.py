@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["STYLE", "MAP_SIZE", "CURVE_SIZE", "PNG_OPTIONS", "basin_colours",
-           "RUNNING_COLOR_HEX", "NO_LABEL_COLOR", "SEPARATRIX_COLOR", "SEPARATRIX_WIDTH",
-           "SEPARATRIX_ALPHA", "SEPARATRIX_FAINT", "CYCLE_COLOR", "LABELLED_WELLS", "pi_label",
-           "pi_ticks", "point_title", "critical_point_markers", "axes", "window_ticks"]
+__all__ = ["STYLE", "MAP_SIZE", "CURVE_SIZE", "PNG_OPTIONS", "well_colour", "well_palette",
+           "basin_colours", "WELL_CYCLE", "RUNNING_COLOR_HEX", "RUNNING_LINE_COLOR_HEX",
+           "NO_LABEL_COLOR", "NEAR_BOUNDARY_COLOR", "T_TRAP_CMAP", "DISTANCE_CMAP",
+           "colormap_table", "SEPARATRIX_COLOR", "SEPARATRIX_WIDTH", "SEPARATRIX_ALPHA",
+           "SEPARATRIX_FAINT", "CYCLE_COLOR", "LABELLED_WELLS", "SADDLE_MARKER",
+           "ATTRACTOR_MARKER", "pi_label", "pi_ticks", "point_title", "critical_point_markers",
+           "axes", "window_ticks"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
@@ -31,26 +34,41 @@ SEPARATRIX_COLOR, SEPARATRIX_WIDTH, SEPARATRIX_ALPHA = "#1a1a1a", 0.5, 0.75
 SEPARATRIX_FAINT = {"color": "white", "lw": 0.4, "alpha": 0.45}
 #: The running limit cycle's colour.
 CYCLE_COLOR = "black"
-#: Basin maps with more wells than this label each band "k = …" inside it: past it, the
-#: lightness steps of the palette are too fine to name a band by colour alone.
+#: Basin maps with more wells than this label each band "k = …" inside it: the palette
+#: repeats every WELL_CYCLE wells on each side, and a band is best named, not matched.
 LABELLED_WELLS = 16
 
-# The basin palette (:func:`basin_colours`), defined in Oklab (B. Ottosson, "A perceptual
+# The basin palette (:func:`well_colour`), defined in Oklab (B. Ottosson, "A perceptual
 # color space for image processing", 2020), whose lightness L (0 black … 1 white), chroma C
-# and hue h [deg] are perceptually uniform enough to place colours by: hue by the sign of k
-# (k > 0 warm, yellow → crimson; k < 0 cool, cyan → violet, the blue–yellow axis that
-# red–green colour-blind readers keep), lightness by |k| (the nearest wells lightest), k = 0
-# green, the running basin a neutral grey, no certified label white. Each colour takes the
-# largest chroma up to _CHROMA that sRGB can show at its L and h. The distances are
-# checked in CAM02-UCS, also under simulated deuteranopia and protanopia (colorspacious),
-# by tests/views/test_palette.py.
-_L_NEAR, _L_FAR = 0.90, 0.35        # Oklab L of |k| = 1 and of the farthest well
-_L_NEAR_LINES, _L_FAR_LINES = 0.80, 0.30  # the same, for lines and markers on white
-_HUE_POSITIVE, _HUE_NEGATIVE = (95.0, 0.0), (200.0, 300.0)  # h [deg] from |k| = 1 to the farthest
+# and hue h [deg] are perceptually uniform enough to place colours by. The colour of a well
+# is a function of k alone, the same in every figure and on the page, so that two figures can
+# be compared by colour:
+# * hue by the sign of k (k > 0 warm, yellow → crimson as |k| grows; k < 0 cool, cyan →
+#   violet: the blue–yellow axis that red–green colour-blind readers keep), k = 0 green;
+# * lightness alternating with the parity of k (odd |k| light, even |k| dark), so that two
+#   neighbouring wells k, k + 1, whose bands touch on every map, differ most in lightness,
+#   which every reader sees (at least 27 CAM02-UCS units apart, also for a protanope);
+# * within a parity, lightness falling and hue turning with |k|: far wells darker, and no two
+#   wells of |k| ≤ WELL_CYCLE share a colour. Past WELL_CYCLE the sequence repeats (an
+#   even cycle keeps the parity alternation across the repeat; such maps name their bands).
+# Each colour takes the largest chroma up to _CHROMA that sRGB can show at its L and h. The
+# distances are checked in CAM02-UCS, also under simulated deuteranopia and protanopia
+# (colorspacious), by tests/views/test_palette.py.
+WELL_CYCLE = 14
+# Oklab L of the nearest and the farthest odd |k| (1, WELL_CYCLE − 1) and even |k| (2, WELL_CYCLE)
+_L_ODD, _L_EVEN = (0.93, 0.72), (0.58, 0.32)
+_HUE_POSITIVE, _HUE_NEGATIVE = (105.0, 10.0), (200.0, 310.0)  # h [deg], |k| = 1 … WELL_CYCLE
 _CHROMA = 0.16
-_ZERO_LCH = (0.72, 0.14, 150.0)     # k = 0: green (0.60 for lines)
-_RUNNING_L = 0.62                   # the running basin: neutral grey (0.45 for lines)
-#: Colour of "no certified label" (status unresolved or nonfinite) on every map: white.
+_ZERO_LCH = (0.66, 0.15, 145.0)     # k = 0: green, between the two lightness bands
+_RUNNING_L = 0.62                   # the running basin: neutral grey
+# Lines and markers on a white page (the curves, atlas orbit's certificate): the same hue
+# and chroma, lightness mapped linearly from [_L_EVEN[1], _L_ODD[0]] onto _LINE_L, so that the
+# light colours show as thin lines and the parity alternation remains; k = 0 and the running
+# basin at lightnesses of their own, between the light and the dark lines.
+_LINE_L = (0.23, 0.80)
+_ZERO_LINE_L, _RUNNING_LINE_L = 0.50, 0.45
+#: Colour of "no certified label" (status unresolved or nonfinite) on every map, and of "no
+#: value" (no t_trap, no distance) on the t_trap and distance maps: white.
 NO_LABEL_COLOR = "#ffffff"
 
 # Oklab → linear sRGB (Ottosson 2020): the inverse of his M2, then of M1.
@@ -87,41 +105,88 @@ def _oklch_hex(lightness: float, chroma: float, hue: float) -> str:
     return "#" + "".join(f"{round(255 * v):02x}" for v in srgb)
 
 
-def basin_colours(ks, running: bool = False, lines: bool = False) -> dict[int | str, str]:
-    """The colour ("#rrggbb") of each well k in ``ks`` in one figure, and of "none" (no
-    certified label) and, with ``running``, of "running" (the running basin): every one
-    distinct, no colour repeated whatever the number of wells (no cycling).
+def _well_lch(k: int, lines: bool) -> tuple[float, float, float]:
+    """Oklab (L, C, h [deg]) of well k (the scheme above)."""
+    if k == 0:
+        return (_ZERO_LINE_L if lines else _ZERO_LCH[0]), *_ZERO_LCH[1:]
+    m = (abs(k) - 1) % WELL_CYCLE              # 0 … WELL_CYCLE − 1
+    near, far = _L_ODD if m % 2 == 0 else _L_EVEN
+    lightness = near + (m // 2) / (WELL_CYCLE // 2 - 1) * (far - near)
+    first, last = _HUE_POSITIVE if k > 0 else _HUE_NEGATIVE
+    hue = first + m / (WELL_CYCLE - 1) * (last - first)
+    if lines:
+        lo, hi = _L_EVEN[1], _L_ODD[0]
+        lightness = _LINE_L[0] + (lightness - lo) / (hi - lo) * (_LINE_L[1] - _LINE_L[0])
+    return lightness, _CHROMA, hue
 
-    Hue by the sign of k, lightness by |k| (Oklab L from 0.90 at |k| = 1 down by
-    0.55/max(K − 1, 3) per well, K the figure's largest |k|: to 0.35 at |k| = K when K ≥ 4),
-    k = 0 green, the
-    running basin neutral grey, no label white: so +k and −k are one pair, a light and a
-    dark band are near and far wells, and the colours stay apart for colour-blind readers
-    (deuteranopia, protanopia: the warm and the cool side differ along blue–yellow). The
-    palette depends on the figure's largest |k| only; the maps, ``atlas orbit``'s figure,
-    the curves and the page all take their colours from here. ``lines``: the same scheme
-    darker (L from 0.80 to 0.30), for thin lines and markers on a white page (the curves),
-    where the lightest map colours would vanish."""
-    ks = [int(k) for k in ks]
-    far = max([abs(k) for k in ks] + [1])
-    near_l, far_l = (_L_NEAR_LINES, _L_FAR_LINES) if lines else (_L_NEAR, _L_FAR)
-    colours: dict[int | str, str] = {}
-    for k in ks:
-        if k == 0:
-            colours[k] = _oklch_hex(0.60 if lines else _ZERO_LCH[0], *_ZERO_LCH[1:])
-            continue
-        t = (abs(k) - 1) / max(far - 1, 3)
-        hues = _HUE_POSITIVE if k > 0 else _HUE_NEGATIVE
-        colours[k] = _oklch_hex(near_l - t * (near_l - far_l), _CHROMA,
-                                hues[0] + t * (hues[1] - hues[0]))
+
+#: The palette's tables, computed once: ("zero", "positive", "negative") → "#rrggbb" of k = 0
+#: and of k = ±1 … ±WELL_CYCLE, for maps (False) and for lines (True).
+_TABLES = {lines: {"zero": _oklch_hex(*_well_lch(0, lines)),
+                   "positive": [_oklch_hex(*_well_lch(j, lines))
+                                for j in range(1, WELL_CYCLE + 1)],
+                   "negative": [_oklch_hex(*_well_lch(-j, lines))
+                                for j in range(1, WELL_CYCLE + 1)]}
+           for lines in (False, True)}
+
+
+def well_palette(lines: bool = False) -> dict:
+    """The palette as tables, for the page (which looks a colour up as :func:`well_colour`
+    does, never computing one): {"zero": "#rrggbb", "positive": [k = 1 … WELL_CYCLE],
+    "negative": [k = −1 … −WELL_CYCLE], "cycle": WELL_CYCLE}."""
+    table = _TABLES[lines]
+    return {"zero": table["zero"], "positive": list(table["positive"]),
+            "negative": list(table["negative"]), "cycle": WELL_CYCLE}
+
+
+def well_colour(k: int, lines: bool = False) -> str:
+    """The colour ("#rrggbb") of well k: a function of k alone, the same in every figure and
+    on the page (module notes above: hue by sign, lightness alternating with the parity of k,
+    repeating every WELL_CYCLE wells on each side). ``lines``: the same hues darker, for
+    thin lines and markers on a white page, where the light map colours would vanish."""
+    k, table = int(k), _TABLES[lines]
+    if k == 0:
+        return table["zero"]
+    return table["positive" if k > 0 else "negative"][(abs(k) - 1) % WELL_CYCLE]
+
+
+def basin_colours(ks, running: bool = False, lines: bool = False) -> dict[int | str, str]:
+    """The colour ("#rrggbb") of each well k in ``ks`` (:func:`well_colour`: the same
+    whatever else the figure holds), of "none" (no certified label: white) and, with
+    ``running``, of "running" (the running basin: neutral grey); ``lines`` as
+    :func:`well_colour`. The maps, ``atlas orbit``'s figure, the curves and the page all
+    take their colours from here."""
+    colours: dict[int | str, str] = {int(k): well_colour(k, lines) for k in ks}
     if running:
-        colours["running"] = _oklch_hex(0.45, 0.0, 0.0) if lines else RUNNING_COLOR_HEX
+        colours["running"] = RUNNING_LINE_COLOR_HEX if lines else RUNNING_COLOR_HEX
     colours["none"] = NO_LABEL_COLOR
     return colours
 
 
-#: The running basin's colour: a neutral grey, "#rrggbb".
+#: The running basin's colour: a neutral grey, "#rrggbb" (and, darker, as a line).
 RUNNING_COLOR_HEX = _oklch_hex(_RUNNING_L, 0.0, 0.0)
+RUNNING_LINE_COLOR_HEX = _oklch_hex(_RUNNING_LINE_L, 0.0, 0.0)
+
+#: The colour maps of the two continuous maps, the PNGs' and the page's alike: t_trap
+#: (plasma) and the boundary distance (viridis), two perceptually uniform sequential maps of
+#: matplotlib (van der Walt and Smith, 2015) that stay readable to colour-blind readers and
+#: whose ends (dark blue-violet, yellow) are neither "no value" white nor the running grey;
+#: two different maps, so that the two quantities are not read one for the other.
+T_TRAP_CMAP, DISTANCE_CMAP = "plasma", "viridis"
+#: The distance map's colour for a state closer than d_cert to a boundary (its label
+#: certified for the RK4 map only): black, below the scale's dark end.
+NEAR_BOUNDARY_COLOR = "#000000"
+
+
+def colormap_table(name: str, n: int = 256) -> list[str]:
+    """The matplotlib colour map ``name`` sampled at n equally spaced points, "#rrggbb" from
+    its low end to its high end: what the page interpolates (linearly) so that its layers
+    show the PNGs' colours."""
+    from matplotlib import colormaps
+    from matplotlib.colors import to_hex
+
+    cmap = colormaps[name]
+    return [to_hex(cmap(i / (n - 1))) for i in range(n)]
 
 
 def pi_label(n: int, halves: bool = False) -> str:
@@ -197,24 +262,31 @@ def point_title(point: dict[str, float]) -> str:
     return text + (f", τ = {torque:g} rad/s²" if torque else "")
 
 
-def critical_point_markers(ax, theta, is_saddle, tilted: bool = False,
-                           on_map: bool = False) -> None:
-    """Mark the critical points (θ [rad], 0) on the θ axis: attractors (2πk, 0) as black
-    dots, saddles ((2j+1)π, 0) as open red circles (essay Figure 9), labelled for the
-    legend; ``on_map``: over a basin map, where they must show on every basin colour, the
-    dots ringed in white and the saddles open black circles filled white; ``tilted``: a
-    pendulum with torque, whose rest states sit at θ* + 2πk, θ* = asin(τ/ω0²), and saddles
-    at π − θ* + 2πk."""
+#: The one look of a saddle in every figure and on the page (maps, ``atlas orbit``'s figure,
+#: the essay's Figure 9): an open circle, black edge, white inside, so that it shows on every
+#: basin colour and on a white page alike; matplotlib ``plot`` keywords (sizes in points).
+SADDLE_MARKER = {"marker": "o", "ms": 7.0, "mfc": "white", "mec": "black", "mew": 1.5,
+                 "ls": "none"}
+#: The one look of an attractor (a rest state): a black dot ringed in white.
+ATTRACTOR_MARKER = {"marker": "o", "ms": 6.0, "mfc": "black", "mec": "white", "mew": 1.0,
+                    "ls": "none"}
+
+
+def critical_point_markers(ax, theta, is_saddle, tilted: bool = False) -> None:
+    """Mark the critical points (θ [rad], 0) on the θ axis: attractors (2πk, 0) as
+    ATTRACTOR_MARKER, saddles ((2j+1)π, 0) as SADDLE_MARKER (the same on a basin map and on
+    a white page), labelled for the legend, drawn whole where they sit on the frame (the
+    saddles ±3π of the default window: ``clip_on`` off); ``tilted``: a pendulum with torque,
+    whose rest states sit at θ* + 2πk, θ* = asin(τ/ω0²), and saddles at π − θ* + 2πk."""
     theta, is_saddle = np.asarray(theta, float), np.asarray(is_saddle, bool)
-    if (~is_saddle).any():  # none in a narrow window: no legend entry for what is not there
-        ax.plot(theta[~is_saddle], np.zeros((~is_saddle).sum()), "o", color="black",
-                mec="white" if on_map else "black", ms=6 if on_map else 5, zorder=5,
-                label="attractors (θ* + 2πk, 0)" if tilted else "attractors (2πk, 0)")
-    if is_saddle.any():
-        ax.plot(theta[is_saddle], np.zeros(is_saddle.sum()), "o",
-                mfc="white" if on_map else "none", mec="black" if on_map else "red", mew=1.5,
-                ms=7, zorder=5,
-                label="saddles (π − θ* + 2πk, 0)" if tilted else "saddles ((2j+1)π, 0)")
+    for chosen, style, label in (
+            (~is_saddle, ATTRACTOR_MARKER,
+             "attractors (θ* + 2πk, 0)" if tilted else "attractors (2πk, 0)"),
+            (is_saddle, SADDLE_MARKER,
+             "saddles (π − θ* + 2πk, 0)" if tilted else "saddles ((2j+1)π, 0)")):
+        if chosen.any():  # none in a narrow window: no legend entry for what is not there
+            ax.plot(theta[chosen], np.zeros(chosen.sum()), **style, zorder=5, clip_on=False,
+                    label=label)
 
 
 def axes(ax, size: tuple[float, float]):

@@ -71,13 +71,18 @@ def test_bands_are_named_past_sixteen_wells_and_not_before():
                 assert np.all(k[int(round(row))] == j), name
 
 
+#: The title line of a parameter point, as :func:`atlas.views.style.point_title` writes it.
+POINT = "α = 0.35 s⁻¹, ω0 = 1 rad/s"
+
+
 def _distance_scene(d_cert):
     """The distance to the line θ̇ = 0.5 of a 200 × 200 grid of the unit square (exact:
     |θ̇ − 0.5|), its boundary drawn."""
     grid = np.linspace(0.0, 1.0, 200)
     d = np.abs(grid[:, None] - 0.5) * np.ones((1, 200))
     return {"grid": (grid, grid), "image": (d, d[d > 0].min(), d.max()),
-            "separatrices": [(grid, np.full(200, 0.5))], "d_cert": d_cert}
+            "separatrices": [(grid, np.full(200, 0.5))], "d_cert": d_cert,
+            "point": POINT}
 
 
 def test_the_distance_scale_spreads_its_values():
@@ -95,15 +100,17 @@ def test_the_distance_scale_spreads_its_values():
     assert "percentile" in label and "rad-ish" not in label and "Euclidean" in label
 
 
-def test_the_distance_title_says_what_white_means():
-    """d_cert measured and met: white is closer than d_cert; not met: none is; not
-    measured: said so, never "closer than d_cert not measured"."""
+def test_the_distance_title_says_what_black_means():
+    """d_cert measured and met: black is closer than d_cert (white is "no label" on every
+    map); not met: none is; not measured: said so, never "closer than d_cert not
+    measured"."""
     titles = {}
     for name, d_cert in (("met", 0.01), ("none", 1e-9), ("nan", float("nan"))):
         ax = Figure(figsize=MAP_SIZE).add_subplot()
         maps._draw_boundary_distance(ax, **_distance_scene(d_cert))
         titles[name] = ax.get_title()
-    assert "white: closer than d_cert = 1.0e-02" in titles["met"]
+    assert "black: closer than d_cert = 1.0e-02" in titles["met"]
+    assert all(POINT in title for title in titles.values())
     assert "none closer than d_cert = 1.0e-09" in titles["none"]
     assert "d_cert not measured" in titles["nan"] and "closer than" not in titles["nan"]
 
@@ -114,9 +121,10 @@ def test_the_trap_time_map_says_running_orbits_are_certified_too():
     grid = np.linspace(0.0, 1.0, 20)
     t = np.outer(grid, grid) * 10
     ax = Figure(figsize=MAP_SIZE).add_subplot()
-    maps._draw_trap_time(ax, (grid, grid), (t, 0.01, 10.0), [])
+    maps._draw_trap_time(ax, (grid, grid), (t, 0.01, 10.0), [], POINT)
     assert "running" in ax.figure.axes[-1].get_ylabel()
     assert "no label" in ax.get_title() and "never" not in ax.get_title()
+    assert POINT in ax.get_title()
 
 
 def test_band_names_keep_off_the_rest_states_and_saddles():
@@ -134,3 +142,43 @@ def test_band_names_keep_off_the_rest_states_and_saddles():
     v = {t.get_text(): t.get_position()[1] for t in ax.texts}["k = 0"]
     assert abs(v) > 0.06 * (theta_dot[-1] - theta_dot[0])
     assert np.all(k[int(round(v + zero))] == 0)
+
+
+def test_the_trap_time_map_draws_t0_at_its_dark_end_and_no_label_white():
+    """t_trap = 0 (certified at once) is the colour map's own dark end, not a grey like the
+    running basin's; no certified label (NaN) is white, as on the basin map."""
+    from matplotlib import colormaps
+    from matplotlib.colors import to_rgba
+
+    from atlas.views.style import NO_LABEL_COLOR, T_TRAP_CMAP
+
+    grid = np.linspace(0.0, 1.0, 4)
+    t = np.array([[0.0, 1.0, 10.0, np.nan]] * 4)
+    ax = Figure(figsize=MAP_SIZE).add_subplot()
+    maps._draw_trap_time(ax, (grid, grid), (t, 1.0, 10.0), [], POINT)
+    image = ax.images[0]
+    drawn = image.to_rgba(image.get_array())[0]
+    np.testing.assert_allclose(drawn[0], colormaps[T_TRAP_CMAP](0.0))
+    np.testing.assert_allclose(drawn[2], colormaps[T_TRAP_CMAP](1.0))
+    np.testing.assert_allclose(drawn[3], to_rgba(NO_LABEL_COLOR))
+
+
+def test_the_distance_map_draws_near_states_black_and_missing_ones_white():
+    """Closer than d_cert: NEAR_BOUNDARY_COLOR (black) over the map; no distance stored: the
+    "no label" white, never the running basin's grey."""
+    from matplotlib.colors import to_rgba
+
+    from atlas.views.style import NEAR_BOUNDARY_COLOR, NO_LABEL_COLOR
+
+    scene = _distance_scene(0.01)
+    d = scene["image"][0].copy()
+    d[:5] = np.nan
+    scene["image"] = (d, *scene["image"][1:])
+    ax = Figure(figsize=MAP_SIZE).add_subplot()
+    maps._draw_boundary_distance(ax, **scene)
+    base, near = ax.images
+    np.testing.assert_allclose(base.to_rgba(base.get_array())[0, 0], to_rgba(NO_LABEL_COLOR))
+    rows = np.flatnonzero(d[:, 0] <= 0.01)
+    np.testing.assert_allclose(near.to_rgba(near.get_array())[rows[0], 0],
+                               to_rgba(NEAR_BOUNDARY_COLOR))
+    assert "white: no distance stored" in ax.get_title()

@@ -98,6 +98,28 @@ def test_one_colour_key_for_every_panel_distinct_per_well(alpha_atlas):
     assert len({palette[w] for w in wells}) == len(wells)
 
 
+@pytest.mark.parametrize("figure", ["trap_time", "boundary_distance", "basin"])
+def test_each_map_of_a_parameter_atlas_names_its_point(alpha_atlas, figure):
+    """The t_trap and distance maps of each α (and the basin map) say which α they show:
+    every α's value is in its own map's title, and in no other's."""
+    from atlas.layout import points
+    from atlas.views.maps import MAP_FIGURES
+    from atlas.views.selectors import point_index
+
+    read, draw = MAP_FIGURES[figure]
+    titles = []
+    with atlas.open(alpha_atlas) as tree:
+        ds = tree.to_dataset(inherit=False)
+        for point in points(ds):
+            ax = Figure().add_subplot()
+            draw(ax, **read(tree, None, **point_index(ds, point)))
+            titles.append(ax.get_title())
+    for alpha, title in zip(ALPHAS, titles):
+        named = [a for a in ALPHAS if f"α = {a:g} s⁻¹" in title]
+        assert named == [alpha], title
+        assert "ω0 = 1 rad/s" in title
+
+
 def test_the_running_basin_has_one_colour_across_panels(torque_atlas):
     """τ = 0 has wells and no running basin, τ = 1.5 only the running basin: its panel is
     drawn in the key's "running" colour everywhere the file says running."""

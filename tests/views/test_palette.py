@@ -1,102 +1,174 @@
-"""The basin palette (atlas.views.style.basin_colours): every basin of a figure a colour of its
-own, far apart in CAM02-UCS (colorspacious, an implementation independent of the Oklab
-arithmetic the palette is built with), also as readers with deuteranopia or protanopia see it
-(the Machado, Oliveira & Fernandes 2009 simulation, at full severity); ±k paired by hue,
-|k| by lightness."""
+"""The basin palette (atlas.views.style.well_colour, basin_colours): the colour of a well is a
+function of k alone, the same in every figure; neighbouring wells far apart and every well
+of a figure distinct, in CAM02-UCS (colorspacious, an implementation independent of the
+Oklab arithmetic the palette is built with), also as readers with deuteranopia or protanopia
+see it (the Machado, Oliveira & Fernandes 2009 simulation, at full severity); ±k paired by
+hue, neighbours told apart by lightness. And the colour maps of the t_trap and distance maps,
+whose colours cannot be taken for the special ones (no label, running, closer than d_cert)."""
 
 import colorspacious  # a dev dependency (pyproject.toml): CAM02-UCS and CVD simulation
 import numpy as np
 import pytest
 
-from atlas.views.style import NO_LABEL_COLOR, basin_colours
+from atlas.views.style import (
+    DISTANCE_CMAP,
+    NEAR_BOUNDARY_COLOR,
+    NO_LABEL_COLOR,
+    RUNNING_COLOR_HEX,
+    T_TRAP_CMAP,
+    WELL_CYCLE,
+    basin_colours,
+    colormap_table,
+    well_colour,
+)
 
 #: Colour-vision simulations: (name, colorspacious CVD space or None for normal vision).
 VISIONS = [("normal", None)] + [
     (kind, {"name": "sRGB1+CVD", "cvd_type": kind, "severity": 100})
     for kind in ("deuteranomaly", "protanomaly")]
-#: The least CAM02-UCS ΔE required between two basins of one figure, for up to 9 wells
-#: (K ≤ 4 per side: wells −K … K, the running basin, no label) and for 11 to 31 (K ≤ 15): a
-#: ΔE of about 1 is a just noticeable difference of two patches side by side, 3.5 plainly
-#: visible; past 16 wells the map also names each band. The palette reaches, maps (lines):
-#: normal 24.5 (24.0) up to K = 4 and 5.1 (5.0) up to K = 15, deuteranopia 16.8 (15.6) and
-#: 4.1 (3.8), protanopia 9.8 (10.7) and 5.0 (4.5).
-LEAST_DELTA_E = {"normal": (20.0, 4.5), "deuteranomaly": (14.0, 3.5),
-                 "protanomaly": (8.0, 3.5)}
+#: The least CAM02-UCS ΔE between two neighbouring wells k, k + 1 (whose bands touch on every
+#: map), in every vision: a ΔE of about 1 is a just noticeable difference of two patches side
+#: by side, 3.5 plainly visible; the old palette, which spread its lightness over the
+#: figure's wells, left neighbours about 5 apart with 27 wells. The palette reaches 27 (maps)
+#: and 32 (lines), under protanopia.
+LEAST_NEIGHBOUR_DELTA_E = 20.0
+#: The least ΔE between any two basins of a figure (wells −WELL_CYCLE … WELL_CYCLE, the
+#: running basin, no label): distinct, if not neighbours. The palette reaches, maps (lines):
+#: normal 6.3 (6.8), deuteranopia 3.9 (3.6), protanopia 5.6 (4.9).
+LEAST_DELTA_E = {"normal": 4.5, "deuteranomaly": 3.5, "protanomaly": 3.5}
 
 
-def _rgb(colours: dict) -> tuple[list, np.ndarray]:
-    keys = list(colours)
-    return keys, np.array([[int(colours[k][i:i + 2], 16) / 255 for i in (1, 3, 5)]
-                           for k in keys])
+def _rgb(colours: list[str]) -> np.ndarray:
+    return np.array([[int(c[i:i + 2], 16) / 255 for i in (1, 3, 5)] for c in colours])
 
 
-def _ucs(rgb: np.ndarray, cvd) -> np.ndarray:
-    """CAM02-UCS (J', a', b') of sRGB colours (0…1), as a reader with ``cvd`` sees them."""
+def _ucs(colours: list[str], cvd) -> np.ndarray:
+    """CAM02-UCS (J', a', b') of "#rrggbb" colours, as a reader with ``cvd`` sees them."""
+    rgb = _rgb(colours)
     if cvd is not None:
         rgb = np.clip(colorspacious.cspace_convert(rgb, cvd, "sRGB1"), 0, 1)
     return colorspacious.cspace_convert(rgb, "sRGB1", "CAM02-UCS")
 
 
-def _least_distance(colours: dict, cvd) -> tuple[float, tuple]:
-    keys, rgb = _rgb(colours)
-    ucs = _ucs(rgb, cvd)
-    d = np.sqrt(((ucs[:, None] - ucs[None]) ** 2).sum(-1))
-    np.fill_diagonal(d, np.inf)
-    i, j = np.unravel_index(d.argmin(), d.shape)
-    return float(d[i, j]), (keys[i], keys[j])
+def _distances(colours: list[str], cvd) -> np.ndarray:
+    ucs = _ucs(colours, cvd)
+    return np.sqrt(((ucs[:, None] - ucs[None]) ** 2).sum(-1))
+
+
+@pytest.mark.parametrize("lines", [False, True], ids=["maps", "lines"])
+def test_a_wells_colour_is_the_same_whatever_the_figure_holds(lines):
+    """The colour of k does not depend on the other wells of the figure (the 11-α atlas
+    drew k = +2 pale gold, the default map orange)."""
+    everything = basin_colours(range(-60, 61), running=True, lines=lines)
+    for ks in ([2], range(-2, 3), range(-13, 14), range(-1, 14), [-7, 0, 30], range(0, 60)):
+        colours = basin_colours(ks, running=True, lines=lines)
+        assert all(colours[k] == everything[k] == well_colour(k, lines) for k in ks), ks
+        assert colours["running"] == everything["running"]
 
 
 @pytest.mark.parametrize("lines", [False, True], ids=["maps", "lines"])
 @pytest.mark.parametrize("vision, cvd", VISIONS, ids=[v for v, _ in VISIONS])
-def test_every_basin_of_a_figure_is_far_from_every_other(vision, cvd, lines):
-    """1 to 31 wells, with the running basin and "no label": no two share a colour, and
-    every pair is at least LEAST_DELTA_E apart (CAM02-UCS), for every vision."""
-    for far in range(0, 16):
-        colours = basin_colours(range(-far, far + 1), running=True, lines=lines)
-        assert len(colours) == 2 * far + 3 and len(set(colours.values())) == len(colours)
-        least, pair = _least_distance(colours, cvd)
-        assert least >= LEAST_DELTA_E[vision][far > 4], (far, pair, least)
+def test_neighbouring_wells_are_far_apart(vision, cvd, lines):
+    """k and k + 1 for every k in −40 … 40 (through 0 and through the palette's repeat at
+    ±WELL_CYCLE): at least LEAST_NEIGHBOUR_DELTA_E apart, for every vision."""
+    ks = range(-40, 41)
+    d = _distances([well_colour(k, lines) for k in ks], cvd)
+    steps = np.diagonal(d, offset=1)
+    worst = int(steps.argmin())
+    assert steps.min() >= LEAST_NEIGHBOUR_DELTA_E, (ks[worst], ks[worst + 1], steps.min())
 
 
-def test_a_figure_of_wells_on_one_side_only_is_distinct_too():
-    """An asymmetric window (wells −1 … 13, as a torque map may show): still distinct."""
-    colours = basin_colours(range(-1, 14), running=True)
-    for _, cvd in VISIONS:
-        assert _least_distance(colours, cvd)[0] >= 4.0
+@pytest.mark.parametrize("lines", [False, True], ids=["maps", "lines"])
+@pytest.mark.parametrize("vision, cvd", VISIONS, ids=[v for v, _ in VISIONS])
+def test_every_basin_of_a_figure_is_distinct(vision, cvd, lines):
+    """The wells −WELL_CYCLE … WELL_CYCLE, the running basin and "no label": no two share a
+    colour, every pair at least LEAST_DELTA_E apart."""
+    colours = basin_colours(range(-WELL_CYCLE, WELL_CYCLE + 1), running=True, lines=lines)
+    keys = list(colours)
+    assert len(set(colours.values())) == len(colours) == 2 * WELL_CYCLE + 3
+    d = _distances(list(colours.values()), cvd)
+    np.fill_diagonal(d, np.inf)
+    i, j = np.unravel_index(d.argmin(), d.shape)
+    assert d[i, j] >= LEAST_DELTA_E[vision], (keys[i], keys[j], d[i, j])
+
+
+def test_the_palette_repeats_every_cycle_on_each_side():
+    """Past ±WELL_CYCLE the sequence starts again (so that a map of any width has colours),
+    the sign's hue family kept: the key and the band names tell such wells apart."""
+    for k in range(1, 3 * WELL_CYCLE):
+        assert well_colour(k + WELL_CYCLE) == well_colour(k)
+        assert well_colour(-k - WELL_CYCLE) == well_colour(-k)
+    assert well_colour(1) != well_colour(-1)
 
 
 @pytest.mark.parametrize("vision, cvd", VISIONS[:2], ids=["normal", "deuteranomaly"])
-def test_sign_is_the_hue_and_distance_the_lightness(vision, cvd):
+def test_sign_is_the_hue_and_parity_the_lightness(vision, cvd):
     """Hue by sign: a line through grey in the (a', b') plane of CAM02-UCS parts the wells
     k > 0 from the wells k < 0, every one more than 3 from it (also as a deuteranope sees
-    them); lightness by |k|: J' falls as |k| grows, on each side; a pair ±k is closer in
-    lightness than half the step to the next pair."""
-    far = 10
-    keys, rgb = _rgb(basin_colours(range(-far, far + 1)))
-    ucs = dict(zip(keys, _ucs(rgb, cvd)))
-    positive = np.array([ucs[k][1:] for k in range(1, far + 1)])
-    negative = np.array([ucs[-k][1:] for k in range(1, far + 1)])
+    them); lightness by parity: every odd |k| lighter than every even |k| (neighbours differ
+    most in what every reader sees), lighter still the nearer the well within a parity; a
+    pair ±j closer in lightness than half the step to the next well."""
+    ks = range(-WELL_CYCLE, WELL_CYCLE + 1)
+    ucs = dict(zip(ks, _ucs([well_colour(k) for k in ks], cvd)))
+    positive = np.array([ucs[k][1:] for k in range(1, WELL_CYCLE + 1)])
+    negative = np.array([ucs[-k][1:] for k in range(1, WELL_CYCLE + 1)])
     across = positive.mean(axis=0) - negative.mean(axis=0)
     across /= np.hypot(*across)
     assert (positive @ across).min() > 3 and (negative @ across).max() < -3
     for sign in (1, -1):
-        lightness = [ucs[sign * j][0] for j in range(1, far + 1)]
-        assert np.all(np.diff(lightness) < 0)
-    if cvd is None:  # a pair ±j is closer in lightness than half the step to the next pair
-        assert all(abs(ucs[j][0] - ucs[-j][0]) < 0.5 * (ucs[j][0] - ucs[j + 1][0])
-                   for j in range(1, far))
+        odd = [ucs[sign * j][0] for j in range(1, WELL_CYCLE + 1, 2)]
+        even = [ucs[sign * j][0] for j in range(2, WELL_CYCLE + 1, 2)]
+        assert min(odd) > max(even)
+        assert np.all(np.diff(odd) < 0) and np.all(np.diff(even) < 0)
+    if cvd is None:
+        assert all(abs(ucs[j][0] - ucs[-j][0]) < 0.5 * abs(ucs[j][0] - ucs[j + 1][0])
+                   for j in range(1, WELL_CYCLE))
 
 
 def test_running_is_neutral_grey_and_no_label_white():
     colours = basin_colours([-1, 0, 1], running=True)
     r, g, b = (int(colours["running"][i:i + 2], 16) for i in (1, 3, 5))
     assert r == g == b and 60 < r < 200
+    assert colours["running"] == RUNNING_COLOR_HEX
     assert colours["none"] == NO_LABEL_COLOR == "#ffffff"
     assert "running" not in basin_colours([0])
 
 
-def test_the_basin_map_draws_with_the_palette(tmp_path):
-    """The colours the basin map's image shows are basin_colours' of its wells."""
+@pytest.mark.parametrize("name", [T_TRAP_CMAP, DISTANCE_CMAP])
+@pytest.mark.parametrize("vision, cvd", VISIONS, ids=[v for v, _ in VISIONS])
+def test_the_colour_maps_cannot_be_taken_for_the_special_colours(name, vision, cvd):
+    """Every colour of the t_trap and distance maps is far (ΔE ≥ 20) from "no label" white
+    and from the d_cert black; their ends (the lowest and highest tenth, where t = 0 and the
+    longest times sit) far from the running basin's grey (magma's pale top looked white;
+    t = 0 was drawn in a grey like the running basin's)."""
+    table = colormap_table(name)
+    ucs = _ucs(table, cvd)
+    special = _ucs([NO_LABEL_COLOR, NEAR_BOUNDARY_COLOR, RUNNING_COLOR_HEX], cvd)
+    d = np.sqrt(((ucs[:, None] - special[None]) ** 2).sum(-1))
+    assert d[:, :2].min() >= 20.0, d[:, :2].min(axis=0)
+    tenth = len(table) // 10
+    assert np.r_[d[:tenth, 2], d[-tenth:, 2]].min() >= 20.0
+    assert T_TRAP_CMAP != DISTANCE_CMAP  # two quantities, two maps
+
+
+def test_the_colour_map_tables_are_matplotlibs():
+    """The page's tables sample the PNGs' colour maps at their ends and evenly between."""
+    from matplotlib import colormaps
+    from matplotlib.colors import to_hex
+
+    for name in (T_TRAP_CMAP, DISTANCE_CMAP):
+        table = colormap_table(name)
+        assert len(table) == 256
+        assert table[0] == to_hex(colormaps[name](0.0))
+        assert table[-1] == to_hex(colormaps[name](1.0))
+        assert table[100] == to_hex(colormaps[name](100 / 255))
+
+
+@pytest.mark.parametrize("wells", [(-2, 2), (-13, 13), (2, 5)], ids=str)
+def test_the_basin_map_draws_each_well_in_its_own_colour(wells):
+    """The colours the basin map's image shows are well_colour's of each k, whatever range
+    of wells the map holds (a planted palette that spreads its colours over the map's wells
+    draws k = 2 differently in the three maps)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -104,14 +176,13 @@ def test_the_basin_map_draws_with_the_palette(tmp_path):
 
     from atlas.views.maps import _draw_basin
 
-    k = np.array([[-2.0, -1.0, 0.0], [1.0, 2.0, np.nan]])
-    fig = Figure()
-    ax = fig.add_subplot()
-    _draw_basin(ax, (np.arange(3.0), np.arange(2.0)), (k, -2, 2, False), [], None, None, "t")
+    kmin, kmax = wells
+    k = np.array([[kmin, 2.0, kmax], [kmax, 2.0, np.nan]])
+    ax = Figure().add_subplot()
+    _draw_basin(ax, (np.arange(3.0), np.arange(2.0)), (k, kmin, kmax, False), [], None, None,
+                "t")
     image = ax.images[0]
     drawn = image.to_rgba(image.get_array(), bytes=True)[..., :3]
-    palette = basin_colours(range(-2, 3))
     for (r, c), well in np.ndenumerate(k):
-        hex_colour = palette["none" if np.isnan(well) else int(well)]
-        expected = [int(hex_colour[i:i + 2], 16) for i in (1, 3, 5)]
-        np.testing.assert_array_equal(drawn[r, c], expected)
+        colour = NO_LABEL_COLOR if np.isnan(well) else well_colour(int(well))
+        np.testing.assert_array_equal(drawn[r, c], _rgb([colour])[0] * 255)

@@ -110,7 +110,8 @@ def test_view_cli(files, tmp_path, capsys):
     assert main(["view", str(files["single"]), "-o", str(out)]) == 0
     assert out.stat().st_size > 0 and f"wrote {out}" in capsys.readouterr().out
     for args, fragment in ((["view", str(tmp_path / "missing.h5")], "missing.h5: no such file"),
-                           (["view", str(out)], "not an atlas file"),
+                           (["view", str(out), "-o", str(tmp_path / "other.html")],
+                            "not an atlas file"),
                            (["view", str(files["single"]), "-o", str(tmp_path)], "directory"),
                            (["view", str(files["single"]), "-o", str(tmp_path / "x" / "p.html")],
                             "not a directory")):
@@ -275,6 +276,69 @@ def test_parameter_slider(files, browser):
         browser.click(xy["x"], xy["y"])
         r = _readout(browser)
         assert r["point"] == str(a) and int(r["orbitK"]) == int(k[a, j, i]) == int(r["gridK"])
+
+
+@needs_browser
+def test_the_page_draws_in_the_pngs_colours(files, browser):
+    """The page's colour of every well k (−40 … 40, through the palette's repeat) is the
+    PNGs' well_colour(k), its key's swatches too; its time and distance layers use the PNGs'
+    colour maps (at the nodes of their tables, exactly)."""
+    from matplotlib import colormaps
+
+    from atlas.views.style import DISTANCE_CMAP, T_TRAP_CMAP, well_colour
+
+    _open(browser, files["pages"]["sweep"])
+    page = browser.evaluate("[...Array(81).keys()].map((i) => atlasView.wellColour(i - 40))")
+    assert page == [well_colour(k) for k in range(-40, 41)]
+    swatches = browser.evaluate("""[...document.querySelectorAll('#key .item')]
+        .filter((e) => e.dataset.k !== undefined).map((e) => [Number(e.dataset.k),
+        getComputedStyle(e.querySelector('.swatch')).backgroundColor])""")
+    assert swatches and all(
+        colour == "rgb({}, {}, {})".format(*(int(well_colour(k)[i:i + 2], 16) for i in (1, 3, 5)))
+        for k, colour in swatches)
+    nodes = [0, 37, 128, 200, 255]
+    for layer, name in (("t_trap", T_TRAP_CMAP), ("distance", DISTANCE_CMAP)):
+        drawn = browser.evaluate(f"{nodes}.map((i) => atlasView.scaleColour('{layer}', i / 255))")
+        assert drawn == [[round(255 * c) for c in colormaps[name](i / 255)[:3]] for i in nodes]
+    assert browser.errors == []
+
+
+@needs_browser
+def test_a_saddle_on_the_windows_edge_is_drawn_whole(files, browser):
+    """The saddle at θ = 3π sits on the right edge of the default window: its ring shows
+    beside the frame too (it was clipped to the plot, half of it gone)."""
+    _open(browser, files["pages"]["single"])
+    pixel = browser.evaluate("""(() => {
+        const xy = atlasView.clientXY(3 * Math.PI, 0), c = document.getElementById('map');
+        const b = c.getBoundingClientRect(), dpr = window.devicePixelRatio || 1;
+        const ring = 3.5 * 4 / 3;  // SADDLE_MARKER: 7 pt across, 1 pt = 4/3 px
+        const x = (xy.x - b.left + ring) * dpr, y = (xy.y - b.top) * dpr;
+        return { frame: atlasView.drawn().right, x: xy.x - b.left + ring,
+                 rgba: [...c.getContext('2d').getImageData(x, y, 1, 1).data] }; })()""")
+    assert pixel["x"] > pixel["frame"] + 1  # beside the frame, outside the plot
+    assert pixel["rgba"][3] == 255 and max(pixel["rgba"][:3]) < 100, pixel
+    assert browser.errors == []
+
+
+@needs_browser
+def test_at_900_by_700_the_controls_and_side_panel_are_on_screen(files, browser):
+    """A 900 × 700 window (a projector, a small laptop): the parameter slider, the layer
+    switch and the orbit form, the map, and the side panel (the readout and the pendulum)
+    are all within it, no scrolling, the side panel beside the map (it was below the
+    fold)."""
+    browser.page.set_viewport_size({"width": 900, "height": 700})
+    try:
+        _open(browser, files["pages"]["sweep"])
+        boxes = browser.evaluate("""Object.fromEntries(['controls', 'layers', 'goto', 'map',
+            'readout', 'pendulum'].map((id) => { const r = document.getElementById(id)
+            .getBoundingClientRect(); return [id, [r.left, r.top, r.right, r.bottom]]; }))""")
+        for name, (left, top, right, bottom) in boxes.items():
+            assert 0 <= left < right <= 900 and 0 <= top < bottom <= 700, (name, boxes)
+        assert boxes["readout"][0] >= boxes["map"][2]  # beside the map, not under it
+        assert browser.evaluate("document.documentElement.scrollWidth") <= 900
+    finally:
+        browser.page.set_viewport_size({"width": 1180, "height": 660})
+    assert browser.errors == []
 
 
 @needs_browser

@@ -23,9 +23,6 @@
   //: cross θ_cert (mod 2π) at speeds within SETTLE of each other (the cycle reached), as
   //: atlas.commands.orbit_integrate.integrate.
   const SETTLE = 1e-3, MIN_TURNS = 2;
-  // viridis at 0, 1/8, …, 1 (matplotlib's): the time and distance layers
-  const VIRIDIS = [[68, 1, 84], [71, 45, 123], [59, 82, 139], [44, 114, 142], [33, 145, 140],
-                   [40, 174, 128], [94, 201, 98], [173, 220, 48], [253, 231, 37]];
 
   const xOf = (th) => M.left + (th - A) / (B - A) * W;
   const yOf = (v) => M.top + H - (v - VA) / (VB - VA) * H;
@@ -44,6 +41,26 @@
     fix(th, fine ? Math.max(4, DT_DEC) : DT_DEC) + " rad, θ̇" + (dot ? "0" : "") + " = " +
     fix(v, fine ? Math.max(4, DV_DEC) : DV_DEC) + " rad/s";
   const inside = (th, v) => th >= A && th <= B && v >= VA && v <= VB;
+
+  // Every colour comes from atlas.views.style through the data (the PNGs' own): a well's
+  // colour is looked up in the palette's tables as well_colour does (a function of k alone,
+  // repeating every `cycle` wells on each side); the time and distance layers interpolate
+  // the PNGs' colour maps, given as equally spaced tables ("rrggbb" after "rrggbb").
+  const hexRgb = (c) => [1, 3, 5].map((i) => parseInt(c.slice(i, i + 2), 16));
+  function wellColour(k) {
+    const p = D.palette;
+    return k === 0 ? p.zero : (k > 0 ? p.positive : p.negative)[(Math.abs(k) - 1) % p.cycle];
+  }
+  const SCALES = {};
+  for (const [name, table] of Object.entries(D.colormaps)) {
+    SCALES[name] = Array.from({ length: table.length / 6 },
+                              (_, i) => hexRgb("#" + table.slice(6 * i, 6 * i + 6)));
+  }
+  function scaleColour(name, f) {
+    const t = SCALES[name], x = clamp(f, 0, 1) * (t.length - 1);
+    const i = Math.min(t.length - 2, Math.floor(x)), u = x - i;
+    return t[i].map((c, n) => Math.round(c + u * (t[i + 1][n] - c)));
+  }
 
   // θ drawn in the window: θ itself where it is inside, else shifted by a multiple of PERIOD
   // into it (the map's pictures repeat every 2π in θ, one well further per turn).
@@ -253,10 +270,6 @@
     const a = Math.abs(n) / x, b = d / x;
     return (n < 0 ? "−" : "") + (a === 1 ? "" : a) + "π" + (b === 1 ? "" : "/" + b);
   }
-  function colourOf(p, k) {
-    const i = p.key.wells.indexOf(k);
-    return i < 0 ? "#999" : p.key.colors[i];
-  }
   // An orbit's phase curve, θ wrapped into the window (the line breaks where it jumps).
   function drawPath(c, r, n, latest) {
     const path = r.path;
@@ -291,42 +304,48 @@
     }
   }
 
-  function viridis(f) {
-    const x = clamp(f, 0, 1) * 8, i = Math.min(7, Math.floor(x)), t = x - i;
-    return VIRIDIS[i].map((c, n) => Math.round(c + t * (VIRIDIS[i + 1][n] - c)));
-  }
-  // The time and distance layers: one pixel per grid point, on a log scale between the 1st
-  // and 99th percentiles of the stored values (so that the ridges and valleys use the whole
-  // scale); white where nothing is stored (not trapped; no distance).
+  // The time and distance layers: one pixel per grid point, in the PNGs' colour maps on a
+  // log scale between the 1st and 99th percentiles of the stored values above the floor (0;
+  // for the distance, d_cert where measured), so that the ridges and valleys use the whole
+  // scale: t_trap = 0 (certified at once) at the dark end, as in the PNG; the "no label"
+  // white where nothing is stored (no label certified; no distance); the PNG's d_cert colour
+  // where a state is closer than d_cert to a boundary.
   function layerImage(p, name) {
     p.layers = p.layers || {};
     if (p.layers[name]) return p.layers[name];
     const n = NT * NV, values = new Float64Array(n);
+    const floor = name === "distance" && p.d_cert !== null ? p.d_cert : 0;
     for (let m = 0; m < n; m++) {
       if (name === "t_trap") {
         const t = p.grid.trap[m];
-        values[m] = t === 0xFFFFFFFF ? NaN : Math.max(t, 1) * D.check_every * D.dt;
+        values[m] = t === 0xFFFFFFFF ? NaN : t * D.check_every * D.dt;
       } else {
         const q = p.grid.dist[m];
-        values[m] = q === 65535 || q === 0 ? NaN : 2 ** (q / D.dist_steps - D.dist_offset);
+        values[m] = q === 65535 ? NaN : q === 0 ? 0 : 2 ** (q / D.dist_steps - D.dist_offset);
       }
     }
-    const finite = Array.from(values).filter(Number.isFinite).map(Math.log10).sort((x, y) => x - y);
+    const finite = Array.from(values).filter((v) => v > floor).map(Math.log10)
+      .sort((x, y) => x - y);
     const q = (f) => finite[Math.min(finite.length - 1, Math.floor(f * finite.length))];
     let lo = finite.length ? q(0.01) : 0, hi = finite.length ? q(0.99) : 1;
     if (!(hi > lo)) { lo -= 0.5; hi += 0.5; }
     const canvas = document.createElement("canvas");
     canvas.width = NT; canvas.height = NV;
     const ctx = canvas.getContext("2d"), img = ctx.createImageData(NT, NV);
+    const blank = hexRgb(D.no_label_color), nearRgb = hexRgb(D.near_boundary_color);
+    let blanks = false, near = false;
     for (let j = 0; j < NV; j++) {
       for (let i = 0; i < NT; i++) {
         const val = values[j * NT + i], o = 4 * ((NV - 1 - j) * NT + i);
-        const rgb = Number.isFinite(val) ? viridis((Math.log10(val) - lo) / (hi - lo)) : [255, 255, 255];
+        let rgb;
+        if (Number.isNaN(val)) { rgb = blank; blanks = true; }
+        else if (floor > 0 && val <= floor) { rgb = nearRgb; near = true; }
+        else rgb = scaleColour(name, (Math.log10(val) - lo) / (hi - lo));
         img.data[o] = rgb[0]; img.data[o + 1] = rgb[1]; img.data[o + 2] = rgb[2]; img.data[o + 3] = 255;
       }
     }
     ctx.putImageData(img, 0, 0);
-    p.layers[name] = { canvas, lo, hi };
+    p.layers[name] = { canvas, lo, hi, blanks, near };
     return p.layers[name];
   }
 
@@ -344,6 +363,7 @@
       c.drawImage(layerImage(P, shown).canvas, M.left, M.top, W, H);
       $("map").dataset.drawn = shown;
     }
+    drawAxes(c);  // the frame under the markers that sit on it
     c.save();
     c.beginPath(); c.rect(M.left, M.top, W, H); c.clip();
     // the boundaries: full strength over the basins, faint over the time and distance layers
@@ -375,16 +395,8 @@
       }
       c.setLineDash([]);
     }
-    // critical points as the figures mark them: attractors black dots ringed in white,
-    // saddles open black circles, white inside (seen on every basin colour)
-    c.fillStyle = "#000"; c.strokeStyle = "#fff"; c.lineWidth = 1.5;
-    for (const t of P.attractors) {
-      c.beginPath(); c.arc(xOf(t), yOf(0), 4, 0, TWO_PI); c.fill(); c.stroke();
-    }
-    c.fillStyle = "#fff"; c.strokeStyle = "#000"; c.lineWidth = 1.8;
-    for (const t of P.saddles) {
-      c.beginPath(); c.arc(xOf(t), yOf(0), 5, 0, TWO_PI); c.fill(); c.stroke();
-    }
+    c.restore(); drawMarkers(c);  // under the orbits, over the frame
+    c.save(); c.beginPath(); c.rect(M.left, M.top, W, H); c.clip();
     drawn = { xmin: Infinity, xmax: -Infinity, thmin: Infinity, thmax: -Infinity,
               shifted: false, left: M.left, right: M.left + W, A, B, period: PERIOD };
     orbits.forEach((r, n) => drawPath(c, r, n + 1, n === orbits.length - 1));
@@ -402,7 +414,17 @@
       c.fillStyle = "#000"; c.fillText(text, x, y);
     }
     c.restore();
-    drawAxes(c);
+  }
+  // The critical points as every figure marks them (D.markers: atlas.views.style's), not
+  // clipped to the plot, so that a saddle on the window's edge (±3π) shows whole.
+  function drawMarkers(c) {
+    for (const [which, list] of [["attractor", P.attractors], ["saddle", P.saddles]]) {
+      const m = D.markers[which], px = 4 / 3;  // 1 pt = 4/3 CSS px
+      c.fillStyle = m.fill; c.strokeStyle = m.edge; c.lineWidth = m.width * px;
+      for (const t of list) {
+        c.beginPath(); c.arc(xOf(t), yOf(0), m.size * px / 2, 0, TWO_PI); c.fill(); c.stroke();
+      }
+    }
   }
   function drawAxes(c) {
     c.strokeStyle = "#333"; c.fillStyle = "#222"; c.lineWidth = 1;
@@ -464,7 +486,7 @@
   }
 
   const bobColor = (r) => (r && r.status === "running" ? D.running_color
-    : r && r.k !== null ? colourOf(P, r.k) : "#999");
+    : r && r.k !== null ? wellColour(r.k) : D.no_label_color);
   function drawPendulum(th, orbit) {
     const c = penCtx, cx = 110, cy = 100, r = 78;
     c.clearRect(0, 0, 220, 220);
@@ -523,8 +545,8 @@
       title.textContent = "Colour: the well k (rest state (" + (tilted ? "θ* + " : "") +
         "2πk, 0)) the orbit from each point reaches";
       colours.appendChild(title);
-      P.key.wells.forEach((k, i) => {
-        const s = item(colours, { kind: "fill", color: P.key.colors[i] }, "k = " + signed(k));
+      P.key.wells.forEach((k) => {
+        const s = item(colours, { kind: "fill", color: wellColour(k) }, "k = " + signed(k));
         s.dataset.k = String(k);
       });
       if (P.key.running) item(colours, { kind: "fill", color: D.running_color }, "running");
@@ -540,15 +562,24 @@
       bar.width = bw; bar.height = 12; bar.className = "bar";
       const bc = bar.getContext("2d");
       for (let x = 0; x < bw; x++) {
-        const [r, g, b] = viridis(x / (bw - 1));
+        const [r, g, b] = scaleColour(layer, x / (bw - 1));
         bc.fillStyle = "rgb(" + r + "," + g + "," + b + ")"; bc.fillRect(x, 0, 1, 12);
       }
       const lo = document.createElement("span"), hi = document.createElement("span");
       lo.textContent = "≤ " + sci(10 ** L.lo) + " "; hi.textContent = " ≥ " + sci(10 ** L.hi) +
         (layer === "t_trap" ? " s" : "");
       colours.append(lo, bar, hi);
-      item(colours, { kind: "fill", color: "#ffffff" }, layer === "t_trap" ? "not trapped"
-        : "no distance stored");
+      if (layer === "t_trap") {
+        colours.append(document.createTextNode(" (t = 0, certified at once: the dark end) "));
+      }
+      if (L.blanks) {
+        item(colours, { kind: "fill", color: D.no_label_color }, layer === "t_trap"
+          ? "no label certified by t_max" : "no distance stored");
+      }
+      if (L.near) {
+        item(colours, { kind: "fill", color: D.near_boundary_color }, "closer than d_cert = " +
+          sci(P.d_cert) + " (labels certified for the RK4 map only)");
+      }
     }
     key.appendChild(colours);
     const marks = document.createElement("div");
@@ -557,8 +588,10 @@
       item(marks, { kind: "line", color: layer === "basins" ? D.separatrix.color : "#999" },
            "separatrices (basin boundaries)" + (layer === "basins" ? "" : ", faint"));
     }
-    if (P.saddles.length) item(marks, { kind: "ring", color: "#000" }, "saddles");
-    if (P.attractors.length) item(marks, { kind: "dot", color: "#000" }, "attractors (rest states)");
+    if (P.saddles.length) item(marks, { kind: "ring", color: D.markers.saddle.edge }, "saddles");
+    if (P.attractors.length) {
+      item(marks, { kind: "dot", color: D.markers.attractor.fill }, "attractors (rest states)");
+    }
     if (P.cycle) item(marks, { kind: "dash", color: "#000" }, "running limit cycle");
     item(marks, { kind: "line", color: "#000" }, "orbit");
     item(marks, { kind: "ring", color: "#000" }, "its start");
@@ -822,7 +855,7 @@
   const ready = select(0).then(() => { $("readout").dataset.ready = "1"; });
   // For scripts and tests: the same computations the page draws.
   window.atlasView = {
-    ready, select, show, clear, setLayer, parseValue, energyText,
+    ready, select, show, clear, setLayer, parseValue, energyText, wellColour, scaleColour,
     orbit: (th, v, i) => { const { path, ...r } = integrate(th, v, D.points[i ?? index]); return r; },
     grid: (th, v) => gridAt(P, th, v),
     drawn: () => Object.assign({}, drawn),
