@@ -33,7 +33,13 @@ from atlas import defaults  # noqa: E402
 from atlas.kernels.rk4 import record_straightforward  # noqa: E402
 from atlas.physics import linear
 from atlas.physics.pendulum import Pendulum, critical_points  # noqa: E402
-from atlas.views.style import STYLE, critical_point_markers, pi_ticks  # noqa: E402
+from atlas.views.style import (  # noqa: E402
+    ATTRACTOR_MARKER,
+    SADDLE_MARKER,
+    STYLE,
+    critical_point_markers,
+    pi_ticks,
+)
 
 __all__ = [
     "fig1_underdamped_angle",
@@ -55,8 +61,11 @@ __all__ = [
 THETA = "θ [rad]"
 THETA_DOT = "θ̇ [rad/s]"
 TIME = "t [s]"
-#: Colours of the damping regimes in Figures 7–8 (essay captions).
-REGIME_COLORS = {"underdamped": "green", "critically damped": "blue", "overdamped": "red"}
+#: Colours of the damping regimes in Figures 7–8: blue and vermilion either side of the black
+#: critical case (Okabe & Ito's colour-blind-safe set; the essay's green and red are one
+#: colour to a reader with deuteranopia or protanopia).
+REGIME_COLORS = {"underdamped": "#0072b2", "critically damped": "#000000",
+                 "overdamped": "#d55e00"}
 
 
 # --------------------------------------------------------------------------- helpers
@@ -109,7 +118,7 @@ def _legend_outside(ax) -> None:
 
 
 def _mark_origin(ax) -> None:
-    ax.plot([0.0], [0.0], "o", color="black", ms=4, label="attracting point (0, 0)")
+    ax.plot([0.0], [0.0], **ATTRACTOR_MARKER, zorder=5, label="attracting point (0, 0)")
 
 
 def _offset_ticks(ax, axis: str, centre: float, name: str, step: float, half: float) -> None:
@@ -253,7 +262,7 @@ def fig6_phase_curve_in_time_3d(ax_or_fig=None, *, small=False, alpha=0.1, omega
     ax.plot(theta, theta_dot, t, color="blue", lw=0.8, label="(θ(t), θ̇(t), t)")
     ax.plot([0.0], [0.0], [t_max], "o", color="red", ms=5, label="attracting point θ = θ̇ = 0")
     lim = float(np.max(np.abs(theta)))
-    pi_ticks(ax, -lim, lim)
+    pi_ticks(ax, -lim, lim, most=5)  # the foreshortened θ axis holds five labels apart
     ax.set(xlabel=THETA, ylabel=THETA_DOT, zlabel=TIME)
     ax.set_title(f"Phase curve in time: α = {alpha:g} s⁻¹, ω0 = {omega0:g} rad/s;\n"
                  f"{_ic(theta0, theta_dot0)}")
@@ -273,9 +282,10 @@ def _regimes(alphas, omega0, theta0, theta_dot0, t):
 def fig7_damping_regimes_angle(ax_or_fig=None, *, small=False, omega0=2.0,
                                alphas=(0.4, 2.0, 4.0), theta0=0.5, theta_dot0=0.0,
                                t_max=10.0) -> Figure:
-    """Figure 7: θ(t) underdamped (green), critically damped (blue), overdamped (red)
-    (eqs. 6, 11, 18 via :func:`linear.solve`). The essay gives no parameters: ω0 = 2 rad/s
-    and α = 0.4, 2, 4 s⁻¹ by default."""
+    """Figure 7: θ(t) underdamped, critically damped, overdamped (eqs. 6, 11, 18 via
+    :func:`linear.solve`), in REGIME_COLORS (the essay's green, blue, red: not safe for
+    colour-blind readers). The essay gives no parameters: ω0 = 2 rad/s and α = 0.4, 2,
+    4 s⁻¹ by default."""
     fig, (ax,) = _axes(ax_or_fig)
     t = _times(t_max, small)
     for label, color, theta, _ in _regimes(alphas, omega0, theta0, theta_dot0, t):
@@ -314,8 +324,8 @@ def fig9_nonlinear_phase_portrait(ax_or_fig=None, *, small=False, alpha=defaults
                                   dt=defaults.DT) -> Figure:
     """Figure 9: phase portrait of the full eq. (1) by RK4 (blue), with the separatrices of
     the origin's basin — both branches of the stable manifolds of the saddles (±π, 0), from
-    :func:`atlas.boundaries.trace.trace` — in red, saddles as open red circles and the attractors
-    (0, 0), (±2π, 0) as dots.
+    :func:`atlas.boundaries.trace.trace` — in red, the saddles and the attractors (0, 0),
+    (±2π, 0) in the markers of the basin maps (:func:`critical_point_markers`).
 
     Initial conditions: on the window's four edges (θ̇0 at its top and bottom values there;
     θ̇0 > 0 on the left and < 0 on the right edge, so that every curve enters the window) and at
@@ -382,11 +392,8 @@ def _flow_full_vs_linear(ax_or_fig, small, n, alpha, omega0, half_width, half_he
         u, v = _field(pendulum, n, theta, theta_dot, linearised=linearised)
         ax.streamplot(theta, theta_dot, u, v, density=0.8 if small else 1.4, color="blue",
                       linewidth=0.8, arrowsize=0.8)
-        if saddle:
-            ax.plot([centre], [0.0], "o", mfc="white", mec="red", mew=1.5, ms=7,
-                    label=f"saddle ({name}, 0)")
-        else:
-            ax.plot([centre], [0.0], "o", color="black", ms=5, label=f"attractor ({name}, 0)")
+        ax.plot([centre], [0.0], **(SADDLE_MARKER if saddle else ATTRACTOR_MARKER), zorder=5,
+                label=f"{'saddle' if saddle else 'attractor'} ({name}, 0)")
         ax.set(xlim=(centre - half_width, centre + half_width),
                ylim=(-half_height, half_height), xlabel=THETA, ylabel=THETA_DOT,
                title=("Linearised, eqs. (22), (" + ("24" if saddle else "23") + ")"
@@ -424,8 +431,9 @@ def fig12_linearised_flow_near_saddle(ax_or_fig=None, *, small=False, alpha=0.1,
     """Figure 12: phase curves near the saddle (π, 0) from the linearisation (eqs. 25–26 via
     :func:`linear.solve_saddle`), each run from t = 0 to ±t_max: the asymptotes (red) from
     θ0 = π, θ̇0 = ±0.001; left/right branches (blue) from θ0 = π ± 0.1, θ̇0 = 0; top/bottom
-    branches (blue) from θ0 = π, θ̇0 = ±0.07."""
-    fig, (ax,) = _axes(ax_or_fig, figsize=(5.8, 5.0))
+    branches (blue) from θ0 = π, θ̇0 = ±0.07. The starting points are black dots, in the
+    legend (the asymptotes' lie under the saddle's marker)."""
+    fig, (ax,) = _axes(ax_or_fig, figsize=(7.6, 5.0))
     t = np.linspace(-t_max, t_max, 801 if small else 4001)
     starts = [(0.0, s * asymptote_speed, "red", "asymptotes") for s in (1, -1)]
     starts += [(s * branch_offset, 0.0, "blue", "branches") for s in (-1, 1)]
@@ -438,15 +446,18 @@ def fig12_linearised_flow_near_saddle(ax_or_fig=None, *, small=False, alpha=0.1,
                           for x in (phi, theta_dot))
         ax.plot(np.pi + phi, theta_dot, color=color, lw=1.5 if color == "red" else 1.0,
                 label=None if label in labelled else label)
-        ax.plot([np.pi + phi0], [theta_dot0], ".", color=color, ms=5)
         labelled.add(label)
-    ax.plot([np.pi], [0.0], "o", mfc="white", mec="red", mew=1.5, ms=7, label="saddle (π, 0)")
+    ax.plot([np.pi + phi0 for phi0, *_ in starts], [v for _, v, *_ in starts], "o",
+            color="black", ms=3.5, ls="none", zorder=4,
+            label=f"starting points (t = 0);\nthe asymptotes' (θ̇0 = ±{asymptote_speed:g})\n"
+                  "under the saddle")
+    ax.plot([np.pi], [0.0], **SADDLE_MARKER, zorder=5, label="saddle (π, 0)")
     ax.set(xlim=(np.pi - half_width, np.pi + half_width), ylim=(-half_width, half_width),
            xlabel=THETA, ylabel=THETA_DOT,
            title=f"Linearised flow near (π, 0), eqs. (25)–(26):\n"
                  f"α = {alpha:g} s⁻¹, ω0 = {omega0:g} rad/s, t ∈ [−{t_max:g}, {t_max:g}] s")
     _offset_ticks(ax, "x", np.pi, "π", 0.1, half_width)
-    ax.legend(loc="upper right", framealpha=0.8, frameon=True)
+    _legend_outside(ax)
     return fig
 
 
@@ -472,7 +483,11 @@ FIGURES = {
 def write_all(outdir: Path, *, small: bool = False) -> list[Path]:
     """Write Figures 1–12 as ``outdir/figNN_<what>.png`` (creating ``outdir``); returns the
     paths in the essay's order."""
+    from atlas.store.outputs import check_output, figure_metadata
+
     outdir = Path(outdir)
+    for stem in FIGURES:  # nothing is written where a figure would replace another file
+        check_output(outdir / f"{stem}.png", "figure", option="--outdir")
     outdir.mkdir(parents=True, exist_ok=True)
     written = []
     with plt.rc_context(STYLE):
@@ -480,7 +495,7 @@ def write_all(outdir: Path, *, small: bool = False) -> list[Path]:
             fig = draw(small=small)
             fig.tight_layout()
             path = outdir / f"{stem}.png"
-            fig.savefig(path)
+            fig.savefig(path, metadata=figure_metadata(".png"))
             plt.close(fig)
             written.append(path)
     return written

@@ -15,6 +15,7 @@ from matplotlib.colors import same_color  # noqa: E402
 
 from atlas import linear
 from atlas.commands import figures  # noqa: E402
+from atlas.views.style import ATTRACTOR_MARKER, SADDLE_MARKER  # noqa: E402
 
 UNITS = {"θ [rad]", "θ̇ [rad/s]", "t [s]"}
 
@@ -34,6 +35,24 @@ def curves(ax, color=None):
 
 def markers(ax):
     return [ln for ln in ax.lines if len(ln.get_xdata()) <= 10 and ln.get_marker() == "o"]
+
+
+def assert_looks_like(line, marker: dict) -> None:
+    """``line``'s marker is drawn as ``marker`` (style.SADDLE_MARKER, ATTRACTOR_MARKER): one
+    look on the maps, the orbit figure and the essay's figures."""
+    assert line.get_marker() == marker["marker"] and line.get_markersize() == marker["ms"]
+    assert line.get_markeredgewidth() == marker["mew"]
+    assert same_color(line.get_markerfacecolor(), marker["mfc"])
+    assert same_color(line.get_markeredgecolor(), marker["mec"])
+
+
+def _overlapping_labels(fig, labels) -> list:
+    """The pairs of visible, non-empty tick labels whose boxes overlap once drawn."""
+    fig.canvas.draw()
+    boxes = [(t.get_text(), t.get_window_extent()) for t in labels
+             if t.get_visible() and t.get_text()]
+    return [(a, b) for i, (a, box) in enumerate(boxes) for b, other in boxes[i + 1:]
+            if box.overlaps(other)]
 
 
 @pytest.mark.slow
@@ -105,6 +124,8 @@ def test_fig4_has_the_same_damped_frequency_but_two_omega0():
 
 
 def test_fig6_is_three_dimensional_with_a_red_attracting_point():
+    """The closed form in (θ, θ̇, t); θ ticks at multiples of π whose labels, on the
+    foreshortened axis, stand apart (at nine ticks, −3π/2 and −π ran into each other)."""
     fig = figures.fig6_phase_curve_in_time_3d(small=True)
     (ax,) = fig.axes
     assert ax.name == "3d"
@@ -116,6 +137,9 @@ def test_fig6_is_three_dimensional_with_a_red_attracting_point():
     (dot,) = [ln for ln in ax.lines if same_color(ln.get_color(), "red")]
     x, y, z = dot.get_data_3d()
     assert (x[0], y[0], z[0]) == (0.0, 0.0, t[-1])
+    ticks = ax.get_xticks()
+    np.testing.assert_allclose(ticks / np.pi, np.round(ticks / np.pi), atol=1e-12)
+    assert _overlapping_labels(fig, ax.get_xticklabels()) == []
 
 
 def test_fig7_colours_name_the_damping_regimes():
@@ -123,9 +147,33 @@ def test_fig7_colours_name_the_damping_regimes():
     lines = curves(ax)
     assert [ln.get_label().split(",")[0] for ln in lines] == \
         ["underdamped", "critically damped", "overdamped"]
-    for ln, color in zip(lines, ("green", "blue", "red")):
-        assert same_color(ln.get_color(), color)
+    for ln, regime in zip(lines, ("underdamped", "critically damped", "overdamped")):
+        assert same_color(ln.get_color(), figures.REGIME_COLORS[regime])
         assert ln.get_ydata()[0] == 0.5
+
+
+#: The least CAM02-UCS ΔE between two regimes' lines, for every vision: 30 is plainly
+#: apart (the essay's green and red are 17 apart to a deuteranope, 8.5 to a protanope).
+LEAST_REGIME_DELTA_E = 30.0
+
+
+@pytest.mark.parametrize("draw", [figures.fig7_damping_regimes_angle,
+                                  figures.fig8_damping_regimes_phase])
+def test_the_damping_regimes_stay_apart_for_colour_blind_readers(draw):
+    """The three regimes' lines, read back from the Axes, are far apart in CAM02-UCS as
+    readers with normal vision, deuteranopia and protanopia see them (colorspacious, the
+    Machado et al. 2009 simulation at full severity)."""
+    import colorspacious
+    from matplotlib.colors import to_rgb
+
+    rgb = np.array([to_rgb(ln.get_color()) for ln in curves(draw(small=True).axes[0])])
+    assert len(rgb) == 3
+    for cvd in (None, "deuteranomaly", "protanomaly"):
+        seen = rgb if cvd is None else np.clip(colorspacious.cspace_convert(
+            rgb, {"name": "sRGB1+CVD", "cvd_type": cvd, "severity": 100}, "sRGB1"), 0, 1)
+        ucs = colorspacious.cspace_convert(seen, "sRGB1", "CAM02-UCS")
+        apart = [np.linalg.norm(ucs[i] - ucs[j]) for i in range(3) for j in range(i)]
+        assert min(apart) >= LEAST_REGIME_DELTA_E, (cvd, apart)
 
 
 def test_fig9_portrait_has_red_separatrices_through_the_saddles():
@@ -137,11 +185,12 @@ def test_fig9_portrait_has_red_separatrices_through_the_saddles():
     for ln in red:  # each branch starts at its saddle
         theta, theta_dot = ln.get_xdata()[0], ln.get_ydata()[0]
         assert math.hypot(theta - np.pi * np.sign(theta), theta_dot) < 0.05
-    # saddles: open red circles at odd multiples of π; attractors at 0, ±2π
-    (saddles,) = [m for m in markers(ax) if same_color(m.get_markeredgecolor(), "red")]
-    assert saddles.get_markerfacecolor() == "none"  # open: what lies beneath shows
+    # saddles at odd multiples of π, attractors at 0, ±2π, each in the look of the maps
+    (saddles,) = [m for m in markers(ax) if m.get_label().startswith("saddles")]
+    assert_looks_like(saddles, SADDLE_MARKER)
     np.testing.assert_allclose(saddles.get_xdata(), [-3 * np.pi, -np.pi, np.pi, 3 * np.pi])
-    (attractors,) = [m for m in markers(ax) if same_color(m.get_color(), "black")]
+    (attractors,) = [m for m in markers(ax) if m.get_label().startswith("attractors")]
+    assert_looks_like(attractors, ATTRACTOR_MARKER)
     np.testing.assert_allclose(attractors.get_xdata(), [-2 * np.pi, 0.0, 2 * np.pi], atol=1e-15)
     assert len(curves(ax)) - len(red) >= 10  # the blue phase curves
     assert ax.get_xlim() == pytest.approx((-3 * np.pi, 3 * np.pi))
@@ -168,6 +217,10 @@ def test_full_and_linear_flow_side_by_side(draw, centre):
     for ax in (left, right):
         assert ax.collections  # the stream lines
         assert np.mean(ax.get_xlim()) == pytest.approx(centre)
+        (point,) = markers(ax)
+        assert point.get_xdata()[0] == centre
+        assert_looks_like(point, SADDLE_MARKER if round(centre / np.pi) % 2 else
+                          ATTRACTOR_MARKER)
     assert "Full" in left.get_title() and "Linearised" in right.get_title()
 
 
@@ -183,6 +236,17 @@ def test_fig12_curves_are_the_saddle_closed_form():
     # The asymptotes cross at the saddle; the branches stay off it.
     for ln in blue:
         assert np.nanmin(np.hypot(ln.get_xdata() - np.pi, ln.get_ydata())) > 0.03
+    # the six starting points, in the legend, each on its curve (at t = 0); the saddle
+    (starts,) = [ln for ln in ax.lines if ln.get_label().startswith("starting points")]
+    assert starts.get_label() in [t.get_text() for t in ax.get_legend().get_texts()]
+    theta0, theta_dot0 = starts.get_xdata(), starts.get_ydata()
+    np.testing.assert_allclose(sorted(zip(theta0 - np.pi, theta_dot0)),
+                               [(-0.1, 0.0), (0.0, -0.07), (0.0, -0.001), (0.0, 0.001),
+                                (0.0, 0.07), (0.1, 0.0)], atol=1e-15)
+    for start, ln in zip(zip(theta0, theta_dot0), red + blue):
+        assert np.nanmin(np.hypot(ln.get_xdata() - start[0], ln.get_ydata() - start[1])) < 1e-12
+    (saddle,) = [ln for ln in markers(ax) if ln.get_label() == "saddle (π, 0)"]
+    assert_looks_like(saddle, SADDLE_MARKER)
 
 
 def test_figures_draw_into_given_axes():
