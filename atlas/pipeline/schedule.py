@@ -13,8 +13,10 @@ scheduler.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import threading
-from collections.abc import Callable, Iterator
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future
 from typing import NamedTuple
 
@@ -30,7 +32,7 @@ from atlas.pipeline.config import Config
 from atlas.store.partial import TileStore
 
 __all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "label_tile", "certify_tile",
-           "tile_args", "local_results",
+           "tile_args", "local_results", "each_in_background",
            "compute_tile_into_store", "dask_tile_results"]
 
 
@@ -108,8 +110,26 @@ def _in_background(fn, *args, lock=_AHEAD, **kwargs) -> Future:
             except BaseException as exc:  # re-raised in the caller by future.result()
                 future.set_exception(exc)
 
-    threading.Thread(target=work, name="atlas-tile", daemon=True).start()
+    threading.Thread(target=work, name="atlas-background", daemon=True).start()
     return future
+
+
+def each_in_background(fn: Callable, items: Iterable, workers: int) -> Iterator:
+    """``fn(item)`` of each of ``items``, in order, computed ``workers`` at a time in daemon
+    threads (:func:`_in_background`), the next started as each result is taken: a
+    ThreadPoolExecutor's ``map``, except that Ctrl-C and SIGTERM, which come to this thread
+    while it waits, leave at once. A pool's ``with`` block waits for the calls in flight (a
+    parameter point's separatrices, or the kernels' first compilation: half a minute and
+    more on a busy machine) and the interpreter joins its threads at exit; here the calls
+    in flight are abandoned, their results dropped. A call that raises re-raises here, in
+    its turn."""
+    items = iter(items)
+    running = deque(_in_background(fn, item, lock=None)
+                    for item in itertools.islice(items, max(workers, 1)))
+    while running:
+        result = running.popleft().result()
+        running.extend(_in_background(fn, item, lock=None) for item in itertools.islice(items, 1))
+        yield result
 
 
 def local_results(cfg, tiles: TileStore, certifiers, todo, device: str

@@ -60,7 +60,7 @@ from atlas.store.partial import (
 from atlas.store.reader import open_atlas
 from atlas.store.schema import summary_dataset, summary_tree
 
-__all__ = ["run", "layout_of", "inexact_points", "accuracy_exit"]
+__all__ = ["run", "layout_of", "inexact_points", "accuracy_exit", "kept_after_interrupt"]
 
 log = logging.getLogger(__name__)
 
@@ -371,6 +371,23 @@ def accuracy_exit(tree: xr.DataTree, output: Path, accept_inexact: bool = False)
                 "or run with --accept-inexact to accept it", output, len(inexact),
                 EXIT_INEXACT)
     return EXIT_INEXACT
+
+
+def kept_after_interrupt(output: Path) -> str:
+    """What a run of ``output`` stopped by Ctrl-C or SIGTERM keeps, as the CLI says it after
+    "atlas: interrupted; ": its finished tiles, counted, and where, or that no tile was
+    finished (stopped before the map, or in its first tile): then running again starts it
+    over. Reads the partial run's folder only; never raises."""
+    partial = partial_path(output)
+    try:
+        tiles = TileStore.read(partial)
+        done, total = tiles.done().size, tiles.layout.n_tiles
+    except (PartialStoreError, OSError):
+        done = 0
+    if not done:
+        return "no tile was finished; run the same command again to start over"
+    return (f"{done} of {total} tiles are finished and kept in {partial}; run the same "
+            "command again to continue")
 
 
 def _reason(exc: OSError) -> str:
