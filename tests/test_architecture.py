@@ -35,3 +35,24 @@ def test_no_module_imports_itself_back():
                       for b in graph.find_modules_directly_imported_by(a)
                       if b != a and graph.chain_exists(b, a)})
     assert circles == []
+
+
+def _sources(*skip: str):
+    """(path relative to atlas/, text) of every module of the package but ``skip``."""
+    for path in sorted((REPO / "atlas").rglob("*.py")):
+        name = str(path.relative_to(REPO / "atlas"))
+        if name not in skip:
+            yield name, path.read_text()
+
+
+def test_the_exact_boundaries_are_reached_through_their_protocol_only():
+    """No module asks which implementation of ExactBoundaries it holds (isinstance) or reaches
+    into the tilted one's insides (``.tilted``), but the implementations' own family:
+    exact.py, tilted.py and the tilted trace. What studies and traces need is in the
+    protocol (``has_boundary``, ``traced_as``, ``cycle``, ``basin_outline``)."""
+    implementations = r"(UntiltedExact|TiltedExact|UnboundedExact)"
+    found = [name for name, text in _sources("boundaries/exact.py", "boundaries/tilted.py",
+                                             "boundaries/trace_tilted.py")
+             if re.search(rf"isinstance\([^)]*{implementations}", text)
+             or re.search(r"(?<!atlas\.boundaries)\.tilted\.\w", text)]
+    assert found == []

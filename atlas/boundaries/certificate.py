@@ -21,7 +21,6 @@ import numpy as np
 from atlas.boundaries.exact import (
     RUNNING_SIDE,
     ExactBoundaries,
-    UnboundedExact,
     exact_boundaries,
 )
 from atlas.physics.pendulum import Pendulum
@@ -295,7 +294,7 @@ def certifier_for(pendulum: Pendulum, theta0, theta_dot0, shift: float, tol: flo
     if exact is None:
         exact = exact_boundaries(pendulum, ((theta0[0], theta0[-1]),
                                             (theta_dot0[0], theta_dot0[-1])))
-    if isinstance(exact, UnboundedExact):
+    if not exact.has_boundary:
         return NoBoundaries(pendulum, theta0, theta_dot0)
     return Certifier(pendulum, theta0, theta_dot0, shift, tol, exact)
 

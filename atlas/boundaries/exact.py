@@ -18,6 +18,7 @@ interface. Derivations: docs/design/separatrices.md, docs/design/tilted-boundari
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Protocol, runtime_checkable
 
@@ -27,8 +28,11 @@ from atlas.boundaries.basins import FIND_CYCLE, RUNNING_SIDE, ExactAreas
 from atlas.boundaries.manifold import RTOL_CHECK, StableManifold, basin_areas, bins
 from atlas.physics.pendulum import Pendulum
 
-__all__ = ["ExactBoundaries", "ExactAreas", "exact_boundaries", "UntiltedExact",
-           "TiltedExact", "UnboundedExact", "RUNNING_SIDE", "FIND_CYCLE"]
+__all__ = ["ExactBoundaries", "ExactAreas", "Outline", "exact_boundaries", "UntiltedExact",
+           "TiltedExact", "UnboundedExact", "RUNNING_SIDE", "FIND_CYCLE", "OUTLINE_PIECES"]
+
+#: Points per sample interval of L on the outline of an untilted boundary.
+OUTLINE_PIECES = 8
 
 #: First search radius around the window for boundaries [rad-ish]; grown while needed.
 _FIRST_MARGIN = 1.0
@@ -55,6 +59,17 @@ class ExactBoundaries(Protocol):
     running_possible: bool
     lower_well: int
     upper_well: int
+    #: Whether there is a basin boundary at all (False without rest states, |τ| > ω0²: the
+    #: running basin is the whole plane).
+    has_boundary: bool
+    #: How the RK4 map's separatrices along these boundaries are traced: the key of
+    #: :data:`atlas.boundaries.trace.TRACES` ("untilted", "tilted"; "" where none).
+    traced_as: str
+    #: The running limit cycle these boundaries were built with (None where there is none).
+    cycle: object
+    #: The largest |θ̇| [rad s⁻¹] up to which :meth:`basin_outline` is drawn from these
+    #: boundaries as built (inf: integrated further on demand).
+    outline_reach: float
 
     @property
     def reference_error(self) -> float:
@@ -93,6 +108,27 @@ class ExactBoundaries(Protocol):
         nearest pair of the cycle and a basin boundary; NaN where there is no running cycle
         or no boundary."""
 
+    def basin_outline(self, speed: float | None = None) -> Outline:
+        """The basin as a shape: the boundary Γ that bounds well 0's basin, valid for |θ̇| <
+        ``speed`` [rad s⁻¹] (default: as far as built, :attr:`outline_reach`); ValueError
+        beyond :attr:`outline_reach`, or where there is no boundary."""
+
+
+@dataclass(frozen=True)
+class Outline:
+    """One basin boundary Γ as a polyline (``theta`` [rad], ``theta_dot`` [rad s⁻¹]), from one
+    end through its saddle to the other, valid for |θ̇| < ``speed``, with its chord error
+    [rad-ish]; ``strip``: the basin it bounds is the strip between Γ and Γ − 2π (no running
+    cycle), else the tongue inside Γ; ``well``: the well k whose basin it bounds (θ shifted by
+    −2πk gives well 0's)."""
+
+    theta: np.ndarray
+    theta_dot: np.ndarray
+    speed: float
+    chord_error: float
+    strip: bool
+    well: int
+
 
 def exact_boundaries(pendulum: Pendulum, window: Box, *, cycle=FIND_CYCLE) -> ExactBoundaries:
     """The exact basin boundaries of ``pendulum`` (α > 0) over ``window``: the one place
@@ -118,6 +154,8 @@ class UntiltedExact:
     running_possible = False
     #: A boundary of saddle n (odd) separates the wells on either side of nπ.
     lower_well, upper_well = 0, 1
+    has_boundary, traced_as, cycle = True, "untilted", None
+    outline_reach = math.inf  # L is integrated as far as asked
 
     def __init__(self, pendulum: Pendulum, window: Box):
         self.pendulum, self.window = pendulum, window
@@ -220,6 +258,31 @@ class UntiltedExact:
         return best, foot_theta, foot_theta_dot, np.full(theta.shape, self.reference_error)
 
 
+    def basin_outline(self, speed: float | None = None) -> Outline:
+        """Γ through (π, 0), well 0's upper boundary (a strip), from the DOP853 dense output of
+        L integrated past ``speed`` (default: the window's |θ̇| + 2) at
+        :data:`OUTLINE_PIECES` points per sample interval of L (≤ 0.02 of arc length): the
+        chord error, measured at each chord's midpoint, is about 1e-7; its right branch is
+        the point reflection of L through (π, 0)."""
+        from atlas.boundaries.segments import segment_distance
+
+        if speed is None:
+            speed = max(abs(v) for v in self.window[1]) + 2.0
+        m = StableManifold(self.pendulum, speed + 1.0)
+        t = m.tau
+        pieces = np.arange(OUTLINE_PIECES) / OUTLINE_PIECES
+        fine = np.append((t[:-1, None] + np.diff(t)[:, None] * pieces).ravel(), t[-1])
+        theta, theta_dot = m.at(fine)
+        mid_t, mid_v = m.at(0.5 * (fine[1:] + fine[:-1]))
+        chord = float(segment_distance(mid_t, mid_v, theta[:-1], theta_dot[:-1], theta[1:],
+                                       theta_dot[1:]).max(initial=0.0))
+        # L from its far end to the saddle, then its point reflection from the saddle outward
+        left_t = np.append(theta[::-1], math.pi)
+        left_v = np.append(theta_dot[::-1], 0.0)
+        return Outline(np.concatenate([left_t, 2.0 * math.pi - theta]),
+                       np.concatenate([left_v, -theta_dot]), float(speed), chord, True, 0)
+
+
 def _reference_error(fine: StableManifold, coarse: StableManifold) -> float:
     """Largest distance of the reference manifold at rtol 1e-12 (``coarse``) from the one at
     1e-13 (``fine``) over the window's θ̇ band."""
@@ -254,6 +317,40 @@ class TiltedExact:
             self.lower_well = self.upper_well = 0 if pendulum.torque > 0 else 1
         self.areas = self.tilted.areas()
         self._vertices = {}  # the polylines' vertices binned, built on first use
+
+    has_boundary, traced_as = True, "tilted"
+
+    @property
+    def cycle(self):
+        return self.tilted.cycle
+
+    @property
+    def outline_reach(self) -> float:
+        """The window's smaller |θ̇| edge: the branches are integrated over a band reaching
+        beyond it (a point outside the window needs boundaries of its own)."""
+        (_, _), (v0, v1) = self.window
+        return min(abs(v0), abs(v1))
+
+    def basin_outline(self, speed: float | None = None) -> Outline:
+        """Γ through the saddle s_j of the first branch (:meth:`TiltedBoundaries.curves`'
+        polyline, as integrated, no clipping; chord error ≤ 1e-8), the strip's upper
+        boundary when monostable, the tongue's outline when bistable, over the band the
+        branches were integrated in (ValueError where ``speed`` asks for more)."""
+        tilted = self.tilted
+        band = min(-tilted.band[0], tilted.band[1]) - 1e-9
+        if speed is not None and speed > band:
+            raise ValueError(f"the boundaries reach |theta_dot| < {band:g}, not {speed:g}")
+        curves = tilted.curves(clip=False)
+        j = curves[0][0]
+        branch = {name: (t, v) for i, name, t, v in curves if i == j}
+        (lt, lv), (rt, rv) = branch["left"], branch["right"]
+        strip = not tilted.bistable
+        # the boundary of saddle j bounds well j + upper_well from below when a strip, and
+        # holds well j + lower_well as a tongue
+        well = j + (self.upper_well - 1 if strip else self.lower_well)
+        return Outline(np.concatenate([lt[::-1], rt[1:]]), np.concatenate([lv[::-1], rv[1:]]),
+                       float(band if speed is None else speed), float(tilted.curves_chord_error),
+                       strip, int(well))
 
     def __getstate__(self):
         return {**self.__dict__, "_vertices": {}}
@@ -330,6 +427,7 @@ class UnboundedExact:
     running_possible = True
     lower_well = upper_well = 0
     reference_error = 0.0
+    has_boundary, traced_as, cycle, outline_reach = False, "", None, 0.0
 
     def __init__(self, pendulum: Pendulum, window: Box):
         self.pendulum, self.window = pendulum, window
@@ -353,6 +451,9 @@ class UnboundedExact:
 
     def running_shock(self):
         return (math.nan,) * 6  # the running basin is the whole plane: no boundary
+
+    def basin_outline(self, speed: float | None = None) -> Outline:
+        raise ValueError("a pendulum without rest states has no well basins")
 
     def saddles_within(self, theta, theta_dot, radius: float):
         size = np.broadcast_shapes(np.shape(theta), np.shape(theta_dot))

@@ -35,12 +35,7 @@ from atlas.boundaries.bisection import (
 from atlas.boundaries.certificate import cert_distance
 from atlas.boundaries.check import DISCREPANCY_BOUND, SYMMETRY_BOUND, check, symmetry_error
 from atlas.boundaries.crossings import axis_crossings
-from atlas.boundaries.exact import (
-    ExactBoundaries,
-    TiltedExact,
-    UnboundedExact,
-    exact_boundaries,
-)
+from atlas.boundaries.exact import ExactBoundaries, exact_boundaries
 from atlas.boundaries.predictor import (
     edge_speeds,
     fine_spacing,
@@ -52,12 +47,12 @@ from atlas.boundaries.predictor import (
     window_boxes,
 )
 from atlas.boundaries.shooting import Shooter, left_to_labels
-from atlas.boundaries.trace_tilted import trace_tilted
+from atlas.boundaries.trace_tilted import trace_tilted_boundaries
 from atlas.boundaries.window import Window, checked_window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
 
-__all__ = ["trace"]
+__all__ = ["trace", "TRACES"]
 
 #: Every 8th vertex of the right branch of −π that is a reflection of a located one is
 #: located again on its own: the symmetry check.
@@ -117,16 +112,14 @@ def trace(
                 "method": method}
     built = exact is None
     exact = exact_boundaries(p, window.box) if built else exact
-    if isinstance(exact, UnboundedExact):
+    if not exact.has_boundary:
         return None
-    if isinstance(exact, TiltedExact):
-        if built and exact.tilted.cycle is not None:
-            from atlas.physics.running import running_barrier
+    if built and exact.cycle is not None:
+        from atlas.physics.running import running_barrier
 
-            barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.tilted.cycle, dt=dt)
-        return unmeasured_shift(trace_tilted(p, window, exact.tilted, barrier, t_max=t_max,
-                                             **settings), window, exact)
-    return unmeasured_shift(_trace_untilted(p, window, **settings), window, exact)
+        barrier = running_barrier(p.alpha, p.omega0, p.torque, exact.cycle, dt=dt)
+    traced = TRACES[exact.traced_as](p, window, exact, barrier, t_max=t_max, **settings)
+    return unmeasured_shift(traced, window, exact)
 
 
 def unmeasured_shift(ds: xr.Dataset, window: Window, exact: ExactBoundaries) -> xr.Dataset:
@@ -205,12 +198,15 @@ def _relocate(shooter, labels, base, normal, saddle_n, rows, tol: float, lo, hi,
     at[rows] = np.where(s_ok, s_at, 0.5 * (s_lo + s_hi))
 
 
-def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: float,
-                    dt: float, backend: str, method: str) -> xr.Dataset:
+def _trace_untilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,
+                    max_spacing: float, dt: float, t_max: float, backend: str,
+                    method: str) -> xr.Dataset:
     """:func:`trace` without torque: the left branch L of π and the right branch R = −L of
     −π, predicted on the exact manifold (:mod:`atlas.boundaries.predictor`), located on
     certified labels (:func:`atlas.boundaries.bisection.locate`), placed in the window by
-    their 2π copies and checked (:mod:`atlas.boundaries.check`)."""
+    their 2π copies and checked (:mod:`atlas.boundaries.check`). ``exact``, ``barrier`` and
+    ``t_max`` are not needed: the manifold is its own predictor, there is no running cycle,
+    and each label's t_max is the predictor's travel time plus the lingering time."""
     # the two source branches, over the stretch their copies in the window use: vertices on
     # the exact left branch of π, and their reflections for the right branch of −π
     ref = reference(p, window)
@@ -332,3 +328,9 @@ def _trace_untilted(p: Pendulum, window: Window, *, tol: float, max_spacing: flo
                 "max distance of it to the polyline"),
         },
     )
+
+
+#: How the RK4 map's separatrices are traced for each kind of exact boundaries (their
+#: :attr:`~atlas.boundaries.exact.ExactBoundaries.traced_as`): one function of (pendulum,
+#: window, exact boundaries, running barrier, settings) each.
+TRACES = {"untilted": _trace_untilted, "tilted": trace_tilted_boundaries}

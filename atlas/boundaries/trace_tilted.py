@@ -42,10 +42,18 @@ from atlas.boundaries.window import Window
 from atlas.physics.pendulum import Pendulum
 from atlas.store import separatrices as schema
 
-__all__ = ["trace_tilted"]
+__all__ = ["trace_tilted", "trace_tilted_boundaries"]
 
 _SHIFT_STRIDE = 8  # every 8th located vertex is located again on its 2π-shifted copy
 _FIRST_VERTEX = 1e-3  # no vertex closer [rad-ish] to its saddle: the field vanishes there
+
+
+def trace_tilted_boundaries(p: Pendulum, window: Window, exact, barrier, **settings
+                            ) -> xr.Dataset:
+    """:func:`trace_tilted` on the :class:`atlas.boundaries.tilted.TiltedBoundaries` behind
+    ``exact`` (an :class:`atlas.boundaries.exact.TiltedExact`): the tilted family's entry in
+    :data:`atlas.boundaries.trace.TRACES`."""
+    return trace_tilted(p, window, exact.tilted, barrier, **settings)
 
 
 def trace_tilted(p: Pendulum, window: Window, exact, barrier, *, tol: float,

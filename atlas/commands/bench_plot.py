@@ -43,7 +43,7 @@ def _whole_array_maps(path) -> None:
     """The maps of the atlas at ``path`` as ``atlas plot`` read them before streaming: every
     map loaded whole, then each converted to float64 and coarsened in memory."""
     from atlas.store.reader import open_atlas
-    from atlas.views.coarsen import _coarsen
+    from atlas.views.coarsen import coarsen_blocks
 
     tree = open_atlas(path)
     try:
@@ -52,12 +52,12 @@ def _whole_array_maps(path) -> None:
         tree.close()
     k = ds["attractor"].values.astype(float)
     k[~np.isin(ds["status"].values, (TRAPPED, NEAR_BOUNDARY))] = np.nan
-    _coarsen(k, "mode")
+    coarsen_blocks(k, "mode")
     del k
     t = ds["t_trap"].values.astype(float)
-    _coarsen(np.where(t > 0, t, 1.0), "max")
+    coarsen_blocks(np.where(t > 0, t, 1.0), "max")
     del t
-    _coarsen(ds["boundary_distance"].values.astype(float), "min")
+    coarsen_blocks(ds["boundary_distance"].values.astype(float), "min")
 
 
 def _streamed_maps(path) -> None:

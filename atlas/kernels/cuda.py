@@ -34,7 +34,8 @@ from atlas.kernels.rk4 import (
     make_well_energy_torque,
 )
 
-__all__ = ["VARIANTS", "cuda_status", "kernels", "torque_kernels", "require_cuda"]
+__all__ = ["VARIANTS", "cuda_status", "kernels", "torque_kernels", "require_cuda", "import_cuda",
+           "simulator"]
 
 #: Kernel variants: name -> (sin implementation, keep θ wrapped near [−π, π]).
 VARIANTS = ("fast", "straightforward")
@@ -46,13 +47,13 @@ WRAP_EVERY = 16
 _ROUND_MAGIC = 6755399441055744.0
 _INSTALL_HINT = "install pendulum-atlas[cuda] on a machine with an NVIDIA GPU"
 
-#: numba.cuda once imported by _import_cuda(). The kernels refer to it as a module global
+#: numba.cuda once imported by import_cuda(). The kernels refer to it as a module global
 #: because the simulator substitutes its fake module only among a kernel's globals.
 cuda = None
 
 
 @functools.cache
-def _import_cuda():
+def import_cuda():
     """Import numba.cuda once; raise BackendUnavailable with one line when it cannot be."""
     global cuda
     try:
@@ -82,7 +83,7 @@ def _row_stack_alias():
         del np.row_stack
 
 
-def _simulator() -> bool:
+def simulator() -> bool:
     from numba import config
 
     return bool(config.ENABLE_CUDASIM)
@@ -92,8 +93,8 @@ def cuda_status() -> tuple[bool, str]:
     """(usable?, device name or why not). Never raises; the simulator counts as usable and
     is reported as "CUDA simulator"."""
     try:
-        cuda = _import_cuda()
-        if _simulator():
+        cuda = import_cuda()
+        if simulator():
             return True, "CUDA simulator"
         if not cuda.is_available():
             return False, "no CUDA GPU found (numba.cuda.is_available() is False)"
@@ -111,7 +112,7 @@ def require_cuda():
     if not ok:
         hint = "" if _INSTALL_HINT in reason else f"; {_INSTALL_HINT}"
         raise BackendUnavailable(f"backend 'cuda': {reason}{hint}")
-    return _import_cuda()
+    return import_cuda()
 
 
 class Kernels(NamedTuple):

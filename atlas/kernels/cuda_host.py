@@ -16,7 +16,7 @@ import threading
 import numpy as np
 
 from atlas.kernels import uses_torque
-from atlas.kernels.cuda import _import_cuda, _simulator, kernels, torque_kernels
+from atlas.kernels.cuda import import_cuda, kernels, simulator, torque_kernels
 from atlas.kernels.rk4 import torque_model
 
 __all__ = ["label_cuda", "propagate_cuda", "chunk_orbits", "release_buffers", "CHUNK_CAP",
@@ -62,7 +62,7 @@ def chunk_orbits(resident_threads: int | None, free_bytes: float, bytes_per_orbi
 
 def _resident_threads(cuda) -> int | None:
     """Threads the current device holds at once (None under the simulator, which has none)."""
-    if _simulator():
+    if simulator():
         return None
     dev = cuda.get_current_device()
     return dev.MULTIPROCESSOR_COUNT * dev.MAX_THREADS_PER_MULTIPROCESSOR
@@ -107,7 +107,7 @@ class _Pool:
 
     def take(self, cuda, count: int) -> list[_BufferSet]:
         # the simulator makes a throwaway context object per call: it owns no memory
-        context = None if _simulator() else cuda.current_context()
+        context = None if simulator() else cuda.current_context()
         if context is not self.context:
             self.context, self.sets = context, []
         while len(self.sets) < count:
@@ -213,7 +213,7 @@ def label_cuda(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, ene
             int(check_every), float(energy_cap), attractor, status, n_trap)
     # attractor is "inout": the contract leaves it untouched where nothing is trapped.
     modes = ("in", "in", None, None, None, None, None, None, "inout", "out", "out")
-    _run_chunked(_import_cuda(), k.label, k.label_block, args, modes, chunk)
+    _run_chunked(import_cuda(), k.label, k.label_block, args, modes, chunk)
 
 
 def _label_cuda_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
@@ -224,7 +224,7 @@ def _label_cuda_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_ev
         return
     tq, shift, vers, sign, r_theta0, g, r_top, _ = torque_model(
         omega0, torque, running_theta0, running_g, running_top)
-    cuda = _import_cuda()
+    cuda = import_cuda()
     # the barrier goes to the device once, whole (not chunked: it is not per orbit); a
     # 1-sample placeholder keeps the kernel's array argument non-empty, g.size < 2 = none
     g_dev = cuda.to_device(g if g.size else _NO_BARRIER)
@@ -245,4 +245,4 @@ def propagate_cuda(theta, theta_dot, alpha, omega0, dt, n_steps, *, variant: str
         return
     args = (theta, theta_dot, float(alpha), float(omega0), float(dt), int(n_steps))
     modes = ("inout", "inout", None, None, None, None)
-    _run_chunked(_import_cuda(), k.propagate, k.propagate_block, args, modes, chunk)
+    _run_chunked(import_cuda(), k.propagate, k.propagate_block, args, modes, chunk)

@@ -80,19 +80,17 @@ class PointResult:
 def _gaussian(boundaries, settings: StudySettings):
     """(P, error) of well 0's rest state; the boundaries are integrated again over the
     Gaussian's box where the window's do not reach it."""
-    from atlas.boundaries.exact import UntiltedExact, exact_boundaries
+    from atlas.boundaries.exact import exact_boundaries
     from atlas.stability.gaussian import REACH, gaussian_stability
     from atlas.stability.polygons import basin_shape
 
     s_theta, s_dot = settings.sigma
     speed = REACH * s_dot + 0.5
-    if not isinstance(boundaries, UntiltedExact):
-        (_, _), (v0, v1) = boundaries.window
-        if speed > min(abs(v0), abs(v1)):  # beyond the window's band, maybe: integrate there
-            c = boundaries.pendulum.rest_angle
-            boundaries = exact_boundaries(boundaries.pendulum,
-                                          ((c - REACH * s_theta, c + REACH * s_theta),
-                                           (-speed, speed)))
+    if speed > boundaries.outline_reach:  # beyond the band they were built for: build there
+        c = boundaries.pendulum.rest_angle
+        boundaries = exact_boundaries(boundaries.pendulum,
+                                      ((c - REACH * s_theta, c + REACH * s_theta),
+                                       (-speed, speed)))
     return gaussian_stability(basin_shape(boundaries, speed), s_theta, s_dot)
 
 

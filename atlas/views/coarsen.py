@@ -5,7 +5,7 @@ coarsening, aligned to the file's chunks; for a tree opened lazily, the stored c
 inflated here: :func:`atlas.store.reader.stored_rows`) and each band is reduced to blocks
 by compiled kernels: labels by their mode (never averaged into a k that no orbit reached),
 t_trap by the block max, boundary_distance by the block min. So the memory a figure needs
-does not grow with the map (a 16384² atlas: about 0.5 GB). :func:`_coarsen` is the
+does not grow with the map (a 16384² atlas: about 0.5 GB). :func:`coarsen_blocks` is the
 definition on a whole array, which the streamed readers equal (tested).
 """
 
@@ -25,7 +25,7 @@ from atlas.status import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["MAX_PIXELS", "BAND_CELLS", "read_maps", "workers"]
+__all__ = ["MAX_PIXELS", "BAND_CELLS", "read_maps", "workers", "coarsen_blocks"]
 
 #: Largest image drawn per axis [pixels]: a figure is 8 in wide at 150 dpi. Larger maps are
 #: coarsened to it first (labels by their mode, never averaged into a k that no orbit reached).
@@ -41,7 +41,7 @@ def _factors(shape: tuple[int, int]) -> tuple[int, int]:
     return -(-shape[0] // MAX_PIXELS), -(-shape[1] // MAX_PIXELS)
 
 
-def _coarsen(values: np.ndarray, how: str) -> np.ndarray:
+def coarsen_blocks(values: np.ndarray, how: str) -> np.ndarray:
     """Block-reduce ``values`` (rows × columns, NaN = no value) to at most MAX_PIXELS per axis:
     ``mode`` for labels, ``min`` or ``max`` for continuous maps (keeping their extremes).
 

@@ -60,18 +60,18 @@ def test_big_maps_are_coarsened_by_the_mode_of_their_labels():
     """A map wider than the figure's pixels is drawn from blocks; a block of labels takes its
     most frequent label (never an average, which could name a well no orbit reached), and
     the continuous maps keep their extremes."""
-    from atlas.views.coarsen import MAX_PIXELS, _coarsen
+    from atlas.views.coarsen import MAX_PIXELS, coarsen_blocks
 
     rows, cols = 3 * MAX_PIXELS, 2 * MAX_PIXELS + 1
     labels = np.full((rows, cols), 2.0)
     labels[::3, :] = -2.0  # one row in three: the mean (≈ 0.67) would be no label at all
     labels[:3, :] = np.nan
-    small = _coarsen(labels, "mode")
+    small = coarsen_blocks(labels, "mode")
     assert small.shape == (MAX_PIXELS, 801)  # blocks of 3 × 3 cells
     assert np.all(np.isnan(small[0])) and set(np.unique(small[1:])) == {2.0}
     distance = np.arange(rows * cols, dtype=float).reshape(rows, cols)
-    assert _coarsen(distance, "min")[1, 1] == distance[3, 3]
-    assert _coarsen(distance, "max")[0, 0] == distance[2, 2]
+    assert coarsen_blocks(distance, "min")[1, 1] == distance[3, 3]
+    assert coarsen_blocks(distance, "max")[0, 0] == distance[2, 2]
 
 
 def _old_basin_labels(attractor, status):
@@ -90,12 +90,12 @@ def _old_basin_labels(attractor, status):
 @pytest.mark.parametrize("chunked", ["preferred", "dask", "decoded"])
 def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
     """The maps are read in bands of whole blocks and reduced by compiled kernels: the result
-    equals ``_coarsen`` of the whole array, edge blocks (53 × 40 cells in blocks of 8 × 6)
+    equals ``coarsen_blocks`` of the whole array, edge blocks (53 × 40 cells in blocks of 8 × 6)
     and ties (the smallest k wins; the running basin, the largest label, loses) included;
     chunks known from the file's encoding or from dask, and labels decoded to float (NaN
     where the file has its fill value) as plain xarray would read them."""
     from atlas.views import coarsen
-    from atlas.views.coarsen import _coarsen, _read_extreme, _read_labels
+    from atlas.views.coarsen import _read_extreme, _read_labels, coarsen_blocks
 
     monkeypatch.setattr(coarsen, "MAX_PIXELS", 7)
     monkeypatch.setattr(coarsen, "BAND_CELLS", 500)
@@ -127,7 +127,7 @@ def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
                         lambda da, r0, r1: reads.append((r0, r1)) or read(da, r0, r1))
 
     image, kmin, kmax, running = _read_labels(ds)
-    expected = _coarsen(_old_basin_labels(attractor, status), "mode")
+    expected = coarsen_blocks(_old_basin_labels(attractor, status), "mode")
     assert image.shape == expected.shape == (7, 7)
     np.testing.assert_array_equal(image, expected)
     assert (kmin, kmax, running) == (-2, 2, True)
@@ -135,7 +135,7 @@ def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
     assert sorted(set(reads)) == [(0, 40), (40, 53)]  # lcm(8 rows, 5-row chunks) = 40
     for how in ("max", "min"):
         image, lo, hi = _read_extreme(ds, "t_trap", how)
-        np.testing.assert_array_equal(image, _coarsen(t.astype(float), how))
+        np.testing.assert_array_equal(image, coarsen_blocks(t.astype(float), how))
         positive = t[np.isfinite(t) & (t > 0)]
         assert (lo, hi) == (positive.min(), positive.max())
 
@@ -143,13 +143,13 @@ def test_streamed_coarsening_equals_the_whole_array(monkeypatch, chunked):
 def _whole_maps(point):
     """The images of the maps of one parameter point (a Dataset loaded whole) coarsened in
     memory, as the figures drew them before streaming."""
-    from atlas.views.coarsen import _coarsen
+    from atlas.views.coarsen import coarsen_blocks
 
-    k = _coarsen(_old_basin_labels(point["attractor"].values, point["status"].values), "mode")
+    k = coarsen_blocks(_old_basin_labels(point["attractor"].values, point["status"].values), "mode")
     t = point["t_trap"].values.astype(float)
     lo = t[np.isfinite(t) & (t > 0)].min()
-    return (np.ma.masked_invalid(k), _coarsen(np.where(t > 0, t, lo / 2), "max"),
-            np.ma.masked_invalid(_coarsen(point["boundary_distance"].values.astype(float),
+    return (np.ma.masked_invalid(k), coarsen_blocks(np.where(t > 0, t, lo / 2), "max"),
+            np.ma.masked_invalid(coarsen_blocks(point["boundary_distance"].values.astype(float),
                                           "min")))
 
 
@@ -199,7 +199,7 @@ def test_a_big_map_is_drawn_from_bands_never_read_whole(sweep_tree, monkeypatch,
     np.testing.assert_array_equal(np.ma.masked_invalid(maps["basin"][0]), k)
     np.testing.assert_array_equal(np.ma.masked_invalid(maps["boundary_distance"][0]), d)
     np.testing.assert_array_equal(maps["t_trap"][0],  # t_trap before the figure's log scale
-                                  coarsen._coarsen(other["t_trap"].values.astype(float), "max"))
+                                  coarsen.coarsen_blocks(other["t_trap"].values.astype(float), "max"))
 
 
 def test_a_damaged_chunk_of_a_coarsened_map_is_one_line(sweep_tree, monkeypatch, tmp_path):
