@@ -75,8 +75,9 @@ _COINCIDE_PT = 3.0
 
 
 def _per_point(ax, lo: float, hi: float) -> float:
-    """Data units of the x range [lo, hi] per typographic point across ``ax``."""
-    return (hi - lo) / (ax.bbox.width * 72.0 / ax.figure.dpi)
+    """Data units of the x range from lo to hi (either way round) per typographic point
+    across ``ax``."""
+    return abs(hi - lo) / (ax.bbox.width * 72.0 / ax.figure.dpi)
 
 
 def _coinciding(found: list[tuple[str, float]], apart: float) -> list[list[tuple[str, float]]]:
