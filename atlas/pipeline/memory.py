@@ -49,7 +49,7 @@ class MemoryTiles:
     in :attr:`tree`."""
 
     #: A format that takes no parallel writes: a Dask worker sends its tiles back here.
-    format = SimpleNamespace(name="memory", parallel_tile_writes=False)
+    tile_run = SimpleNamespace(name="memory", parallel_tile_writes=False)
     path = IN_MEMORY
 
     def __init__(self, layout: Layout, attrs: dict):

@@ -173,12 +173,13 @@ def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
         yield index, result
 
 
-def compute_tile_into_store(fmt, folder, layout, index, *args, numba_threads=None) -> dict:
-    """Label and certify tile ``index`` and write it with the output's format ``fmt`` into
-    the partial run at ``folder`` (on the Dask worker itself: a format with
+def compute_tile_into_store(tile_run, folder, layout, index, *args, numba_threads=None
+                            ) -> dict:
+    """Label and certify tile ``index`` and write it with the output format's ``tile_run``
+    into the partial run at ``folder`` (on the Dask worker itself: a format with
     ``parallel_tile_writes``, Zarr); return its tally for the client's record."""
     values, tally = compute_tile(*args, numba_threads=numba_threads)
-    fmt.write_tile(folder, layout, index, values)
+    tile_run.write_tile(folder, layout, index, values)
     return tally
 
 
@@ -190,9 +191,9 @@ def dask_tile_results(cfg, tiles: TileStore, certifiers, todo, device: str = "cp
     from atlas.pipeline.distributed import dask_results
 
     layout = tiles.layout
-    if tiles.format.parallel_tile_writes:
+    if tiles.tile_run.parallel_tile_writes:
         def args_of(i):
-            return (tiles.format, tiles.path, layout, i,
+            return (tiles.tile_run, tiles.path, layout, i,
                     *tile_args(cfg, layout, certifiers, i))
 
         task = compute_tile_into_store
@@ -216,7 +217,7 @@ class Scheduler(NamedTuple):
 #: Every tile scheduler by name: this process, one tile ahead; or a Dask cluster.
 SCHEDULERS: dict[str, Scheduler] = {
     "local": Scheduler(local_results, lambda tiles: False),
-    "dask": Scheduler(dask_tile_results, lambda tiles: tiles.format.parallel_tile_writes),
+    "dask": Scheduler(dask_tile_results, lambda tiles: tiles.tile_run.parallel_tile_writes),
 }
 
 

@@ -142,7 +142,7 @@ def _open_tiles(cfg: Config, layout: Layout, identity: dict, restart: bool) -> T
         discard(partial)
     if not partial.exists():
         return TileStore.create(partial, layout, identity, file_attrs(cfg, identity),
-                                format_for(cfg.output))
+                                format_for(cfg.output).tile_run)
     tiles = _refuse_another(partial, identity)
     log.warning("resuming %s: %d of %d tiles already done", partial, tiles.done().size,
                 tiles.layout.n_tiles)

@@ -3,7 +3,7 @@
 The only code that touches HDF5 (h5py, h5netcdf), as :mod:`atlas.store.zarrformat` is for
 Zarr. A tile of a partial run is kept as its map variables encoded exactly as HDF5 stores
 them (:func:`encode_chunk`: byte shuffle, then deflate level :data:`DEFLATE_LEVEL`, the edge
-chunk padded), so :meth:`HDF5.finalize` assembles the file without re-encoding:
+chunk padded), so :meth:`HDF5Tiles.finalize` assembles the file without re-encoding:
 
 1. the basin-map variables are created chunked and compressed, one chunk per tile, and each
    tile's chunks are copied in as stored (memory bounded by one tile);
@@ -34,7 +34,7 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import Layout
 from atlas.store.durable import fsync
-from atlas.store.format import Format, reason
+from atlas.store.format import Container, TileRun, reason
 from atlas.store.schema import (
     FILLS,
     LABEL_VARIABLES,
@@ -44,7 +44,8 @@ from atlas.store.schema import (
     not_an_atlas,
 )
 
-__all__ = ["HDF5", "StoredRows", "encode_chunk", "decode_chunk", "DEFLATE_LEVEL", "root_attrs"]
+__all__ = ["HDF5", "HDF5Tiles", "StoredRows", "encode_chunk", "decode_chunk", "DEFLATE_LEVEL",
+           "root_attrs"]
 
 #: zlib level of the map's chunks (HDF5's gzip filter, after its byte shuffle).
 DEFLATE_LEVEL = 4
@@ -53,25 +54,11 @@ _COMPRESSION = {"compression": "gzip", "compression_opts": DEFLATE_LEVEL, "shuff
 _SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
 
-class HDF5(Format):
-    name = "hdf5"
-    description = "one HDF5 file in netCDF-4 layout (xarray's h5netcdf engine)"
-    suffixes = (".h5", ".hdf5", ".he5", ".nc")
+class HDF5Tiles(TileRun):
+    """A sweep's tiles into one HDF5 file: each tile's chunks encoded as HDF5 stores them,
+    kept with its record, copied into the file at the end (module docstring)."""
 
-    def recognises(self, path: Path) -> bool:
-        try:
-            with open(path, "rb") as fh:
-                offset = 0
-                while True:
-                    fh.seek(offset)
-                    head = fh.read(len(_SIGNATURE))
-                    if head == _SIGNATURE:
-                        return True
-                    if len(head) < len(_SIGNATURE):
-                        return False
-                    offset = max(512, 2 * offset)
-        except OSError:  # absent, a directory, unreadable
-            return False
+    name = "hdf5"
 
     def write_tile(self, folder: Path, layout: Layout, index: int,
                    values: dict) -> dict[str, bytes]:
@@ -94,6 +81,44 @@ class HDF5(Format):
         os.replace(path, output)
         fsync(output.parent)
         tiles.remove()
+
+
+class HDF5(Container):
+    name = "hdf5"
+    description = "one HDF5 file in netCDF-4 layout (xarray's h5netcdf engine)"
+    suffixes = (".h5", ".hdf5", ".he5", ".nc")
+    tile_run = HDF5Tiles()
+
+    def recognises(self, path: Path) -> bool:
+        try:
+            with open(path, "rb") as fh:
+                offset = 0
+                while True:
+                    fh.seek(offset)
+                    head = fh.read(len(_SIGNATURE))
+                    if head == _SIGNATURE:
+                        return True
+                    if len(head) < len(_SIGNATURE):
+                        return False
+                    offset = max(512, 2 * offset)
+        except OSError:  # absent, a directory, unreadable
+            return False
+
+    def root_attrs(self, path: Path) -> dict:
+        return root_attrs(path)[0]
+
+    def open_dataset(self, path: Path) -> xr.Dataset:
+        with xr.open_dataset(path, engine="h5netcdf", mask_and_scale=False) as f:
+            return f.load()
+
+    def write_dataset(self, ds: xr.Dataset, path: Path) -> None:
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            ds.to_netcdf(tmp, engine="h5netcdf")
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
 
     def attrs(self, path: Path) -> dict:
         if path.is_dir():

@@ -7,8 +7,8 @@ finished tile is written under a temporary name and renamed to ``tiles/<index>.n
 file's existence is the record that the tile is done and its contents are whole (the zip's
 CRC is checked on reading); leftovers of cut-short writes (``*.tmp``) are cleared on reopening.
 
-The store is handed the output's :class:`~atlas.store.format.Format` and never asks which
-one it is: the format writes each tile's label arrays (``write_tile``: HDF5 returns encoded
+The store is handed the output format's :class:`~atlas.store.format.TileRun` and never asks
+which one it is: it writes each tile's label arrays (``write_tile``: HDF5 returns encoded
 chunks, kept in the tile file; Zarr writes into its store in the folder) and assembles the
 output (:meth:`TileStore.finalize`). Each tile file holds the tile's tally (basin counts,
 certificate figures), so the summary is summed from O(tiles) numbers.
@@ -27,7 +27,7 @@ import numpy as np
 
 from atlas.layout import Layout
 from atlas.store.durable import discard, fsync, write_durably
-from atlas.store.format import Format
+from atlas.store.format import TileRun
 from atlas.store.formats import DEFAULT, format_named
 
 __all__ = ["TileStore", "Tile", "partial_path", "discard", "MANIFEST", "PartialStoreError",
@@ -81,26 +81,27 @@ class TileStore:
     Make one with :meth:`create` or :meth:`open`; the caller holds the output's lock.
     """
 
-    def __init__(self, path: Path, manifest: dict, fmt: Format):
+    def __init__(self, path: Path, manifest: dict, tile_run: TileRun):
         self.path = path
         self.manifest = manifest
         self.layout = Layout.from_json(manifest["layout"])
-        self.format = fmt
+        self.tile_run = tile_run
 
     # ---------------------------------------------------------------- creating, opening
 
     @classmethod
     def create(cls, path: Path, layout: Layout, identity: dict, attrs: dict,
-               fmt: Format = DEFAULT) -> TileStore:
-        """A new, empty partial run at ``path`` (which must not exist), for an output of
-        format ``fmt`` (:func:`atlas.store.formats.format_for` of the output)."""
+               tile_run: TileRun = DEFAULT.tile_run) -> TileStore:
+        """A new, empty partial run at ``path`` (which must not exist), written by
+        ``tile_run`` (the :attr:`~atlas.store.format.Container.tile_run` of
+        :func:`atlas.store.formats.format_for` of the output)."""
         manifest = {"schema": SCHEMA, "identity": identity, "layout": layout.to_json(),
-                    "format": fmt.name, "attrs": _jsonable(attrs)}
+                    "format": tile_run.name, "attrs": _jsonable(attrs)}
         new = path.with_name(f"{path.name}.{os.getpid()}.new")
         shutil.rmtree(new, ignore_errors=True)
         try:
             (new / "tiles").mkdir(parents=True)
-            fmt.create(new, layout)
+            tile_run.create(new, layout)
             write_durably(new / MANIFEST,
                           lambda fh: fh.write(json.dumps(manifest, indent=1).encode()))
             fsync(new / "tiles")
@@ -109,7 +110,7 @@ class TileStore:
             shutil.rmtree(new, ignore_errors=True)
             raise
         fsync(path.parent)
-        return cls(path, manifest, fmt)
+        return cls(path, manifest, tile_run)
 
     @classmethod
     def read(cls, path: Path) -> TileStore:
@@ -122,7 +123,7 @@ class TileStore:
             manifest = json.loads((path / MANIFEST).read_text())
             if manifest.get("schema") != SCHEMA:
                 raise ValueError(f"schema {manifest.get('schema')!r}")
-            store = cls(path, manifest, format_named(manifest["format"]))
+            store = cls(path, manifest, format_named(manifest["format"]).tile_run)
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise PartialStoreError(f"unreadable manifest ({exc.__class__.__name__})") from None
         return store
@@ -170,11 +171,12 @@ class TileStore:
         """Store tile ``index`` durably and atomically: ``values`` maps each map variable
         (:data:`atlas.store.schema.MAP_VARIABLES`) to its array (shaped (rows, n_theta0)),
         written by the format; ``tally`` holds the tile's named count arrays."""
-        self.record(index, tally, self.format.write_tile(self.path, self.layout, index, values))
+        self.record(index, tally, self.tile_run.write_tile(self.path, self.layout, index,
+                                                           values))
 
     def record(self, index: int, tally: dict, chunks: dict | None = None) -> None:
         """Record tile ``index`` done, with its ``tally`` and the bytes its format keeps
-        (:meth:`~atlas.store.format.Format.write_tile`'s result; none where the tile was
+        (:meth:`~atlas.store.format.TileRun.write_tile`'s result; none where the tile was
         written by a worker into the format's own store): the tile file appears whole, or
         not at all."""
         arrays = {name: np.frombuffer(data, np.uint8) for name, data in (chunks or {}).items()}
@@ -208,8 +210,8 @@ class TileStore:
 
     def finalize(self, output: Path, groups: dict, root_vars, attrs: dict) -> None:
         """Assemble the finished tiles into the atlas at ``output`` in this run's format,
-        then remove the partial run (:meth:`atlas.store.format.Format.finalize`)."""
-        self.format.finalize(self, output, groups, root_vars, attrs)
+        then remove the partial run (:meth:`atlas.store.format.TileRun.finalize`)."""
+        self.tile_run.finalize(self, output, groups, root_vars, attrs)
 
     def remove(self) -> None:
         """Delete the partial run, once its output is in place."""

@@ -16,8 +16,6 @@ are absent when not asked. :func:`open_study` checks a file before it is believe
 from __future__ import annotations
 
 import json
-import os
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +24,7 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import PARAMETERS
+from atlas.store.formats import format_for
 from atlas.store.schema import STUDY_SCHEMA
 
 __all__ = ["STUDY_SCHEMA", "STUDY_FORMAT", "STUDY_VARIABLES", "BIFURCATIONS",
@@ -178,58 +177,22 @@ def variable_attrs(name: str) -> dict:
     return attrs
 
 
-def _is_zarr(path: Path) -> bool:
-    return path.suffix == ".zarr"
-
-
 def write_study(ds: xr.Dataset, path: str | Path) -> None:
-    """Write ``ds`` (checked first, :func:`check_study`) at ``path``: whole or not at all (a
-    temporary name renamed into place)."""
+    """Write ``ds`` (checked first, :func:`check_study`) at ``path`` in the format its name
+    asks for (:func:`atlas.store.formats.format_for`): whole or not at all."""
     path = Path(path)
     check_study(ds, path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    old = path.with_name(f".{path.name}.{os.getpid()}.old")
-    try:
-        if _is_zarr(path):
-            ds.to_zarr(tmp, mode="w", consolidated=False)
-            if path.exists() or path.is_symlink():  # a folder cannot be replaced in one step:
-                os.replace(path, old)              # the old study moves aside, then goes
-        else:
-            ds.to_netcdf(tmp, engine="h5netcdf")
-        os.replace(tmp, path)
-    except BaseException:
-        if old.exists() and not path.exists():  # put the old study back where it was
-            os.replace(old, path)
-        _remove(tmp)
-        raise
-    _remove(old)
-
-
-def _remove(path: Path) -> None:
-    """Remove ``path`` (a file or a folder) if it is there."""
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        path.unlink(missing_ok=True)
-
-
-def _attrs(path: Path) -> dict:
-    if _is_zarr(path):
-        from atlas.store.zarrformat import root_attrs
-
-        return root_attrs(path)
-    from atlas.store.hdf5 import root_attrs
-
-    return root_attrs(path)[0]
+    format_for(path).write_dataset(ds, path)
 
 
 def is_study_file(path: str | Path) -> bool:
     """Whether ``path`` is a study file (by its ``atlas_schema`` attribute)."""
     path = Path(path)
-    if not path.exists() or (path.is_dir() and not _is_zarr(path)):
+    fmt = format_for(path)
+    if not path.exists() or (path.is_dir() and not fmt.folder):
         return False
     try:
-        value = _attrs(path).get("atlas_schema")
+        value = fmt.root_attrs(path).get("atlas_schema")
     except Exception:  # not HDF5 / Zarr at all: the atlas reader says what it is
         return False
     if isinstance(value, bytes):
@@ -243,11 +206,7 @@ def open_study(path: str | Path) -> xr.Dataset:
     if not path.exists():
         raise InputFileError(f"{path}: no such file")
     try:
-        if _is_zarr(path):
-            ds = xr.open_zarr(path, consolidated=False, mask_and_scale=False).load()
-        else:
-            with xr.open_dataset(path, engine="h5netcdf", mask_and_scale=False) as f:
-                ds = f.load()
+        ds = format_for(path).open_dataset(path)
     except Exception as exc:  # a damaged file fails in h5py, h5netcdf, zarr or xarray
         raise InputFileError(f"{path}: not a readable study file "
                              f"({exc.__class__.__name__})") from None

@@ -6,13 +6,13 @@ file (:mod:`atlas.store.schema`: root variables, coordinates, attributes, groups
 ``xr.open_datatree(path, engine="zarr")`` or :func:`atlas.open`.
 
 During a run the store is built inside the partial folder (``<output>.partial/atlas.zarr``):
-:meth:`Zarr.create` writes the metadata (one chunk per tile), :meth:`Zarr.write_tile` writes
-a tile by region, whole chunks only, so tiles never share a chunk and any number of writers
-(Dask workers with the partial folder on a shared file system) can write their own tiles at
-once. Zarr writes each chunk to a temporary name and renames it, so a kill leaves a chunk
-whole or absent; the tile counts as done only once its record is written after it
-(:meth:`atlas.store.partial.TileStore.record`). :meth:`Zarr.finalize` adds the summary, marks
-the store complete, and renames it onto the output.
+:meth:`ZarrTiles.create` writes the metadata (one chunk per tile), :meth:`ZarrTiles.write_tile`
+writes a tile by region, whole chunks only, so tiles never share a chunk and any number of
+writers (Dask workers with the partial folder on a shared file system) can write their own
+tiles at once. Zarr writes each chunk to a temporary name and renames it, so a kill leaves a
+chunk whole or absent; the tile counts as done only once its record is written after it
+(:meth:`atlas.store.partial.TileStore.record`). :meth:`ZarrTiles.finalize` adds the summary,
+marks the store complete, and renames it onto the output.
 """
 
 from __future__ import annotations
@@ -28,10 +28,10 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import BackendUnavailable, InputFileError
 from atlas.layout import Layout
-from atlas.store.format import Format
+from atlas.store.format import Container, TileRun
 from atlas.store.schema import MAP_VARIABLES, SCHEMA, chunks_of, not_an_atlas
 
-__all__ = ["Zarr", "DATA", "root_attrs"]
+__all__ = ["Zarr", "ZarrTiles", "DATA", "root_attrs"]
 
 #: The Zarr store's folder name inside the partial folder.
 DATA = "atlas.zarr"
@@ -46,18 +46,12 @@ def _zarr():
     return zarr
 
 
-class Zarr(Format):
+class ZarrTiles(TileRun):
+    """A sweep's tiles into a Zarr store inside the partial folder, each tile its own
+    chunks, written by whichever process computed it (module docstring)."""
+
     name = "zarr"
-    description = "a Zarr v3 store (a folder; tiles written in parallel, e.g. by Dask workers)"
-    suffixes = (".zarr",)
-    folder = True
     parallel_tile_writes = True
-
-    def recognises(self, path: Path) -> bool:
-        return (path / "zarr.json").is_file()
-
-    def require(self) -> None:
-        _zarr()
 
     def create(self, folder: Path, layout: Layout) -> None:
         """The store's metadata: coordinates, empty label variables chunked one chunk per
@@ -116,6 +110,22 @@ class Zarr(Format):
         shutil.rmtree(aside, ignore_errors=True)
         tiles.remove()
 
+class Zarr(Container):
+    name = "zarr"
+    description = "a Zarr v3 store (a folder; tiles written in parallel, e.g. by Dask workers)"
+    suffixes = (".zarr",)
+    folder = True
+    tile_run = ZarrTiles()
+
+    def recognises(self, path: Path) -> bool:
+        return (path / "zarr.json").is_file()
+
+    def require(self) -> None:
+        _zarr()
+
+    def root_attrs(self, path: Path) -> dict:
+        return root_attrs(path)
+
     def attrs(self, path: Path) -> dict:
         if path.is_dir() and not (path / "zarr.json").exists():
             raise InputFileError(f"{path}: is a directory, not an atlas file")
@@ -127,6 +137,28 @@ class Zarr(Format):
 
     def open(self, path: Path, chunks=None) -> xr.DataTree:
         return xr.open_datatree(path, engine="zarr", mask_and_scale=False, chunks=chunks)
+
+
+    def open_dataset(self, path: Path) -> xr.Dataset:
+        return xr.open_zarr(path, consolidated=False, mask_and_scale=False).load()
+
+    def write_dataset(self, ds: xr.Dataset, path: Path) -> None:
+        """A folder cannot be replaced in one step: the new store is written under a
+        temporary name, the old one moved aside, the new one renamed into place, and only
+        then the old one removed (put back if the rename fails)."""
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        old = path.with_name(f".{path.name}.{os.getpid()}.old")
+        try:
+            ds.to_zarr(tmp, mode="w", consolidated=False)
+            if path.exists() or path.is_symlink():
+                os.replace(path, old)
+            os.replace(tmp, path)
+        except BaseException:
+            if old.exists() and not path.exists():  # put the old store back where it was
+                os.replace(old, path)
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        shutil.rmtree(old, ignore_errors=True)
 
 
 def root_attrs(path: Path) -> dict:

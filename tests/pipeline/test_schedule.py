@@ -20,14 +20,14 @@ def test_resolve_splits_the_backend_word_into_device_and_scheduler():
         resolve("tpu")
 
 
-class _Format:
+class _TileRun:
     def __init__(self, parallel):
         self.parallel_tile_writes = parallel
 
 
 class _Tiles:
     def __init__(self, parallel):
-        self.format = _Format(parallel)
+        self.tile_run = _TileRun(parallel)
 
 
 def test_only_dask_workers_write_tiles_and_only_where_the_format_takes_parallel_writes():
