@@ -150,17 +150,32 @@ def _map_png(attractor: np.ndarray, status: np.ndarray, wells: np.ndarray) -> st
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode()
 
 
+#: Band names keep this fraction of the window's height off θ̇ = 0 (where the rest states
+#: and saddles are marked) and of its width and height off its edges (where a name centred on
+#: its point would be cut in half), wherever the band has room elsewhere.
+_LABEL_CLEARANCE = 0.06
+
+
 def _band_labels(attractor, labelled, wells, distance, theta0, theta_dot0) -> list:
     """Where the page writes "k" on the map when it has more than LABELLED_WELLS wells (past
-    that, the palette's lightness steps are too fine to name a band by colour alone): for
-    each well k, [k, θ0 [rad], θ̇0 [rad s⁻¹]] of its grid point farthest from every basin
-    boundary (the stored ``boundary_distance``; with none stored, its middle point)."""
+    that, the palette repeats and a band is best named): for each well k, [k, θ0 [rad],
+    θ̇0 [rad s⁻¹]] of its grid point farthest from every basin boundary (the stored
+    ``boundary_distance``; with none stored, its middle point), of the points _LABEL_CLEARANCE
+    away from θ̇ = 0 and from the window's edges where the band has any (as the PNG's band
+    names, :func:`atlas.views.maps._label_bands`)."""
     if len(wells) <= LABELLED_WELLS:
         return []
     depth = np.where(np.isfinite(distance), distance, -1.0)
+    width, height = np.ptp(theta0), np.ptp(theta_dot0)
+    inside_t = np.minimum(theta0 - theta0[0], theta0[-1] - theta0) >= _LABEL_CLEARANCE * width
+    inside_v = ((np.minimum(theta_dot0 - theta_dot0[0], theta_dot0[-1] - theta_dot0)
+                 >= _LABEL_CLEARANCE * height)
+                & (np.abs(theta_dot0) >= _LABEL_CLEARANCE * height))
+    clear = inside_v[:, None] & inside_t[None, :]
     labels = []
     for k in wells:
-        j, i = np.nonzero(labelled & (attractor == k))
+        band = labelled & (attractor == k)
+        j, i = np.nonzero(band & clear if (band & clear).any() else band)
         best = int(np.argmax(depth[j, i])) if (depth[j, i] > 0).any() else j.size // 2
         labels.append([int(k), float(theta0[i[best]]), float(theta_dot0[j[best]])])
     return labels

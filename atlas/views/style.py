@@ -279,10 +279,17 @@ def critical_point_markers(ax, theta, is_saddle, tilted: bool = False) -> None:
     saddles ±3π of the default window: ``clip_on`` off); ``tilted``: a pendulum with torque,
     whose rest states sit at θ* + 2πk, θ* = asin(τ/ω0²), and saddles at π − θ* + 2πk."""
     theta, is_saddle = np.asarray(theta, float), np.asarray(is_saddle, bool)
+    # unclipped, a marker outside fixed limits (a zoom far from θ̇ = 0) would be drawn there,
+    # off the map: only those in the window (to rounding) are drawn where the limits are set
+    shown = np.ones(theta.shape, bool)
+    for axis, values in (("x", theta), ("y", np.zeros_like(theta))):
+        if not getattr(ax, f"get_autoscale{axis}_on")():
+            lo, hi = sorted(getattr(ax, f"get_{axis}lim")())
+            shown &= (values >= lo - 1e-9 * (hi - lo)) & (values <= hi + 1e-9 * (hi - lo))
     for chosen, style, label in (
-            (~is_saddle, ATTRACTOR_MARKER,
+            (shown & ~is_saddle, ATTRACTOR_MARKER,
              "attractors (θ* + 2πk, 0)" if tilted else "attractors (2πk, 0)"),
-            (is_saddle, SADDLE_MARKER,
+            (shown & is_saddle, SADDLE_MARKER,
              "saddles (π − θ* + 2πk, 0)" if tilted else "saddles ((2j+1)π, 0)")):
         if chosen.any():  # none in a narrow window: no legend entry for what is not there
             ax.plot(theta[chosen], np.zeros(chosen.sum()), **style, zorder=5, clip_on=False,

@@ -81,6 +81,20 @@ def test_a_saddle_on_the_maps_edge_is_drawn_whole():
         assert pixels[row, column].max() < 100, (theta, pixels[row, column])
 
 
+def test_a_zoom_off_the_theta_axis_draws_no_marker_outside_its_window():
+    """A zoom window around θ̇0 = 2.41 rad/s holds no critical point: none is drawn (unclipped,
+    one at θ̇ = 0 would sit far below the map, and the figure's tight layout failed), and
+    the legend does not name them."""
+    grid = (np.linspace(-0.5, 0.5, 21), np.linspace(2.4, 2.5, 21))
+    critical = (np.array([-PI, 0.0, PI]), np.array([True, False, True]), False)
+    fig = Figure(figsize=MAP_SIZE)
+    ax = fig.add_subplot()
+    maps._draw_basin(ax, grid, (np.zeros((21, 21)), 0, 0, False), [], critical, None, "t")
+    assert _markers(ax) == {}
+    box = fig.get_tightbbox(FigureCanvasAgg(fig).get_renderer())
+    assert box.height < 2 * fig.get_figheight()  # nothing drawn far off the figure
+
+
 def test_the_orbit_figure_has_no_colour_of_its_own_for_saddles(tmp_path, monkeypatch):
     """``atlas orbit`` without a file: its phase plane marks the saddles as SADDLE_MARKER and
     its θ(t) panel draws the saddles' levels in the marker's edge colour; nothing is red

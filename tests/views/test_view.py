@@ -105,6 +105,31 @@ def test_packed_arrays_round_trip(files):
     assert len(_data(files["pages"]["sweep"])["points"]) == 2
 
 
+def test_band_names_keep_off_the_markers_and_the_edges():
+    """19 horizontal bands across θ̇ ∈ [−12, 12], well 0's six wide around θ̇ = 0, the others
+    one wide: each named inside its own band, off θ̇ = 0, where the rest states and saddles
+    are marked (well 0's band is deepest there), and off the window's edges (every band is
+    deepest, by the stored distance, at the left edge), wherever the band has room."""
+    from atlas.views.page import _band_labels
+
+    theta0, theta_dot0 = np.linspace(-3 * np.pi, 3 * np.pi, 60), np.linspace(-12, 12, 241)
+    depth = np.abs(theta_dot0)
+    k = np.where(depth < 3, 0, np.sign(theta_dot0) * np.ceil(depth - 3)).astype(int)
+    lo, hi = np.where(k == 0, -3, np.where(k > 0, k + 2, k - 3)), np.where(
+        k == 0, 3, np.where(k > 0, k + 3, k - 2))
+    to_edge = np.minimum(theta_dot0 - lo, hi - theta_dot0)  # to the band's nearer boundary
+    distance = to_edge[:, None] * np.linspace(2, 1, 60)[None, :]
+    k = k[:, None] * np.ones((1, 60), int)
+    wells = np.arange(-9, 10)
+    labels = _band_labels(k, np.ones(k.shape, bool), wells, distance, theta0, theta_dot0)
+    assert [w for w, _, _ in labels] == wells.tolist()
+    for well, th, v in labels:
+        assert k[int(np.argmin(np.abs(theta_dot0 - v))), 0] == well, (well, v)
+        if abs(well) <= 8:  # room off the axis and the edges
+            assert abs(v) >= 0.06 * 24 and 12 - abs(v) >= 0.06 * 24, (well, v)
+            assert min(th - theta0[0], theta0[-1] - th) >= 0.06 * 6 * np.pi, (well, th)
+
+
 def test_view_cli(files, tmp_path, capsys):
     out = tmp_path / "page.html"
     assert main(["view", str(files["single"]), "-o", str(out)]) == 0

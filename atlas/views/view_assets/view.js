@@ -416,12 +416,15 @@
     c.restore();
   }
   // The critical points as every figure marks them (D.markers: atlas.views.style's), not
-  // clipped to the plot, so that a saddle on the window's edge (±3π) shows whole.
+  // clipped to the plot, so that a saddle on the window's edge (±3π) shows whole; only those
+  // in the window (to rounding), as critical_point_markers: none in a zoom off θ̇ = 0.
   function drawMarkers(c) {
+    const et = 1e-9 * (TH1 - TH0), ev = 1e-9 * (V1 - V0);
+    if (V0 - ev > 0 || V1 + ev < 0) return;
     for (const [which, list] of [["attractor", P.attractors], ["saddle", P.saddles]]) {
       const m = D.markers[which], px = 4 / 3;  // 1 pt = 4/3 CSS px
       c.fillStyle = m.fill; c.strokeStyle = m.edge; c.lineWidth = m.width * px;
-      for (const t of list) {
+      for (const t of list.filter((x) => x >= TH0 - et && x <= TH1 + et)) {
         c.beginPath(); c.arc(xOf(t), yOf(0), m.size * px / 2, 0, TWO_PI); c.fill(); c.stroke();
       }
     }
