@@ -304,10 +304,9 @@
     }
   }
 
-  // The time and distance layers: one pixel per grid point, in the PNGs' colour maps on a
-  // log scale between the 1st and 99th percentiles of the stored values above the floor (0;
-  // for the distance, d_cert where measured), so that the ridges and valleys use the whole
-  // scale: t_trap = 0 (certified at once) at the dark end, as in the PNG; the "no label"
+  // The time and distance layers: one pixel per grid point, in the PNGs' colour maps and on
+  // their log scales, over the stored values above the floor (0; for the distance, d_cert
+  // where measured): t_trap = 0 (certified at once) at the dark end, as in the PNG; the "no label"
   // white where nothing is stored (no label certified; no distance); the PNG's d_cert colour
   // where a state is closer than d_cert to a boundary.
   function layerImage(p, name) {
@@ -326,9 +325,11 @@
     }
     const finite = Array.from(values).filter((v) => v > floor).map(Math.log10)
       .sort((x, y) => x - y);
+    // the PNGs' limits (atlas.views.maps): t_trap from its least to its greatest value, the
+    // distance from its 1st to its 99th percentile; a decade at least
     const q = (f) => finite[Math.min(finite.length - 1, Math.floor(f * finite.length))];
-    let lo = finite.length ? q(0.01) : 0, hi = finite.length ? q(0.99) : 1;
-    if (!(hi > lo)) { lo -= 0.5; hi += 0.5; }
+    const [a, b] = name === "t_trap" ? [0, 1] : [0.01, 0.99];
+    const lo = finite.length ? q(a) : -3, hi = Math.max(finite.length ? q(b) : 0, lo + 1);
     const canvas = document.createElement("canvas");
     canvas.width = NT; canvas.height = NV;
     const ctx = canvas.getContext("2d"), img = ctx.createImageData(NT, NV);
@@ -559,7 +560,7 @@
       title.textContent = layer === "t_trap" ? "Colour: the time to trap t_trap [s]" +
         (P.barrier ? " (or to the running certificate)" : "") + ", log scale"
         : "Colour: the distance to the nearest basin boundary (θ and θ̇ in rad and rad/s as " +
-          "one unit), log scale";
+          "one unit), log scale over its 1st to 99th percentile";
       colours.appendChild(title);
       const bar = document.createElement("canvas"), bw = 220;
       bar.width = bw; bar.height = 12; bar.className = "bar";
