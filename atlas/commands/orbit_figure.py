@@ -22,6 +22,7 @@ from atlas.errors import AtlasError
 from atlas.physics.pendulum import Pendulum, critical_points
 from atlas.status import RUNNING, TRAPPED
 from atlas.views.style import (
+    ORBIT_START_MARKER,
     SADDLE_MARKER,
     STYLE,
     basin_colours,
@@ -151,8 +152,8 @@ def _draw_phase_curve(ax, orbit: Orbit, lo: float, hi: float) -> None:
     ax.plot(theta, theta_dot, color="white", lw=3.0, zorder=6)
     ax.plot(theta, theta_dot, color="black", lw=1.2, zorder=7,
             label=f"orbit (drawn modulo {turns} into the window)" if shifted else "orbit")
-    ax.plot(_wrap_point(orbit.theta0, lo, hi), orbit.theta_dot0, "o", mfc="white",
-            mec="black", ms=7, zorder=8, label="initial condition (θ0, θ̇0)")
+    ax.plot(_wrap_point(orbit.theta0, lo, hi), orbit.theta_dot0, **ORBIT_START_MARKER,
+            zorder=8, label="initial condition (θ0, θ̇0)")
     if orbit.trap_index is not None:
         i = orbit.trap_index
         ax.plot(_wrap_point(orbit.theta[i], lo, hi), orbit.theta_dot[i], "x", color="black",

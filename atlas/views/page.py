@@ -64,6 +64,7 @@ from atlas.views.style import (
     LABELLED_WELLS,
     NEAR_BOUNDARY_COLOR,
     NO_LABEL_COLOR,
+    ORBIT_START_MARKER,
     RUNNING_COLOR_HEX,
     SADDLE_MARKER,
     SEPARATRIX_ALPHA,
@@ -333,8 +334,8 @@ def page_style() -> dict:
     own): the well palette's tables (:func:`atlas.views.style.well_palette`), the running and
     "no label" colours, the t_trap and distance colour maps as 256-entry tables
     (:func:`atlas.views.style.colormap_table`, packed as one string of "rrggbb" each: 1.5 kB,
-    not 2.5) with the distance map's d_cert colour, the separatrices and the critical-point
-    markers."""
+    not 2.5) with the distance map's d_cert colour, the separatrices, the critical-point
+    markers and the orbit's start."""
     return {
         "palette": well_palette(), "running_color": RUNNING_COLOR_HEX,
         "no_label_color": NO_LABEL_COLOR, "near_boundary_color": NEAR_BOUNDARY_COLOR,
@@ -343,7 +344,8 @@ def page_style() -> dict:
         "separatrix": {"color": SEPARATRIX_COLOR, "alpha": SEPARATRIX_ALPHA},
         "separatrix_faint": {"color": SEPARATRIX_FAINT["color"],
                              "alpha": SEPARATRIX_FAINT["alpha"]},
-        "markers": {"saddle": _marker(SADDLE_MARKER), "attractor": _marker(ATTRACTOR_MARKER)},
+        "markers": {"saddle": _marker(SADDLE_MARKER), "attractor": _marker(ATTRACTOR_MARKER),
+                    "start": _marker(ORBIT_START_MARKER)},
     }
 
 

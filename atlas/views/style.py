@@ -15,8 +15,8 @@ __all__ = ["STYLE", "MAP_SIZE", "CURVE_SIZE", "PNG_OPTIONS", "well_colour", "wel
            "NO_LABEL_COLOR", "NEAR_BOUNDARY_COLOR", "T_TRAP_CMAP", "DISTANCE_CMAP",
            "colormap_table", "SEPARATRIX_COLOR", "SEPARATRIX_WIDTH", "SEPARATRIX_ALPHA",
            "SEPARATRIX_FAINT", "CYCLE_COLOR", "LABELLED_WELLS", "SADDLE_MARKER",
-           "ATTRACTOR_MARKER", "pi_label", "pi_ticks", "point_title", "critical_point_markers",
-           "axes", "window_ticks"]
+           "ATTRACTOR_MARKER", "ORBIT_START_MARKER", "pi_label", "pi_ticks", "point_title",
+           "critical_point_markers", "axes", "window_ticks"]
 
 #: One style for every atlas figure.
 STYLE = {"figure.dpi": 110, "savefig.dpi": 150, "axes.grid": False, "font.size": 10,
@@ -270,6 +270,10 @@ SADDLE_MARKER = {"marker": "o", "ms": 7.0, "mfc": "white", "mec": "black", "mew"
 #: The one look of an attractor (a rest state): a black dot ringed in white.
 ATTRACTOR_MARKER = {"marker": "o", "ms": 6.0, "mfc": "black", "mec": "white", "mew": 1.0,
                     "ls": "none"}
+#: The start of an orbit (its initial condition), in ``atlas orbit``'s figure and on the page:
+#: a white square edged black, a shape of its own (an open circle is a saddle).
+ORBIT_START_MARKER = {"marker": "s", "ms": 6.5, "mfc": "white", "mec": "black", "mew": 1.5,
+                      "ls": "none"}
 
 
 def critical_point_markers(ax, theta, is_saddle, tilted: bool = False) -> None:

@@ -17,6 +17,7 @@ from atlas.views.style import (  # noqa: E402
     ATTRACTOR_MARKER,
     DISTANCE_CMAP,
     MAP_SIZE,
+    ORBIT_START_MARKER,
     SADDLE_MARKER,
     T_TRAP_CMAP,
     WELL_CYCLE,
@@ -98,7 +99,8 @@ def test_a_zoom_off_the_theta_axis_draws_no_marker_outside_its_window():
 def test_the_orbit_figure_has_no_colour_of_its_own_for_saddles(tmp_path, monkeypatch):
     """``atlas orbit`` without a file: its phase plane marks the saddles as SADDLE_MARKER and
     its θ(t) panel draws the saddles' levels in the marker's edge colour; nothing is red
-    (the old figure's saddles were red, the maps' white)."""
+    (the old figure's saddles were red, the maps' white); the orbit's start is no open circle
+    (it looked like a saddle)."""
     from atlas.commands.orbit import report
     from atlas.commands.orbit_figure import plot_orbit
 
@@ -108,6 +110,9 @@ def test_the_orbit_figure_has_no_colour_of_its_own_for_saddles(tmp_path, monkeyp
     plot_orbit(orbit, tmp_path / "o.png", context["tree"], context["index"])
     phase, angle = saved[0].axes[0], saved[0].axes[1]
     assert _looks_like(_markers(phase)["saddles"], SADDLE_MARKER)
+    start = next(line for line in phase.lines if line.get_label().startswith("initial"))
+    assert _looks_like(start, ORBIT_START_MARKER)  # a shape of its own: not a saddle's
+    assert ORBIT_START_MARKER["marker"] != SADDLE_MARKER["marker"]
     levels = [line for line in angle.lines if line.get_linestyle() == ":"]
     assert levels and {to_hex(line.get_color()) for line in levels} == {
         to_hex(SADDLE_MARKER["mec"])}

@@ -288,8 +288,9 @@
       c.stroke();
     }
     const x0 = xOf(wrap(path[0])), y0 = yOf(path[1]);
-    c.fillStyle = "#fff"; c.strokeStyle = "#000"; c.lineWidth = 1.5;
-    c.beginPath(); c.arc(x0, y0, latest ? 5 : 4, 0, TWO_PI); c.fill(); c.stroke();
+    const m = D.markers.start, side = m.size * 4 / 3 * (latest ? 1 : 0.8);  // pt → px
+    c.fillStyle = m.fill; c.strokeStyle = m.edge; c.lineWidth = m.width * 4 / 3;
+    c.beginPath(); c.rect(x0 - side / 2, y0 - side / 2, side, side); c.fill(); c.stroke();
     if (orbits.length > 1) {
       c.font = "bold 12px 'DejaVu Sans', system-ui, sans-serif";
       c.textAlign = "left"; c.textBaseline = "bottom";
@@ -598,7 +599,7 @@
     }
     if (P.cycle) item(marks, { kind: "dash", color: "#000" }, "running limit cycle");
     item(marks, { kind: "line", color: "#000" }, "orbit");
-    item(marks, { kind: "ring", color: "#000" }, "its start");
+    item(marks, { kind: "square", color: D.markers.start.edge }, "its start");
     item(marks, { kind: "cross", color: "#000" }, "certified" + (P.barrier
       ? " (energy trap or running barrier)" : " (energy trap)"));
     key.appendChild(marks);
