@@ -73,8 +73,9 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
               on_result=None):
     """Load, check, compute and write the study of ``config``: (Dataset, output path,
     seconds in all). ``on_result`` as :func:`atlas.stability.study.compute_points`."""
+    from atlas.kernels.threads import cores
     from atlas.pipeline.config import load_config
-    from atlas.stability.study import PHASES, StudySettings, compute_points, cores
+    from atlas.stability.study import PHASES, StudySettings, compute_points
 
     start = time.perf_counter()
     cfg = load_config(config, output=output, study=True)

@@ -1,4 +1,5 @@
-"""How many parameter points may run their compiled kernels at once, from Python threads.
+"""How many parameter points may run their compiled kernels at once, from Python threads,
+and with how many of Numba's threads each; the cores this process may use.
 
 Independent parameter points (their exact boundaries, separatrices, study values) are
 computed two at a time on threads: the compiled code releases the GIL, so the points'
@@ -11,7 +12,26 @@ results never depend on it: each point is computed alone.
 
 from __future__ import annotations
 
-__all__ = ["concurrent_points", "threadsafe_layer"]
+__all__ = ["concurrent_points", "threadsafe_layer", "cores", "use_threads"]
+
+
+def cores() -> int:
+    """The cores this process may run on (its CPU affinity on Linux, else every core)."""
+    import os
+
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
+def use_threads(numba_threads: int | None) -> None:
+    """Numba's thread count for this thread's parallel kernels (a per-thread setting):
+    ``numba_threads`` where given (at most Numba's pool), else left as it is."""
+    if numba_threads is not None:
+        import numba
+
+        numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
 
 
 def threadsafe_layer() -> bool:

@@ -21,11 +21,15 @@ from collections.abc import Callable, Iterator
 from urllib.parse import urlparse
 
 from atlas.errors import BackendUnavailable
+from atlas.kernels.threads import cores
 
 log = logging.getLogger(__name__)
 
 
-def _client(scheduler: str | None, workers: int | None):
+def client_for(scheduler: str | None, workers: int | None):
+    """(a Dask client, the LocalCluster it started or None): on ``scheduler``'s address where
+    given, else on a new local cluster of ``workers`` processes (default: up to 4, one per
+    core). BackendUnavailable in one line without dask.distributed or a scheduler to reach."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -49,13 +53,6 @@ def _client(scheduler: str | None, workers: int | None):
     return Client(cluster), cluster
 
 
-def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not Linux
-        return os.cpu_count() or 1
-
-
 def _host(address: str) -> str:
     return urlparse(address).hostname or address
 
@@ -71,16 +68,18 @@ def numba_threads_here(slots_by_host: dict[str, int]) -> int | None:
     except (ImportError, ValueError):
         return None
     slots = slots_by_host.get(_host(worker.address)) or worker.state.nthreads
-    return max(1, _cores() // max(1, slots))
+    return max(1, cores() // max(1, slots))
 
 
-def dask_results(cfg, todo, args_of: Callable[[int], tuple], compute_tile, run_identity: str,
-                 ) -> Iterator[tuple[int, tuple]]:
-    """Yield (tile index, what ``compute_tile`` returned: (arrays, tally), or a tally for a
-    tile its worker wrote) as tiles finish on the cluster."""
+def dask_map(scheduler: str | None, workers: int | None, task: Callable, args_of: Callable,
+             todo, prefix: str) -> Iterator[tuple[int, object]]:
+    """Yield (index, ``task(*args_of(index), numba_threads=…)``) for every index of ``todo``
+    as the tasks finish on the cluster (:func:`client_for`), at most 2 × workers in flight,
+    each with its host's share of the cores as Numba threads (:func:`numba_threads_here`).
+    Task keys ``<prefix>-<token>-<index>`` are unique per call."""
     from distributed import as_completed
 
-    client, cluster = _client(cfg.execution.scheduler, cfg.execution.workers)
+    client, cluster = client_for(scheduler, workers)
     try:
         info = client.scheduler_info(n_workers=-1)["workers"]
         n_workers = max(1, len(info))
@@ -88,7 +87,7 @@ def dask_results(cfg, todo, args_of: Callable[[int], tuple], compute_tile, run_i
         for address, worker in info.items():
             host = _host(address)
             slots_by_host[host] = slots_by_host.get(host, 0) + int(worker["nthreads"])
-        prefix = f"atlas-tile-{run_identity}-{secrets.token_hex(6)}"
+        prefix = f"{prefix}-{secrets.token_hex(6)}"
         log.info("dask: %d workers, task slots per host %s", n_workers, slots_by_host)
         pending = iter(todo)
         window = as_completed()
@@ -97,15 +96,14 @@ def dask_results(cfg, todo, args_of: Callable[[int], tuple], compute_tile, run_i
             for index in (next(pending, None) for _ in range(count)):
                 if index is None:
                     return
-                future = client.submit(_tile_task, compute_tile, slots_by_host,
-                                       *args_of(int(index)), key=f"{prefix}-{index}",
-                                       pure=False)
-                future.tile_index = int(index)
+                future = client.submit(_task, task, slots_by_host, *args_of(int(index)),
+                                       key=f"{prefix}-{index}", pure=False)
+                future.task_index = int(index)
                 window.add(future)
 
         submit(2 * n_workers)
         for future in window:
-            yield future.tile_index, future.result()
+            yield future.task_index, future.result()
             future.release()
             del future
             submit(1)
@@ -115,6 +113,15 @@ def dask_results(cfg, todo, args_of: Callable[[int], tuple], compute_tile, run_i
             cluster.close()
 
 
-def _tile_task(compute_tile, slots_by_host, *args):
-    """One tile on a worker, with the worker's share of its host's cores."""
-    return compute_tile(*args, numba_threads=numba_threads_here(slots_by_host))
+def dask_results(cfg, todo, args_of: Callable[[int], tuple], compute_tile, run_identity: str,
+                 ) -> Iterator[tuple[int, tuple]]:
+    """Yield (tile index, what ``compute_tile`` returned: (arrays, tally), or a tally for a
+    tile its worker wrote) as tiles finish on the cluster (:func:`dask_map`, keys
+    ``atlas-tile-<run identity>-<token>-<tile>``)."""
+    yield from dask_map(cfg.execution.scheduler, cfg.execution.workers, compute_tile, args_of,
+                        todo, f"atlas-tile-{run_identity}")
+
+
+def _task(function, slots_by_host, *args):
+    """One task on a worker, with the worker's share of its host's cores."""
+    return function(*args, numba_threads=numba_threads_here(slots_by_host))

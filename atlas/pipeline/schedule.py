@@ -23,6 +23,7 @@ from typing import NamedTuple
 from atlas import defaults
 from atlas.boundaries.certificate import Certifier
 from atlas.defaults import BACKEND_WORDS
+from atlas.kernels.threads import concurrent_points, use_threads
 from atlas.labels.backends import Backend
 from atlas.labels.backends import lookup as lookup_backend
 from atlas.labels.labelling import label
@@ -32,6 +33,7 @@ from atlas.pipeline.config import Config
 from atlas.store.partial import TileStore
 
 __all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "label_tile", "certify_tile",
+           "point_results",
            "tile_args", "local_results", "each_in_background",
            "compute_tile_into_store", "dask_tile_results"]
 
@@ -55,7 +57,7 @@ def label_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice
                method=defaults.METHOD, backend="cpu", numba_threads=None):
     """The first half of :func:`compute_tile`: the tile's labels (the RK4 map and its
     certificates, :func:`atlas.label`), with ``numba_threads`` threads where given."""
-    _use_threads(numba_threads)
+    use_threads(numba_threads)
     p = certifier.pendulum
     return label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
                  omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
@@ -66,19 +68,10 @@ def certify_tile(certifier: Certifier, rows: slice, res, numba_threads=None):
     """The second half of :func:`compute_tile`: the labels ``res`` of :func:`label_tile`
     certified for the exact equation (status, boundary distance), as the tile's arrays and
     tally, with ``numba_threads`` threads where given."""
-    _use_threads(numba_threads)
+    use_threads(numba_threads)
     status, distance, tally = certifier.tile(rows, res.attractor, res.status)
     return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
             "boundary_distance": distance}, tally
-
-
-def _use_threads(numba_threads: int | None) -> None:
-    """Numba's thread count for this thread's parallel kernels (a per-thread setting): the
-    caller's ``numba_threads``, where given."""
-    if numba_threads is not None:
-        import numba
-
-        numba.set_num_threads(min(numba_threads, numba.config.NUMBA_NUM_THREADS))
 
 
 def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
@@ -203,6 +196,32 @@ def dask_tile_results(cfg, tiles: TileStore, certifiers, todo, device: str = "cp
 
         task = compute_tile
     yield from dask_results(cfg, todo, args_of, task, tiles.manifest["attrs"]["run_identity"])
+
+
+def point_results(task: Callable, points: list[tuple], *, backend: str = "cpu",
+                  scheduler: str | None = None, workers: int | None = None,
+                  per_thread: int = 4) -> Iterator[tuple[int, object]]:
+    """(i, ``task(*points[i], numba_threads=…)``) of every parameter point: on this machine
+    (``backend`` "cpu": in their order, by up to ``workers`` threads where there are at
+    least ``per_thread`` points per thread, else here; threads, not processes: the compiled
+    kernels release the GIL, and a process pool would fork Numba's running OpenMP pool or
+    import the caller's ``__main__`` again) or as Dask tasks, one per point ("dask": on
+    ``scheduler`` if given, else a local cluster of ``workers`` processes; in the order
+    they finish). Each point is computed alone, so its result does not depend on where."""
+    if backend == "dask":
+        from atlas.pipeline.distributed import dask_map
+
+        yield from dask_map(scheduler, workers, task, lambda i: points[i], range(len(points)),
+                            "atlas-points")
+        return
+    n = concurrent_points(len(points) // per_thread, most=workers or 1)
+    if n < 2:
+        yield from ((i, task(*point)) for i, point in enumerate(points))
+        return
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(n) as pool:
+        yield from enumerate(pool.map(lambda point: task(*point), points))
 
 
 class Scheduler(NamedTuple):

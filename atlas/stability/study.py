@@ -16,7 +16,6 @@ reason, and the study goes on.
 from __future__ import annotations
 
 import math
-import secrets
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -32,7 +31,7 @@ from atlas.stability.shocks import (
 )
 
 __all__ = ["StudySettings", "PointResult", "compute_point", "compute_points", "POINT_STATUS",
-           "PHASES", "cores"]
+           "PHASES"]
 
 #: The status of a parameter point (CF flag values of ``point_status``).
 POINT_STATUS = {"exact": 0, "saddle_node": 1, "failed": 2}
@@ -133,42 +132,18 @@ def compute_point(alpha: float, omega0: float, torque: float,
     return out
 
 
-#: Points per process below which a local study stays in one process (forking costs more).
-_POINTS_PER_PROCESS = 4
+#: Points per thread below which a local study stays in this thread.
+_POINTS_PER_THREAD = 4
 
 
-def cores() -> int:
-    """The cores this process may run on."""
-    import os
+def _point_task(alpha: float, omega0: float, torque: float, settings: StudySettings,
+                numba_threads: int | None = None) -> PointResult:
+    """:func:`compute_point` as a task of :func:`atlas.pipeline.schedule.point_results`,
+    with ``numba_threads`` Numba threads where given (a Dask worker's share of its host)."""
+    from atlas.kernels.threads import use_threads
 
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not Linux
-        return os.cpu_count() or 1
-
-
-def _point(point, settings):
-    return compute_point(*point, settings)
-
-
-def _local(points, settings: StudySettings, workers: int | None):
-    """The points' results in order, computed by ``workers`` threads where there are enough
-    points, else here. Threads, not processes: the compiled kernels release the GIL, and a
-    process pool would either fork a running OpenMP thread pool of Numba's (which GNU OpenMP
-    refuses) or, started afresh, import the caller's ``__main__`` again (a script without a
-    ``__main__`` guard, a notebook). Each point is computed alone, so the results are the same
-    whatever the number of threads."""
-    from atlas.kernels.threads import concurrent_points
-
-    n = concurrent_points(len(points) // _POINTS_PER_PROCESS, most=workers or 1)
-    if n < 2:
-        yield from (compute_point(*point, settings) for point in points)
-        return
-    from concurrent.futures import ThreadPoolExecutor
-    from functools import partial
-
-    with ThreadPoolExecutor(n) as pool:
-        yield from pool.map(partial(_point, settings=settings), points)
+    use_threads(numba_threads)
+    return compute_point(alpha, omega0, torque, settings)
 
 
 def compute_points(points: list[tuple[float, float, float]], settings: StudySettings, *,
@@ -183,34 +158,13 @@ def compute_points(points: list[tuple[float, float, float]], settings: StudySett
     task one whole point.
     ``on_result(i, result)`` is called as each arrives (on the CPU in order, with Dask in
     the order they finish). A point's result does not depend on where it was computed."""
+    from atlas.pipeline.schedule import point_results
+
     results: list[PointResult | None] = [None] * len(points)
-    if backend != "dask":
-        for i, result in enumerate(_local(points, settings, workers)):
-            results[i] = result
-            if on_result is not None:
-                on_result(i, result)
-        return results
-    from distributed import as_completed
-
-    from atlas.pipeline.distributed import _client
-
-    client, cluster = _client(scheduler, workers)
-    try:
-        prefix = f"atlas-stability-{secrets.token_hex(6)}"
-        futures = []
-        for i, point in enumerate(points):
-            future = client.submit(compute_point, *point, settings, key=f"{prefix}-{i}",
-                                   pure=False)
-            future.point_index = i
-            futures.append(future)
-        for future in as_completed(futures):
-            i = future.point_index
-            results[i] = future.result()
-            future.release()
-            if on_result is not None:
-                on_result(i, results[i])
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    for i, result in point_results(_point_task, [(*point, settings) for point in points],
+                                   backend=backend, scheduler=scheduler, workers=workers,
+                                   per_thread=_POINTS_PER_THREAD):
+        results[i] = result
+        if on_result is not None:
+            on_result(i, result)
     return results

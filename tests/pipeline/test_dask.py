@@ -89,7 +89,8 @@ def test_a_worker_killed_mid_run_changes_nothing(tmp_path, cluster):
 
 
 def test_each_task_gets_its_hosts_share_of_cores(cluster):
-    from atlas.pipeline.distributed import _cores, numba_threads_here
+    from atlas.kernels.threads import cores
+    from atlas.pipeline.distributed import numba_threads_here
 
     client = cluster[1]
     host = "127.0.0.1"
@@ -100,6 +101,6 @@ def test_each_task_gets_its_hosts_share_of_cores(cluster):
                                             workers=[address]))
                 for address in client.scheduler_info()["workers"]}
 
-    assert on_each_worker({host: 2}) == {max(1, _cores() // 2)}
+    assert on_each_worker({host: 2}) == {max(1, cores() // 2)}
     # a host the run did not list: the worker's own task slots (1 here) share the cores
-    assert on_each_worker({}) == {_cores()}
+    assert on_each_worker({}) == {cores()}

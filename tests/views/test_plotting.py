@@ -198,8 +198,8 @@ def test_a_big_map_is_drawn_from_bands_never_read_whole(sweep_tree, monkeypatch,
     k, _, d = _whole_maps(other)
     np.testing.assert_array_equal(np.ma.masked_invalid(maps["basin"][0]), k)
     np.testing.assert_array_equal(np.ma.masked_invalid(maps["boundary_distance"][0]), d)
-    np.testing.assert_array_equal(maps["t_trap"][0],  # t_trap before the figure's log scale
-                                  coarsen.coarsen_blocks(other["t_trap"].values.astype(float), "max"))
+    t_trap = other["t_trap"].values.astype(float)  # before the figure's log scale
+    np.testing.assert_array_equal(maps["t_trap"][0], coarsen.coarsen_blocks(t_trap, "max"))
 
 
 def test_a_damaged_chunk_of_a_coarsened_map_is_one_line(sweep_tree, monkeypatch, tmp_path):
