@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import textwrap
 import threading
 
 import pytest
@@ -47,10 +46,19 @@ def test_each_in_background_raises_a_calls_error_in_its_turn():
         next(results)
 
 
+#: First in each child below: SIGINT handled and not blocked, as a terminal gives it,
+#: whatever the test process left it with (a pytest started in the background ignores it,
+#: and an earlier test in the same worker can leave it blocked; a child inherits both).
+_AS_ON_A_TERMINAL = """\
+import signal
+signal.signal(signal.SIGINT, signal.default_int_handler)
+signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+"""
+
 #: A process that maps a call that never returns, and is sent SIGINT while the call runs:
 #: it must leave, through KeyboardInterrupt and the interpreter's normal exit, with the call
 #: still in flight. Under a ThreadPoolExecutor it would wait for that call for ever.
-_STUCK = """\
+_STUCK = _AS_ON_A_TERMINAL + """\
 import os, signal, threading
 from atlas.pipeline.schedule import each_in_background
 
@@ -109,7 +117,7 @@ def test_a_run_stopped_before_its_partial_run_existed_kept_nothing(tmp_path):
 
 
 #: ``atlas run`` whose exact boundaries never return, sent SIGINT while they compute.
-_RUN_STUCK = """\
+_RUN_STUCK = _AS_ON_A_TERMINAL + """\
 import os, signal, sys, threading
 from atlas.boundaries import exact
 
@@ -135,7 +143,7 @@ def test_ctrl_c_while_a_point_computes_stops_the_run_at_once(tmp_path):
     and more on a busy machine, for ever here) and then said "finished tiles are kept"."""
     config = write_config(tmp_path / "c.yaml", SMALL.format(sep="true",
                                                             output=tmp_path / "x.h5"))
-    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(_RUN_STUCK), config],
+    proc = subprocess.run([sys.executable, "-c", _RUN_STUCK, config],
                           cwd=REPO, capture_output=True, text=True, timeout=600)  # a hang
     assert proc.returncode == 130, proc.stderr
     assert proc.stderr.strip() == ("atlas: interrupted; no tile was finished; run the same "
