@@ -25,7 +25,7 @@ import numpy as np
 from atlas.physics.pendulum import START_DISTANCE, Pendulum
 
 __all__ = ["StableManifold", "BoundaryIndex", "to_left_branch", "basin_areas", "BasinAreas",
-           "RTOL", "START_DISTANCE"]
+           "RTOL", "START_DISTANCE", "DenseOutput"]
 
 #: Relative and absolute tolerance of the DOP853 reference.
 RTOL = 1e-13
@@ -52,7 +52,7 @@ SMALL_WINDOW = 0.5
 _MAX_WALK = 100_000
 
 
-class _DenseOutput:
+class DenseOutput:
     """DOP853's dense output (Hairer, Nørsett & Wanner, §II.6) of a whole solution, evaluated
     for many times at once: the polynomial of every step, its coefficients stacked over the
     steps (evaluated by a compiled loop: a call costs microseconds). ``t``: the step ends
@@ -68,7 +68,7 @@ class _DenseOutput:
         self._lists = None  # the same as Python lists, for point()
 
     @classmethod
-    def from_scipy(cls, solutions) -> _DenseOutput:
+    def from_scipy(cls, solutions) -> DenseOutput:
         """The dense output of scipy ``OdeSolution`` pieces (DOP853), each starting where the
         one before ends."""
         parts = [q for solution in solutions for q in solution.interpolants]
@@ -77,7 +77,7 @@ class _DenseOutput:
                    np.array([q.y_old for q in parts]), np.array([q.F for q in parts]))
 
     @classmethod
-    def from_pieces(cls, pieces) -> _DenseOutput:
+    def from_pieces(cls, pieces) -> DenseOutput:
         """The dense output of :class:`atlas.kernels.dop853.Solution` s, each starting where
         the one before ends."""
         return cls(np.concatenate([pieces[0].t] + [q.t[1:] for q in pieces[1:]]),
@@ -167,7 +167,7 @@ class StableManifold:
     def _finish(self) -> None:
         """Dense output, end point and samples of the integrated pieces."""
         first, rest = self._pieces[0], self._pieces[1:]
-        self._sol = _DenseOutput.from_pieces(self._pieces)
+        self._sol = DenseOutput.from_pieces(self._pieces)
         t = self._sol.t  # the step ends of every piece
         y = np.concatenate([first.y.T] + [piece.y[1:].T for piece in rest], axis=1)
         self.tau_end = float(t[-1])

@@ -26,17 +26,14 @@ from functools import cached_property, partial
 import numpy as np
 
 from atlas.boundaries.basins import FIND_CYCLE, RUNNING_SIDE, ExactAreas
-from atlas.boundaries.manifold import RTOL, RTOL_CHECK, _DenseOutput
+from atlas.boundaries.branches import CHORD_TOL, MAX_SEGMENT, FundamentalBranches, Polyline
+from atlas.boundaries.manifold import RTOL, RTOL_CHECK
 from atlas.boundaries.segments import Segments
-from atlas.physics.pendulum import START_DISTANCE, Pendulum
+from atlas.physics.pendulum import Pendulum
 
 __all__ = ["TiltedBoundaries", "RUNNING_SIDE", "CHORD_TOL", "CURVE_CHORD_TOL", "MAX_SEGMENT",
            "MARGIN"]
 
-#: Largest distance [rad-ish] of a branch from its polyline's chords, aimed for: the chords
-#: the sides and distances search (the distances themselves are measured to the dense
-#: output), whose vertices the trace starts from.
-CHORD_TOL = 1e-6
 #: The same for the finer polylines of :meth:`TiltedBoundaries.curves` (the basin polygons
 #: of the Gaussian basin stability, whose error their chord error enters).
 CURVE_CHORD_TOL = 1e-8
@@ -44,9 +41,6 @@ CURVE_CHORD_TOL = 1e-8
 #: a branch is taken to stray from its chords: the distance search's reach beyond them, and
 #: the band around the curves where a side is read off the nearest point instead.
 SLACK = 2.0
-#: Longest polyline segment [rad-ish] (keeps the coarse chords of the distance search short:
-#: their length enters its pruning bound).
-MAX_SEGMENT = 0.004
 #: Default clearance [rad-ish] of the integrated band beyond the window's θ̇ range (and of the
 #: boundary search beyond its θ range).
 MARGIN = 2.0
@@ -55,59 +49,6 @@ MARGIN = 2.0
 #: vertices in the window).
 _INDEX_SLACK = 0.01
 _TWO_PI = 2.0 * math.pi
-
-
-# --------------------------------------------------------------------------- integration
-
-def _branch(p: Pendulum, sign: int, rtol: float, bottom: float, top: float):
-    """DOP853 along the branch of the saddle (π − θ*, 0) of ``p`` (τ ≥ 0) arriving from the
-    left (``sign`` −1, L) or right (+1, R), in reversed time from START_DISTANCE along the
-    stable eigenvector, until θ̇ leaves (bottom, top) (compiled:
-    :func:`atlas.kernels.dop853.integrate`, scipy's method step for step). Returns (dense
-    output of (θ, θ̇), the :class:`atlas.kernels.dop853.Solution`, 'top' or 'bottom')."""
-    from atlas.kernels.dop853 import BAND, EVENT, REVERSED, solve
-
-    s = p.saddle_angle
-    e0, e1 = p.saddle_stable_direction()
-    start = [s + sign * START_DISTANCE * e0, sign * START_DISTANCE * e1]
-    t_cap = 1e4 * (1.0 / p.alpha + 1.0 / p.omega0)
-    sol = solve(REVERSED, (p.alpha, p.omega0, p.torque, 0.0), BAND, (bottom, top), start,
-                t_cap, rtol, (rtol,), dim=2)
-    if sol.status != EVENT:
-        raise RuntimeError(f"a stable branch did not leave the band (status {sol.status})")
-    end = sol.y[-1, 1]
-    dense = _DenseOutput(sol.t, sol.t_old, sol.h, sol.y_old[:, :2], sol.F[:, :, :2])
-    return dense, sol, "top" if end - top >= bottom - end else "bottom"
-
-
-def _pieces(sol) -> np.ndarray:
-    """The branch ``sol`` (from its start next to the saddle outward) as polynomial pieces,
-    one per DOP853 step, the last cut at the event (:mod:`atlas.kernels.dense_curves`)."""
-    from atlas.kernels.dense_curves import from_dense
-
-    span = np.ones(sol.h.size)
-    span[-1] = (sol.t[-1] - sol.t_old[-1]) / sol.h[-1]
-    out = np.empty((sol.h.size, 2, 8))
-    from_dense(np.ascontiguousarray(sol.y_old), np.ascontiguousarray(sol.F[:, ::-1]), span,
-               out)
-    return out
-
-
-def _refine(dense, t, tol: float, longest: float):
-    """The polyline of ``dense`` (a curve of reversed time) through times ⊇ ``t``: (times,
-    vertices (2, n), chord error). Its chord error — the distance of the dense output at the
-    middle of each segment's time interval from the chord — is ≤ ``tol`` (it shrinks like
-    the square of a segment, so a segment is cut into ⌈1.2√(error/tol)⌉ pieces), and no
-    segment is longer than ``longest``. Each segment is measured once (compiled:
-    :func:`atlas.kernels.segments.refine`)."""
-    from atlas.kernels.segments import refine
-
-    times, xy, error, ok = refine(np.ascontiguousarray(t, dtype=np.float64), dense.t,
-                                  dense.t_old, dense.h, np.ascontiguousarray(dense.y_old),
-                                  dense.F, float(tol), float(longest))
-    if not ok:
-        raise RuntimeError("the branch polyline did not reach its chord tolerance")
-    return times, xy, float(error)
 
 
 def _runs_around(inside: np.ndarray):
@@ -135,123 +76,6 @@ def _first_where(x: np.ndarray, shift: float, bound: float, side: str) -> int:
     while i < x.size and not beyond(i):
         i += 1
     return i
-
-
-def _near_first(search, near: float | None, bound: float):
-    """``search(b)`` (a nearest-point search that finds nothing nearer than ``b``: NaN
-    coordinates) first within ``near`` — the same distance found at another tolerance (they
-    differ by some 1e-12) — a little widened, so that it prunes at once; then, if nothing
-    was found there, within ``bound``."""
-    if near is not None:
-        found = search(near * (1.0 + 1e-6) + 1e-9)
-        if not math.isnan(found[1]):
-            return found
-    return search(bound)
-
-
-class _Polyline:
-    """A polyline of Γ_0 = L_0 ∪ R_0 (canonical): ``left``, ``right`` (2, n) each from the
-    saddle out (the saddle first), ``theta``, ``theta_dot`` (from L_0's end through the
-    saddle to R_0's end), ``times`` (each branch's reversed times at its vertices, the
-    saddle's left out), ``chord_error``; and per segment of ``theta``: ``step``, the step of
-    the packed dense output (:attr:`_Fundamental.packed`) whose polynomial it is the chord
-    of (−1 for the two straight pieces at the saddle), and ``span``, its x range there."""
-
-    def __init__(self, fundamental: _Fundamental, parts, times, chord_error: float):
-        saddle = np.array([[fundamental.saddle], [0.0]])
-        self.left, self.right = (np.concatenate([saddle, xy], axis=1) for xy in parts)
-        self.theta, self.theta_dot = np.concatenate([self.left[:, ::-1], self.right[:, 1:]],
-                                                    axis=1)
-        self.times, self.chord_error = times, chord_error
-        self._fundamental = fundamental
-
-    @cached_property
-    def _pieces(self):
-        """(step, span) of every segment of ``theta`` (made on first use: the distance search
-        needs them, the reference polyline and the drawn curves do not)."""
-        (l_step, l_span), (r_step, r_span) = (
-            self._fundamental.pieces_of(i, t) for i, t in enumerate(self.times))
-        return (np.concatenate([l_step[::-1], r_step]),
-                np.ascontiguousarray(np.concatenate([l_span[::-1, ::-1], r_span])))
-
-    @property
-    def step(self) -> np.ndarray:
-        return self._pieces[0]
-
-    @property
-    def span(self) -> np.ndarray:
-        return self._pieces[1]
-
-
-class _Fundamental:
-    """Γ_0 = L_0 ∪ R_0 of the canonical pendulum ``p`` (τ > 0) at rtol ``rtol``: its two
-    branches integrated (``ends``, ``bistable``), as polynomial pieces (``pieces``, from L_0's
-    end through the saddle to R_0's end: the exact areas and nearest points), packed
-    (``packed``: both branches' dense outputs, L_0's steps first: the distance search's
-    curves) and as polylines (:meth:`polyline`: sides and distances of the grid's points)."""
-
-    def __init__(self, p: Pendulum, rtol: float, bottom: float, top: float):
-        from atlas.kernels.dense_curves import reversed_pieces, segment
-
-        self.saddle = p.saddle_angle
-        self.branches = [_branch(p, sign, rtol, bottom, top) for sign in (-1, 1)]
-        self.ends = [end for _, _, end in self.branches]
-        (_, left, _), (_, right, _) = self.branches
-        s = self.saddle
-        self.pieces = np.concatenate([
-            reversed_pieces(_pieces(left)),
-            segment(left.y[0, 0], left.y[0, 1], s, 0.0),
-            segment(s, 0.0, right.y[0, 0], right.y[0, 1]),
-            _pieces(right)])
-        self.theta_range = (float(min(left.y[:, 0].min(), right.y[:, 0].min())),
-                            float(max(left.y[:, 0].max(), right.y[:, 0].max())))
-        self._polylines = {}
-
-    @cached_property
-    def packed(self):
-        """(F (steps, powers, 2) highest power first, y_old (steps, 2)) of both branches'
-        dense outputs, L_0's steps first, and the first step of each branch."""
-        dense = [d for d, _, _ in self.branches]
-        return (np.ascontiguousarray(np.concatenate([d.F for d in dense])),
-                np.ascontiguousarray(np.concatenate([d.y_old for d in dense])),
-                (0, dense[0].h.size))
-
-    def pieces_of(self, branch: int, times):
-        """(step in :attr:`packed`, x span (n, 2)) of each segment of ``branch``'s polyline
-        through the saddle and the vertices at reversed ``times``: −1 for the straight piece
-        from the saddle, then the step that holds each chord's middle time."""
-        dense = self.branches[branch][0]
-        step = np.clip(np.searchsorted(dense.t, 0.5 * (times[:-1] + times[1:]), "right") - 1,
-                       0, dense.h.size - 1)
-        span = np.column_stack([(times[:-1] - dense.t_old[step]) / dense.h[step],
-                                (times[1:] - dense.t_old[step]) / dense.h[step]])
-        first = self.packed[2][branch]
-        return (np.concatenate([[-1], step + first]).astype(np.int64),
-                np.concatenate([np.zeros((1, 2)), span]))
-
-    def polyline(self, tol: float = CHORD_TOL, times=None) -> _Polyline:
-        """The polyline (made once per ``tol``): through the reversed times ``times`` (the
-        per-branch times of another polyline) if given, else refined to ``tol``."""
-        key = tol if times is None else ("times", id(times))
-        if key not in self._polylines:
-            chord_error, all_times, parts = 0.0, [], []
-            for i, (dense, sol, _) in enumerate(self.branches):
-                steps = sol.t
-                if times is None:
-                    t, xy, err = _refine(dense, steps, tol, MAX_SEGMENT)
-                    chord_error = max(chord_error, err)
-                else:
-                    t = np.append(times[i][times[i] < steps[-1]], steps[-1])
-                    xy = dense(t)
-                all_times.append(t)
-                parts.append(xy)
-            self._polylines[key] = _Polyline(self, parts, all_times, chord_error)
-        return self._polylines[key]
-
-    @property
-    def bistable(self) -> bool:
-        """Whether L_0 turns down (leaves the band at the bottom): tongues, a running basin."""
-        return self.ends[0] == "bottom"
 
 
 # --------------------------------------------------------------------------- the boundaries
@@ -296,13 +120,13 @@ class TiltedBoundaries:
         lo, hi = sorted((self.sign * v0, self.sign * v1))
         self._band = (min(lo, -ceiling) - margin, max(hi, ceiling) + margin)  # canonical
         self.band = tuple(sorted(self.sign * v for v in self._band))
-        self._branches = _Fundamental(canon, rtol, *self._band)
-        self._branches_check = _Fundamental(canon, RTOL_CHECK, *self._band)
-        ends, check = self._branches.ends, self._branches_check.ends
+        self.fundamental = FundamentalBranches(canon, rtol, *self._band)
+        self.fundamental_check = FundamentalBranches(canon, RTOL_CHECK, *self._band)
+        ends, check = self.fundamental.ends, self.fundamental_check.ends
         if ends[1] != "bottom" or check != ends:
             raise RuntimeError(f"unexpected stable branches: ends {ends} "
                                f"(rtol {rtol:g}), {check} ({RTOL_CHECK:g})")
-        self.bistable = self._branches.bistable
+        self.bistable = self.fundamental.bistable
         self._escapes = None
         if cycle is FIND_CYCLE:  # found on first use; its existence checked now
             self._escapes = cycle_escapes(p.alpha, p.omega0, p.torque)
@@ -330,15 +154,15 @@ class TiltedBoundaries:
 
     # ------------------------------------------------------------------ polylines
     @cached_property
-    def _fine(self) -> _Polyline:
+    def _fine(self) -> Polyline:
         """Γ_0 at rtol, its polyline refined to CHORD_TOL (made on first use: the areas and
         nearest points do not need it): the chords of the sides and distances."""
-        return self._branches.polyline()
+        return self.fundamental.polyline()
 
     @cached_property
-    def _coarse(self) -> _Polyline:
+    def _coarse(self) -> Polyline:
         """Γ_0 at RTOL_CHECK, its polyline through the fine one's reversed times."""
-        return self._branches_check.polyline(times=self._fine.times)
+        return self.fundamental_check.polyline(times=self._fine.times)
 
     @cached_property
     def chord_error(self) -> float:
@@ -350,7 +174,7 @@ class TiltedBoundaries:
     @property
     def curves_chord_error(self) -> float:
         """The chord error [rad-ish] (≤ CURVE_CHORD_TOL) of :meth:`curves`' polylines."""
-        return self._branches.polyline(CURVE_CHORD_TOL).chord_error
+        return self.fundamental.polyline(CURVE_CHORD_TOL).chord_error
 
     @property
     def _slack(self) -> float:
@@ -369,7 +193,7 @@ class TiltedBoundaries:
                                                np.asarray(theta_dot, float))
         return self.sign * theta, self.sign * theta_dot
 
-    def _canonical_window(self):
+    def canonical_window(self):
         (a, b), (v0, v1) = self.window
         return tuple(sorted((self.sign * a, self.sign * b))), \
             tuple(sorted((self.sign * v0, self.sign * v1)))
@@ -400,7 +224,7 @@ class TiltedBoundaries:
         canon = Pendulum(self.pendulum.alpha, self.pendulum.omega0, abs(self.pendulum.torque))
         worst = 0.0
         for i, coarse in enumerate((self._coarse.left, self._coarse.right)):
-            dense, sol, _ = self._branches.branches[i]
+            dense, sol, _ = self.fundamental.branches[i]
             times = self._coarse.times[i]
             first, last = times[0], sol.t[-1]
             cx, cy = coarse[0, 1:], coarse[1, 1:]  # the saddle left out: the same point
@@ -445,8 +269,8 @@ class TiltedBoundaries:
         polyline to Γ_k for a few —, ``on_curve(segment, fraction)`` the points of the
         branch itself (its dense output) at the reversed time that fraction of the way along
         each segment (between vertices segment and segment + 1)."""
-        f = self._branches.polyline(tol)
-        for k in self._translates(*self._canonical_window()[0]):
+        f = self.fundamental.polyline(tol)
+        for k in self._translates(*self.canonical_window()[0]):
             for i, (name, xy) in enumerate((("left", f.left), ("right", f.right))):
                 branch = name if self.sign > 0 else {"left": "right", "right": "left"}[name]
                 yield (self._saddle(k), branch, partial(self._translate, xy, k),
@@ -464,7 +288,7 @@ class TiltedBoundaries:
         at the reversed time ``fraction`` of the way along its polyline's segments
         ``segment`` (vertex times ``times``, the saddle as vertex 0; the first segment is the
         straight piece from the saddle)."""
-        dense = self._branches.branches[branch][0]
+        dense = self.fundamental.branches[branch][0]
         segment, fraction = np.asarray(segment, np.int64), np.asarray(fraction, float)
         t = np.concatenate([[0.0], times])
         at = t[segment] + fraction * (t[segment + 1] - t[segment])
@@ -473,7 +297,7 @@ class TiltedBoundaries:
         straight = segment == 0
         if straight.any():
             f = fraction[straight]
-            x[straight] = self._branches.saddle + f * (x[straight] - self._branches.saddle)
+            x[straight] = self.fundamental.saddle + f * (x[straight] - self.fundamental.saddle)
             v[straight] = f * v[straight]
         return self.sign * (x + _TWO_PI * np.asarray(k)), self.sign * v
 
@@ -486,7 +310,7 @@ class TiltedBoundaries:
         than MAX_SEGMENT, can cross one line only), so only the segments that cross and their
         neighbours (the clipping) are shifted."""
         (a, b), (v0, v1) = self.window
-        ks = self._translates(*self._canonical_window()[0])
+        ks = self._translates(*self.canonical_window()[0])
         speeds = []
         f = self._fine
         for branch, xy in enumerate((f.left, f.right)):
@@ -539,7 +363,7 @@ class TiltedBoundaries:
         xy = xy[:, np.argsort(xy[0], kind="stable")]
         lo, hi = sorted((self.sign * t0, self.sign * t1))  # θ0 + 2πk ∈ [lo, hi], canonical
         parts = []
-        for k in self._translates(*self._canonical_window()[0]):
+        for k in self._translates(*self.canonical_window()[0]):
             first = _first_where(xy[0], _TWO_PI * k, lo, "left")
             stop = _first_where(xy[0], _TWO_PI * k, hi, "right")
             theta, theta_dot = self._translate(xy, k, slice(first, stop))
@@ -597,7 +421,7 @@ class TiltedBoundaries:
         f = self._fine
         # L_k continues left above the band when it leaves at the top
         flip = (f.theta[0] + _TWO_PI * np.arange(ks.start, ks.stop)
-                if self._branches.ends[0] == "top" else np.full(len(ks), -np.inf))
+                if self.fundamental.ends[0] == "top" else np.full(len(ks), -np.inf))
         index = self._index(lo - self.margin - MAX_SEGMENT, hi + self.margin + MAX_SEGMENT)
         return index.sides(x, v, ks.start, ks.stop - 1, flip, self.bistable, RUNNING_SIDE)
 
@@ -613,7 +437,7 @@ class TiltedBoundaries:
         for (lo, hi), index in self._indices.items():
             if lo <= theta_lo and theta_hi <= hi:
                 return index
-        (a, b), _ = self._canonical_window()
+        (a, b), _ = self.canonical_window()
         reach = self.margin + MAX_SEGMENT + _INDEX_SLACK
         window = (a - reach, b + reach)
         key = window if window[0] <= theta_lo and theta_hi <= window[1] \
@@ -675,7 +499,7 @@ class TiltedBoundaries:
         dist2 = np.full(x.size, np.inf if within is None else within * within)
         k = np.zeros(x.size, np.int64)
         foot_x, foot_y = np.full(x.size, np.nan), np.full(x.size, np.nan)
-        F, y_old, _ = self._branches.packed
+        F, y_old, _ = self.fundamental.packed
         slack = self._slack
         todo, reach = np.arange(x.size), self.margin
         searched = (math.inf, -math.inf)  # θ where every segment has been searched
@@ -709,151 +533,36 @@ class TiltedBoundaries:
                 else reach + _TWO_PI
         return np.sqrt(dist2), k, foot_x, foot_y
 
-    # ------------------------------------------------------------------ areas
-    def _polygon(self, f: _Fundamental) -> np.ndarray:
-        """Well 0's basin ∩ {bottom < θ̇ < top} (canonical) as a closed curved polygon
-        (:mod:`atlas.kernels.dense_curves` pieces): the tongue Γ_0 closed along θ̇ = bottom,
-        or the strip between Γ_{−1} and Γ_0 closed along θ̇ = bottom and θ̇ = top."""
-        from atlas.kernels.dense_curves import reversed_pieces, segment
-
-        gamma = f.pieces
-        first, last = gamma[0, :, 0], gamma[-1, :, :].sum(axis=1)
-        if self.bistable:
-            return np.concatenate([gamma, segment(*last, *first)])
-        before = gamma.copy()
-        before[:, 0, 0] -= _TWO_PI
-        return np.concatenate([gamma, segment(*last, last[0] - _TWO_PI, last[1]),
-                               reversed_pieces(before),
-                               segment(first[0] - _TWO_PI, first[1], *first)])
-
-    def _fractions(self, f: _Fundamental, ks, window):
-        """Area fraction of ``window`` (canonical) in well k's basin, for each k in ``ks``:
-        the curved polygon clipped to the window, exact for the dense output
-        (:func:`atlas.kernels.dense_curves.window_areas`)."""
-        from atlas.kernels.dense_curves import window_areas
-
-        (a, b), (lo, hi) = window
-        shifts = _TWO_PI * np.array(ks, np.float64)
-        areas = np.empty(shifts.size)
-        window_areas(self._polygon(f), shifts, a, b, lo, hi, areas)
-        return areas / ((b - a) * (hi - lo))
-
-    def _area_translates(self, theta_lo: float, theta_hi: float) -> range:
-        """Canonical k whose Γ_k may reach θ ∈ [theta_lo, theta_hi] (from the step ends, a
-        step's width to spare)."""
-        lo, hi = self._branches.theta_range
-        return range(math.floor((theta_lo - hi - 1.0) / _TWO_PI),
-                     math.ceil((theta_hi - lo + 1.0) / _TWO_PI) + 1)
-
+    # ------------------------------------------------------------------ areas, shocks
     def areas(self) -> ExactAreas:
-        """The exact area fraction of the window in each well's basin and in the running basin
-        (:class:`atlas.boundaries.exact.ExactAreas`; docs/design/tilted-boundaries.md): exact
-        for the dense output of the branches at rtol, their error the change from
-        RTOL_CHECK plus the rounding of the coordinates at the window's scale (as
-        :func:`atlas.boundaries.manifold.basin_areas` has it for small windows). The
-        fractions sum to 1 (to their errors)."""
-        window = self._canonical_window()
-        (a, b), (lo, hi) = window
-        ks = self._area_translates(a, b)
-        if not self.bistable:  # the strip of well k lies between Γ_{k−1} and Γ_k
-            ks = range(ks.start, ks.stop + 1)
-        fine = self._fractions(self._branches, ks, window)
-        coarse = self._fractions(self._branches_check, ks, window)
-        # the coordinates' own rounding at the window's scale (the window's edges, and the
-        # translated curves', each to an ulp, over the window's sides): the same for both
-        # tolerances, so their change does not show it (a small window's floor)
-        big_u = max(abs(a), abs(b)) + _TWO_PI * max(abs(ks.start), abs(ks.stop)) + math.pi
-        big_v = max(abs(lo), abs(hi))
-        rounding = 16 * np.finfo(float).eps * (big_u / (b - a) + big_v / (hi - lo))
-        error = np.abs(fine - coarse) + rounding
-        running = running_error = 0.0
-        if self.bistable:
-            running = 1.0 - float(fine.sum())
-            running_error = float(abs(fine.sum() - coarse.sum()) + rounding)
-        keep = fine > 0.0
-        k = self.sign * np.array(ks, np.int64)[keep]
-        order = np.argsort(k)
-        return ExactAreas(k=k[order], fraction=fine[keep][order], running=running,
-                          error=error[keep][order], running_error=running_error)
+        """The exact area fraction of the window in each basin
+        (:func:`atlas.boundaries.tilted_areas.window_areas`)."""
+        from atlas.boundaries.tilted_areas import window_areas
 
-    # ------------------------------------------------------------------ nearest point
-    def _nearest(self, f: _Fundamental, theta: float, theta_dot: float,
-                 near: float | None = None):
-        """(distance, θ, θ̇) of the nearest point of any Γ_k of ``f`` to one point
-        (actual frame), exact for the dense output (:func:`atlas.kernels.dense_curves.
-        nearest`): the nearer of the two saddles beside the point bounds the search, or
-        ``near`` (the distance found at another tolerance) a little widened, where that
-        finds it."""
-        from atlas.kernels.dense_curves import nearest
-
-        x, v = self.sign * theta, self.sign * theta_dot
-        s = f.saddle
-        j0 = math.floor((x - s) / _TWO_PI)
-        best = min(math.hypot(x - s - _TWO_PI * j, v) for j in (j0, j0 + 1))
-        lo, hi = f.theta_range
-        ks = range(math.floor((x - best - hi - 1.0) / _TWO_PI),
-                   math.ceil((x + best - lo + 1.0) / _TWO_PI) + 1)
-        shifts = _TWO_PI * np.array(ks, np.float64)
-        d, t, w = _near_first(lambda bound: nearest(f.pieces, shifts, float(x), float(v),
-                                                    bound), near, math.inf)
-        return d, self.sign * t, self.sign * w
+        return window_areas(self)
 
     def running_shock(self):
-        """The minimal fatal shock of the running limit cycle (Halekotte & Feudel 2020): the
-        nearest pair of a point of the cycle and a point of a basin boundary (any tongue's),
-        as (distance [rad-ish], the cycle's point θ [rad], θ̇ [rad s⁻¹], the boundary's point
-        θ, θ̇, error [rad-ish]); NaN where there is no running cycle (not ``bistable``). The
-        cycle is one turn from its crossing of the section θs
-        (:func:`atlas.physics.running.cycle_section`, or :attr:`cycle` where known) by
-        DOP853 at rtol 1e-12, as pieces; the pair is exact for the pieces
-        (:func:`atlas.kernels.dense_curves.nearest_between`). The error: the distance's
-        change with the boundaries at RTOL_CHECK, plus the cycle's own (its relative error
-        times a bound on its speed)."""
-        from atlas.kernels.dense_curves import nearest_between, ranges
-        from atlas.kernels.dop853 import EVENT, FLOW, TURN, solve
-        from atlas.physics.running import cycle_section
+        """The running limit cycle's minimal fatal shock
+        (:func:`atlas.boundaries.tilted_nearest.running_shock`)."""
+        from atlas.boundaries.tilted_nearest import running_shock
 
-        if not self.bistable:
-            return (math.nan,) * 6
-        p = self.pendulum
-        tau, rtol = abs(p.torque), 1e-12
-        if "cycle" in self.__dict__:  # given, or found already: its crossing of θs
-            cycle = self.cycle
-            theta_s, v = self.sign * cycle.theta0, self.sign * float(cycle.theta_dot[0])
-            period, cycle_error = cycle.period, cycle.error
-            scale = (p.omega0**2 + tau) / (2.0 * p.alpha)
-            turn = solve(FLOW, (p.alpha, p.omega0, tau, 0.0), TURN, (theta_s + _TWO_PI, 0.0),
-                         (theta_s, v), 4.0 * period, rtol, (rtol * _TWO_PI, rtol * scale),
-                         dim=2)
-        else:  # only the crossing, not the sampled cycle, and the turn the search ended on
-            theta_s, v, period, cycle_error, turn = cycle_section(
-                p.alpha, p.omega0, p.torque, rtol=rtol, escapes=self._escapes, turn=True)
-        if turn.status != EVENT:
-            raise RuntimeError("the running cycle did not complete a turn")
-        pieces = _pieces(turn)
-        lo, hi = self._branches.theta_range
-        shifts = _TWO_PI * np.arange(math.floor((theta_s - _TWO_PI - hi) / _TWO_PI),
-                                     math.ceil((theta_s + 2.0 * _TWO_PI - lo) / _TWO_PI) + 1,
-                                     dtype=np.float64)
-        # the saddle (θs, 0) is on a boundary, the cycle's point (θs, v) above it: a bound
-        bound = v * (1.0 + 1e-9)
-        fine = nearest_between(pieces, self._branches.pieces, shifts, bound)
-        check = _near_first(lambda b: nearest_between(pieces, self._branches_check.pieces,
-                                                      shifts, b), fine[0], bound)
-        box = np.empty((pieces.shape[0], 2, 2))
-        ranges(pieces, box)
-        speed = float(np.abs(box[:, 1, :]).max())  # at least the cycle's largest speed
-        error = (abs(fine[0] - check[0]) + cycle_error * speed
-                 + 4 * np.finfo(float).eps * max(fine[0], 1.0))
-        d, a_t, a_v, b_t, b_v = (float(x) for x in fine)
-        sign = self.sign
-        return d, sign * a_t, sign * a_v, sign * b_t, sign * b_v, error
+        return running_shock(self)
 
     def nearest_point(self, theta: float, theta_dot: float):
-        """(distance [rad-ish], θ [rad], θ̇ [rad s⁻¹], error [rad-ish]) of the nearest point
-        of the boundaries to (θ, θ̇), exact for the dense output of the branches at rtol; the
-        error is the change of the distance from RTOL_CHECK (docs/design/tilted-boundaries.md).
-        """
-        d, t, w = self._nearest(self._branches, theta, theta_dot)
-        check, *_ = self._nearest(self._branches_check, theta, theta_dot, near=d)
-        return d, t, w, abs(d - check) + 4 * np.finfo(float).eps * max(d, 1.0)
+        """The nearest point of the boundaries to (θ, θ̇)
+        (:func:`atlas.boundaries.tilted_nearest.nearest_point`)."""
+        from atlas.boundaries.tilted_nearest import nearest_point
+
+        return nearest_point(self, theta, theta_dot)
+
+    @property
+    def known_cycle(self):
+        """The running limit cycle where it was given or found already, else None (not
+        searched for here)."""
+        return self.__dict__.get("cycle")
+
+    @property
+    def escapes(self):
+        """The running cycle's escape test of :func:`atlas.physics.running.cycle_escapes`,
+        where the cycle was not given (None otherwise)."""
+        return self._escapes

@@ -280,7 +280,7 @@ def dense_output(tau, t, t_old, h, y_old, F, out):
     len(tau)): the step found by bisection in the step ends ``t`` (before the first: the
     first step; after the last: the last), then its polynomial, ``F`` (steps × powers ×
     components) highest power first, evaluated as
-    :class:`atlas.boundaries.manifold._DenseOutput` did with numpy (the same operations in the
+    :class:`atlas.boundaries.manifold.DenseOutput` did with numpy (the same operations in the
     same order: the same doubles)."""
     for i in range(tau.size):
         step = dense_step(tau[i], t, h.size - 1)

@@ -297,7 +297,7 @@ def brute_distance(tb: TiltedBoundaries, theta, theta_dot, reach=1.0):
 
     from atlas.boundaries.segments import segment_distance
 
-    f = tb._branches
+    f = tb.fundamental
     poly = f.polyline(CURVE_CHORD_TOL)
     out = []
     for px, py in zip(tb.sign * np.asarray(theta), tb.sign * np.asarray(theta_dot)):
@@ -336,7 +336,7 @@ def test_reference_error_is_the_distance_between_the_two_tolerances(case, built)
     rng = np.random.default_rng(11)
     found = []
     for i, coarse in enumerate((tb._coarse.left, tb._coarse.right)):
-        dense, sol, _ = tb._branches.branches[i]
+        dense, sol, _ = tb.fundamental.branches[i]
         times, last = tb._coarse.times[i], sol.t[-1]
         for j in rng.choice(np.arange(coarse.shape[1] - 2), 50, replace=False):
             c, t = coarse[:, j + 1], min(times[j], last)
@@ -405,7 +405,7 @@ def test_distance_rounds_are_one_search_of_every_boundary_within_reach(case, bui
                                                         np.linspace(lo, hi, 96)))
     dist, saddle = tb.distance(theta, theta_dot)
     assert len(tb._indices) == 2 and np.mean(dist > tb.margin) > 0.2  # a second round
-    (ca, cb), _ = tb._canonical_window()
+    (ca, cb), _ = tb.canonical_window()
     wide = (ca - 12.0, cb + 12.0)
     monkeypatch.setattr(tb, "_indices", {wide: tb._segments(*wide)})
     one, one_saddle = tb.distance(theta, theta_dot)

@@ -78,7 +78,7 @@ def test_dense_output_joins_the_steps():
     which evaluates F from lowest to highest power as StableManifold does)."""
     p, y0, e_stop, t_cap = _problem(0.1, 1.0, 4.0)
     status, n, t, y, t_old, h, y_old, F = _compiled(p, y0, e_stop, t_cap)
-    dense = manifold._DenseOutput(t[: n + 1], t_old[:n], h[:n], y_old[:n], F[:n])
+    dense = manifold.DenseOutput(t[: n + 1], t_old[:n], h[:n], y_old[:n], F[:n])
     ends = dense(t_old[:n] + h[:n] * (1 - 1e-15)).T
     np.testing.assert_allclose(ends[:-1], y_old[1:n], rtol=1e-12, atol=1e-14)
 
@@ -104,12 +104,12 @@ def test_torque_is_refused():
 
 
 def test_compiled_dense_output_is_scipys_polynomial():
-    """manifold._DenseOutput (compiled: dense_output) at times before, inside, at the ends of
+    """manifold.DenseOutput (compiled: dense_output) at times before, inside, at the ends of
     and after the steps: scipy's own dense output of the same steps (rtol 1e-13) to rounding,
     and a step's ends where the next step begins."""
     p, y0, e_stop, t_cap = _problem(0.1, 1.0, 4.0)
     sol = _scipy(p, y0, e_stop, t_cap)
-    dense = manifold._DenseOutput.from_scipy([sol.sol])
+    dense = manifold.DenseOutput.from_scipy([sol.sol])
     ts = sol.sol.ts
     rng = np.random.default_rng(4)
     tau = np.concatenate([rng.uniform(ts[0], ts[-1], 500), ts])

@@ -186,7 +186,7 @@ def test_both_sweeps_give_the_same_sides(bistable):
 @pytest.fixture(scope="module")
 def branch():
     """The dense output of a stable branch of the bSTAB pendulum's saddle (DOP853)."""
-    from atlas.boundaries.tilted import _branch
+    from atlas.boundaries.branches import integrate_branch as _branch
     from atlas.physics.pendulum import Pendulum
 
     dense, sol, _ = _branch(Pendulum(0.05, 1.0, 0.5), -1, 1e-13, -12.0, 12.0)
@@ -340,7 +340,7 @@ def test_the_pruned_curve_search_is_the_wide_one():
     p = Pendulum(0.05, 1.0, 0.5)
     tb = TiltedBoundaries(p, (-math.pi + p.rest_angle, math.pi + p.rest_angle), (-10.0, 10.0))
     index = tb._index(-4.0, 4.0)
-    F, y_old, _ = tb._branches.packed
+    F, y_old, _ = tb.fundamental.packed
     rng = np.random.default_rng(7)
     n = 20_000
     px, py = rng.uniform(-2.5, 2.5, n), rng.uniform(-3.0, 3.0, n)
