@@ -58,6 +58,7 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
     import matplotlib
     from matplotlib.figure import Figure  # no pyplot: a file, never a window or a backend
 
+    from atlas.store.outputs import figure_metadata
     from atlas.views.maps import basin_map, draw_limit_cycle
 
     output = Path(output)
@@ -109,7 +110,7 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
                        f"{orbit.theta_dot0:.4g} rad/s\n(wells dashed, saddles dotted)")
         fig.tight_layout()
         try:
-            fig.savefig(output)
+            fig.savefig(output, metadata=figure_metadata(Path(output).suffix))
         except OSError as exc:
             raise AtlasError(f"{output}: cannot write the figure ({exc.strerror or exc})"
                              ) from None
