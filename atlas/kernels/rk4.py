@@ -46,7 +46,7 @@ def _identity(x):
 
 
 # The RK4 step is written once, as source text with two holes, and compiled in two forms
-# (:func:`_specialise`): the τ = 0 form, θ̇' = −ω0² sin θ − 2αθ̇ exactly as earlier versions
+# (:func:`specialise`): the τ = 0 form, θ̇' = −ω0² sin θ − 2αθ̇ exactly as earlier versions
 # wrote it (adding a zero torque under fast-math may be reassociated and change the last bit
 # of a trajectory), and the τ ≠ 0 form, θ̇' = τ − ω0² sin θ − 2αθ̇ with τ the last argument.
 _RK4_STEP = """
@@ -71,7 +71,7 @@ def step(theta, theta_dot, alpha, omega0, dt{torque}):
 """
 
 
-def _specialise(source, name, torque, **env):
+def specialise(source, name, torque, **env):
     """The plain Python function ``name`` defined by ``source`` in its τ = 0 form
     (``{torque}`` → nothing, ``{force}`` → ``-``: the acceleration starts −ω0²…) or its τ ≠ 0
     form (``{torque}`` → ``, torque``: one more argument; ``{force}`` → ``torque - ``), with
@@ -105,7 +105,7 @@ def make_rk4_step(sin, reduce=None, *, torque=False):
     else:
         sin_near = sin
 
-    step = _specialise(_RK4_STEP, "step", torque, sin_near=sin_near, reduce=reduce)
+    step = specialise(_RK4_STEP, "step", torque, sin_near=sin_near, reduce=reduce)
     return nb.njit(inline="always", fastmath=FASTMATH)(step)
 
 

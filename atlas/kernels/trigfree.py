@@ -25,8 +25,8 @@ from atlas.kernels.fastsin import SIN_FASTMATH, sin_cos_vers
 from atlas.kernels.rk4 import (
     INV_TWO_PI,
     TWO_PI,
-    _specialise,
     make_label_orbit_torque,
+    specialise,
     torque_model,
 )
 
@@ -78,7 +78,7 @@ def make_trigfree_step(*, torque=False):
     """Return a jitted ``step(theta, theta_dot, c, s, alpha, omega0, dt) -> (θ, θ̇, c, s)``:
     one classical RK4 step of the extended system (module docstring); with ``torque`` the
     step of θ̇' = −ω0² s − 2αθ̇ + τ, τ its last argument (:func:`make_trigfree_step_torque`)."""
-    step = _specialise(_TRIGFREE_STEP, "step", torque)
+    step = specialise(_TRIGFREE_STEP, "step", torque)
     return nb.njit(inline="always", fastmath=SIN_FASTMATH)(step)
 
 

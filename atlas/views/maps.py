@@ -52,7 +52,7 @@ if TYPE_CHECKING:
     import xarray as xr
 
 __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "MAP_FIGURES",
-           "draw_limit_cycle", "basin_key"]
+           "draw_limit_cycle", "basin_key", "draw_separatrices", "grid_image", "label_bands"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -74,7 +74,7 @@ def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
                 "point": point_title(point_of(ds))}
 
 
-def _grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kwargs):
+def grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kwargs):
     """Draw a map over the grid (θ0, θ̇0: columns, rows) as an image whose pixels are the
     grid's cells (centred on the grid points); ``image``: the map already coarsened to the
     figure's resolution (its blocks then span the same extent)."""
@@ -91,7 +91,7 @@ def _grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kw
     return image
 
 
-def _draw_separatrices(ax, separatrices: list, faint: bool = False) -> None:
+def draw_separatrices(ax, separatrices: list, faint: bool = False) -> None:
     """The separatrix branches (θ [rad], θ̇ [rad/s]): thin, near-black, translucent lines
     (about one pixel of the saved map), so that a tongue of a basin a few pixels wide keeps
     its colour between its two outlines; ``faint``: thinner, white and fainter still, over
@@ -155,7 +155,7 @@ def _well_name(k: int) -> str:
     return f"{k:+d}".replace("+0", "0").replace("-", "−")
 
 
-def _label_bands(ax, grid, image: np.ndarray, ks: list[int]) -> None:
+def label_bands(ax, grid, image: np.ndarray, ks: list[int]) -> None:
     """Name each well's band "k = …" at the pixel deepest inside it (:func:`_run_depth`;
     of equally deep pixels, the one nearest the middle column): the basin map's key once its
     colours alone are too many to tell apart. Bands nowhere _LABEL_DEPTH pixels deep stay
@@ -213,15 +213,15 @@ def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
     wells = list(range(kmin, kmax + 1))
     unlabelled = bool(np.isnan(k).any())
     cmap, norm, ticks, names, _ = basin_key(wells, running, unlabelled)
-    mesh = _grid_image(ax, grid, k, cmap=cmap, norm=norm)
+    mesh = grid_image(ax, grid, k, cmap=cmap, norm=norm)
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
     cbar.ax.set_yticklabels(names, fontsize=8 if len(names) <= 24 else 6)
     cbar.set_label("attractor k: orbit settles at the rest state of well k"
                    + (";\nrunning: orbit rotates (the running limit cycle)" if running else "")
                    + (";\nno label: unresolved by t_max, or not finite" if unlabelled else ""))
     if len(wells) > LABELLED_WELLS:
-        _label_bands(ax, grid, k, wells)
-    _draw_separatrices(ax, separatrices)
+        label_bands(ax, grid, k, wells)
+    draw_separatrices(ax, separatrices)
     if cycle is not None:
         draw_limit_cycle(ax, grid[0][0], grid[0][-1], *cycle)
     if critical is not None:
@@ -258,10 +258,10 @@ def _draw_trap_time(ax, grid, image, separatrices, point: str):
     # t_trap = 0 (certified at once: the orbit starts inside the trap) is the shortest time
     # there is: drawn below the scale in the scale's own dark end, not in a colour of its own
     cmap = cmap.with_extremes(under=cmap(0.0), bad=NO_LABEL_COLOR)
-    mesh = _grid_image(ax, grid, np.where(t == 0, lo / 2, t), cmap=cmap, norm=LogNorm(lo, hi))
+    mesh = grid_image(ax, grid, np.where(t == 0, lo / 2, t), cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
         "t_trap [s]: time at which the label was certified\n(trapped in a well, or running)")
-    _draw_separatrices(ax, separatrices, faint=True)
+    draw_separatrices(ax, separatrices, faint=True)
     ax.set_title(f"Time to a certified label, {point}\n(darkest: certified at t = 0, inside "
                  "the trap; white: no label certified by t_max)")
     return ax
@@ -290,7 +290,7 @@ def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point:
     measured = d_cert == d_cert
     lo, hi = _spread(d[np.isfinite(d) & (d > (d_cert if measured else 0.0))])
     cmap = colormaps[DISTANCE_CMAP].with_extremes(bad=NO_LABEL_COLOR)
-    mesh = _grid_image(ax, grid, d, cmap=cmap, norm=LogNorm(lo, hi))
+    mesh = grid_image(ax, grid, d, cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="both").set_label(
         "distance to the nearest basin boundary\n[rad (θ) and rad/s (θ̇) as one Euclidean "
         "unit];\ncolours span its 1st to 99th percentile")
@@ -299,7 +299,7 @@ def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point:
         ax.imshow(np.ma.masked_where(~(d <= d_cert), np.ones_like(d)), origin="lower",
                   extent=ax.images[0].get_extent(), aspect="auto", interpolation="nearest",
                   cmap=ListedColormap([NEAR_BOUNDARY_COLOR]), zorder=1)
-    _draw_separatrices(ax, separatrices, faint=True)
+    draw_separatrices(ax, separatrices, faint=True)
     note = (f"black: closer than d_cert = {d_cert:.1e} (labels certified for the RK4 map "
             "only)" if near else f"none closer than d_cert = {d_cert:.1e}: every label "
             "certified for the exact equation" if measured else

@@ -27,11 +27,11 @@ import numpy as np
 from atlas.layout import points
 from atlas.views.maps import (
     MAP_FIGURES,
-    _draw_separatrices,
-    _grid_image,
-    _label_bands,
     basin_key,
     draw_limit_cycle,
+    draw_separatrices,
+    grid_image,
+    label_bands,
 )
 from atlas.views.selectors import point_index, swept, value_text
 from atlas.views.style import LABELLED_WELLS, critical_point_markers
@@ -130,11 +130,11 @@ def draw_multiples(ax, panels: list[dict], wells: list[int], running: bool, titl
     for i, panel in enumerate(panels):
         ax = fig.add_subplot(grid[i // cols, i % cols], sharex=first, sharey=first)
         first = first or ax
-        mesh = _grid_image(ax, panel["grid"], panel["image"], cmap=cmap, norm=norm)
+        mesh = grid_image(ax, panel["grid"], panel["image"], cmap=cmap, norm=norm)
         if len(panel["wells"]) > LABELLED_WELLS:  # named where a label fits in the panel
             step = max(1, -(-max(panel["image"].shape) // _LABEL_ROWS))
-            _label_bands(ax, panel["grid"], panel["image"][::step, ::step], panel["wells"])
-        _draw_separatrices(ax, panel["separatrices"])
+            label_bands(ax, panel["grid"], panel["image"][::step, ::step], panel["wells"])
+        draw_separatrices(ax, panel["separatrices"])
         if panel["cycle"] is not None:
             draw_limit_cycle(ax, panel["grid"][0][0], panel["grid"][0][-1], *panel["cycle"])
         if panel["critical"] is not None:

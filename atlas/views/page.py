@@ -163,7 +163,7 @@ def _band_labels(attractor, labelled, wells, distance, theta0, theta_dot0) -> li
     θ̇0 [rad s⁻¹]] of its grid point farthest from every basin boundary (the stored
     ``boundary_distance``; with none stored, its middle point), of the points _LABEL_CLEARANCE
     away from θ̇ = 0 and from the window's edges where the band has any (as the PNG's band
-    names, :func:`atlas.views.maps._label_bands`)."""
+    names, :func:`atlas.views.maps.label_bands`)."""
     if len(wells) <= LABELLED_WELLS:
         return []
     depth = np.where(np.isfinite(distance), distance, -1.0)
