@@ -56,3 +56,17 @@ def test_the_exact_boundaries_are_reached_through_their_protocol_only():
              if re.search(rf"isinstance\([^)]*{implementations}", text)
              or re.search(r"(?<!atlas\.boundaries)\.tilted\.\w", text)]
     assert found == []
+
+
+def test_no_module_imports_a_private_name_of_another():
+    """``from atlas.x import _name`` nowhere in the package: what another module needs of a
+    module is public (and documented as such)."""
+    import ast
+
+    found = [f"{name}: {node.module}.{alias.name}"
+             for name, text in _sources()
+             for node in ast.walk(ast.parse(text))
+             if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("atlas")
+             for alias in node.names
+             if alias.name.startswith("_") and not alias.name.startswith("__")]
+    assert found == []

@@ -86,8 +86,7 @@ def zoom_config(file: str | Path, theta0: float, theta_dot0: float, width: float
     from pydantic import ValidationError
 
     from atlas.commands.orbit_file import open_point
-    from atlas.pipeline.config import Config, ConfigError
-    from atlas.pipeline.config import _first_error as first_error
+    from atlas.pipeline.config import Config, ConfigError, first_error
     from atlas.store.reader import describe
 
     path = Path(file)  # a config given for it is refused with a hint by the reader

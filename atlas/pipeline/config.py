@@ -45,7 +45,8 @@ from atlas.limits import MAX_RATE, MIN_RATE
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash"]
+__all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "config_hash",
+           "first_error"]
 
 # ---------------------------------------------------------------------------- π expressions
 
@@ -525,7 +526,7 @@ def _did_you_mean(loc: list, errors: list[dict]) -> str:
     return f" (did you mean {match[0]}?)" if match else ""
 
 
-def _first_error(exc: ValidationError) -> str:
+def first_error(exc: ValidationError) -> str:
     """One line from pydantic's errors: ``<key>: <problem> (got <value>)``. An unknown key
     comes first, with the key it most likely meant: a misspelt key is what makes the right
     one missing (``n:`` for ``num:`` says "grid.theta0.n: unknown key (did you mean num?)",
@@ -620,7 +621,7 @@ def load_config(path: str | Path, *, output: str | Path | None = None,
     try:
         cfg = Config.model_validate(data, context={"study": study})
     except ValidationError as exc:
-        raise ConfigError(f"{path}: {_first_error(exc)}") from None
+        raise ConfigError(f"{path}: {first_error(exc)}") from None
     for line in cfg.warnings:
         log.warning("warning: %s: %s", path, line)
     return cfg
@@ -640,9 +641,10 @@ def _not_a_config(path: Path) -> str | None:
         return (f"{path}: a stability study, not a config; look at it with "
                 f"`atlas info {path}` (`atlas stability` reads a YAML config such as "
                 "configs/swing_stability.yaml)")
-    from atlas.store.hdf5 import HDF5
+    from atlas.store.formats import FORMATS
 
-    return f"{path}: an HDF5 file, not a YAML config" if HDF5().recognises(path) else None
+    fmt = next((fmt for fmt in FORMATS.values() if fmt.recognises(path)), None)
+    return f"{path}: {fmt.kind}, not a YAML config" if fmt is not None else None
 
 
 # ---------------------------------------------------------------------------- units

@@ -31,7 +31,7 @@ from atlas.pipeline import points, progress
 from atlas.pipeline.config import Config
 from atlas.pipeline.identity import file_attrs, run_identity
 from atlas.pipeline.schedule import resolve
-from atlas.pipeline.sweep import _finish, _Phases, layout_of
+from atlas.pipeline.sweep import Phases, finish_tiles, layout_of
 from atlas.pipeline.sweep import run as run_to_file
 from atlas.store.schema import MAP_VARIABLES, SCHEMA, summary_tree
 
@@ -117,7 +117,7 @@ def basins(cfg: Config, *, backend: str | None = None, quiet: bool = False) -> x
     running = points.running_certificates(points.pendulums(layout), cfg.integrator.dt)
     with progress.compile_notice(quiet):
         try:
-            _finish(tiles, cfg, backend, quiet, time.perf_counter(), running, _Phases())
+            finish_tiles(tiles, cfg, backend, quiet, time.perf_counter(), running, Phases())
         except OverflowError as exc:  # an orbit beyond the wells an atlas can index
             raise AtlasError(f"{cfg.name}: {exc}") from None
     return tiles.tree

@@ -60,7 +60,8 @@ from atlas.store.partial import (
 from atlas.store.reader import open_atlas
 from atlas.store.schema import summary_dataset, summary_tree
 
-__all__ = ["run", "layout_of", "inexact_points", "accuracy_exit", "kept_after_interrupt"]
+__all__ = ["run", "layout_of", "inexact_points", "accuracy_exit", "kept_after_interrupt",
+           "finish_tiles", "Phases"]
 
 log = logging.getLogger(__name__)
 
@@ -179,7 +180,7 @@ def _process_age() -> float | None:
         return None
 
 
-class _Phases:
+class Phases:
     """Wall time of the phases of a run, logged at INFO (``atlas run -v``)."""
 
     def __init__(self):
@@ -191,8 +192,8 @@ class _Phases:
         self.last = now
 
 
-def _finish(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float,
-            running_certificates: tuple[list, list], phase: _Phases) -> xr.DataTree:
+def finish_tiles(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float,
+                 running_certificates: tuple[list, list], phase: Phases) -> xr.DataTree:
     """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
     and certify what is missing, then assemble the file. A tile file found damaged is set
     aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``).
@@ -305,12 +306,12 @@ def _locked_run(cfg: Config, restart: bool, quiet: bool, backend: str, open_resu
     age = _process_age()
     if age is not None:
         log.info("%-32s %6.2f s", "start-up (process, imports)", age)
-    phase = _Phases()
+    phase = Phases()
     with output_lock(cfg.output):
         try:
             tiles = _open_tiles(cfg, layout, identity, restart)
             phase.done("partial run (open or resume)")
-            written = _finish(tiles, cfg, backend, quiet, start, running_certificates, phase)
+            written = finish_tiles(tiles, cfg, backend, quiet, start, running_certificates, phase)
         except OverflowError as exc:
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:

@@ -81,11 +81,12 @@ class TileRun(_Stateless):
 class Container(_Stateless):
     """One file format as a container of xarray data (stateless).
 
-    ``suffixes`` are the output names that ask for this format (``NAME.zarr``); ``folder``
-    says whether a file of this format is a directory; :attr:`tile_run` is how a sweep
-    writes an atlas in it.
+    ``kind`` names a file of this format in messages ("an HDF5 file"); ``suffixes`` are the
+    output names that ask for this format (``NAME.zarr``); ``folder`` says whether a file of
+    this format is a directory; :attr:`tile_run` is how a sweep writes an atlas in it.
     """
 
+    kind: ClassVar[str]
     description: ClassVar[str]
     suffixes: ClassVar[tuple[str, ...]]
     folder: ClassVar[bool] = False

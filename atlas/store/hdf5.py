@@ -85,6 +85,7 @@ class HDF5Tiles(TileRun):
 
 class HDF5(Container):
     name = "hdf5"
+    kind = "an HDF5 file"
     description = "one HDF5 file in netCDF-4 layout (xarray's h5netcdf engine)"
     suffixes = (".h5", ".hdf5", ".he5", ".nc")
     tile_run = HDF5Tiles()
@@ -126,7 +127,7 @@ class HDF5(Container):
         attrs, has_map = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA or not has_map:
             raise InputFileError(not_an_atlas(
-                path, attrs, "an HDF5 file", " (no atlas basin map in it)",
+                path, attrs, self.kind, " (no atlas basin map in it)",
                 "xr.open_dataset('{path}', engine='h5netcdf')"))
         return attrs
 

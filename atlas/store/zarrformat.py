@@ -112,6 +112,7 @@ class ZarrTiles(TileRun):
 
 class Zarr(Container):
     name = "zarr"
+    kind = "a Zarr store"
     description = "a Zarr v3 store (a folder; tiles written in parallel, e.g. by Dask workers)"
     suffixes = (".zarr",)
     folder = True
@@ -131,7 +132,7 @@ class Zarr(Container):
             raise InputFileError(f"{path}: is a directory, not an atlas file")
         attrs = root_attrs(path)
         if attrs.get("atlas_schema") != SCHEMA:
-            raise InputFileError(not_an_atlas(path, attrs, "a Zarr store",
+            raise InputFileError(not_an_atlas(path, attrs, self.kind,
                                               xarray="xr.open_zarr('{path}')"))
         return attrs
 
