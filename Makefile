@@ -56,8 +56,8 @@ run: $(FIGURE) ## compute configs/default.yaml → outputs/default.h5 and output
 atlas: $(FIGURE) ## compute any config and draw its figures: make atlas CONFIG=configs/x.yaml
 
 # pytest-xdist: one worker per core (TEST_WORKERS=0: all in this process), each worker taking
-# whole test files so that a module's fixtures are built once. On the 2-core machine, otherwise
-# idle, the whole suite takes about 5 min 30 s in one process and 3 min 20 s in two.
+# whole test files so that a module's fixtures are built once. On the 2-core machine the whole
+# suite is about 11 min of CPU time: about 11 min in one process, 6 in two (docs/contributing.md).
 TEST_WORKERS ?= auto
 
 test: $(DEV) ## import rules, the docs (--strict), then the whole test suite (TEST_WORKERS=0: one process)
@@ -65,7 +65,7 @@ test: $(DEV) ## import rules, the docs (--strict), then the whole test suite (TE
 	$(MKDOCS) build --strict --quiet
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
-test-fast: $(DEV) ## the fast subset: every test not marked slow (under a minute)
+test-fast: $(DEV) ## the fast subset: every test not marked slow (about 2 min)
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile -m "not slow"
 
 stability: $(RUN) ## Menck's figure, exact: configs/swing_stability.yaml (1,001 torques) → outputs/swing_stability*.png
