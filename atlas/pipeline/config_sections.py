@@ -1,0 +1,200 @@
+"""The sections of a config, as pydantic models with every default written once: the pendulum
+(α, ω0, τ: a number, a list or a range each), the grid of initial conditions, the
+integrator, the separatrix tracing, the execution backend and the stability study's options.
+The whole config (:class:`atlas.pipeline.config.Config`) is made of these; checks that span
+sections are its own.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from atlas import defaults
+from atlas.defaults import BACKEND_WORDS, METHODS
+from atlas.layout import PARAMETERS
+from atlas.limits import MAX_RATE, MIN_RATE
+from atlas.pipeline.config_numbers import Number, Numbers
+
+__all__ = ["StrictModel", "PendulumConfig", "Axis", "GridConfig", "IntegratorConfig",
+           "SeparatricesConfig", "ExecutionConfig", "StabilityConfig"]
+
+
+class StrictModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+
+class PendulumConfig(StrictModel):
+    """α [s⁻¹], ω0 [rad s⁻¹] and the constant torque τ [rad s⁻²]; a list for any of them
+    makes it a dim of a parameter atlas (the others stay scalar coordinates)."""
+
+    alpha: Numbers = defaults.ALPHA
+    omega0: Numbers = defaults.OMEGA0
+    torque: Numbers = 0.0
+
+    @staticmethod
+    def _each(value, check) -> None:
+        """Apply ``check`` to a value or to every item of a list (naming the bad item)."""
+        if not isinstance(value, list):
+            check(value)
+            return
+        for i, item in enumerate(value):
+            try:
+                check(item)
+            except ValueError as exc:
+                raise ValueError(f"item {i}: {exc}") from None
+
+    @field_validator("alpha")
+    @classmethod
+    def _alpha(cls, value):
+        def check(a):
+            if a < 0:
+                raise ValueError(f"damping must be >= 0, got {a:g}")
+            if a > MAX_RATE:
+                raise ValueError(f"must be at most {MAX_RATE:g} 1/s, got {a:g}")
+            if a == 0:
+                raise ValueError(
+                    "alpha = 0 makes no basin atlas: without damping the energy is conserved "
+                    "and no orbit ever settles on an attractor"
+                )
+
+        cls._each(value, check)
+        return value
+
+    @field_validator("omega0")
+    @classmethod
+    def _omega0(cls, value):
+        def check(w):
+            if w <= 0:
+                raise ValueError(f"must be > 0, got {w:g}")
+            if not MIN_RATE <= w <= MAX_RATE:
+                raise ValueError(f"must be between {MIN_RATE:g} and {MAX_RATE:g} rad/s, "
+                                 f"got {w:g}")
+
+        cls._each(value, check)
+        return value
+
+    @field_validator("torque")
+    @classmethod
+    def _torque(cls, value):
+        def check(t):
+            if not abs(t) <= MAX_RATE**2:
+                raise ValueError(f"must be between {-MAX_RATE**2:g} and {MAX_RATE**2:g} "
+                                 f"rad/s^2, got {t:g}")
+
+        cls._each(value, check)
+        return value
+
+    @field_validator("alpha", "omega0", "torque")
+    @classmethod
+    def _nonempty(cls, value):
+        if isinstance(value, list) and not value:
+            raise ValueError("an empty list sweeps nothing")
+        if isinstance(value, list) and len(set(value)) != len(value):
+            twice = next(v for i, v in enumerate(value) if v in value[:i])
+            raise ValueError(f"the value {twice:g} is listed twice (each parameter point "
+                             "must be named by its values)")
+        return value
+
+    def values(self, name: str) -> list[float]:
+        """The values of parameter ``name`` (one unless it is swept)."""
+        value = getattr(self, name)
+        return value if isinstance(value, list) else [value]
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The parameters given as lists: the dims of a parameter atlas."""
+        return tuple(name for name in PARAMETERS if isinstance(getattr(self, name), list))
+
+    @property
+    def alphas(self) -> list[float]:
+        return self.values("alpha")
+
+    @property
+    def omega0s(self) -> list[float]:
+        return self.values("omega0")
+
+    @property
+    def torques(self) -> list[float]:
+        return self.values("torque")
+
+    @property
+    def points(self) -> list[dict[str, float]]:
+        """Every parameter point, in C order over the swept dims."""
+        names = list(PARAMETERS)
+        return [dict(zip(names, combo))
+                for combo in itertools.product(*(self.values(n) for n in names))]
+
+
+class Axis(StrictModel):
+    """``num`` evenly spaced values from ``start`` to ``stop`` inclusive."""
+
+    start: Number
+    stop: Number
+    num: int = Field(ge=2, le=1 << 20)
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if self.start >= self.stop:
+            raise ValueError(f"start ({self.start:g}) must be less than stop ({self.stop:g})")
+        return self
+
+
+class GridConfig(StrictModel):
+    """The grid of initial conditions θ0 [rad] × θ̇0 [rad s⁻¹]."""
+
+    theta0: Axis = Axis(start=defaults.THETA0_WINDOW[0], stop=defaults.THETA0_WINDOW[1],
+                        num=defaults.GRID_NUM)
+    theta_dot0: Axis = Axis(start=defaults.THETA_DOT0_WINDOW[0],
+                            stop=defaults.THETA_DOT0_WINDOW[1], num=defaults.GRID_NUM)
+
+
+class IntegratorConfig(StrictModel):
+    """Fixed-step RK4: step ``dt`` [s]; orbits not trapped by ``t_max`` [s] are unresolved;
+    ``method`` the discretisation (:data:`atlas.defaults.METHODS`: "rk4", classical RK4 on
+    (θ, θ̇), or "rk4-trigfree", RK4 on (θ, θ̇, cos θ, sin θ), CPU only)."""
+
+    dt: Number = Field(default=defaults.DT, gt=0)
+    t_max: Number = Field(default=defaults.T_MAX, gt=0)
+    method: Literal[METHODS] = defaults.METHOD
+
+
+class SeparatricesConfig(StrictModel):
+    """Stable manifolds of the saddles, located by bisection to ``tol`` with vertices at most
+    ``max_spacing`` apart in the phase plane. A ``tol`` finer than double precision resolves
+    in the window (:func:`atlas.limits.finest_tol`: 1.2e-13 for |θ| ≤ 3π, 1.9e-12 for
+    |θ| ≤ 180) is raised to that finest one, with a warning (:attr:`Config.warnings`)."""
+
+    enabled: bool = True
+    tol: Number = Field(default=defaults.SEPARATRIX_TOL, gt=0, lt=1e-3)
+    max_spacing: Number = Field(default=defaults.MAX_SPACING, gt=0)
+
+
+class ExecutionConfig(StrictModel):
+    """How the sweep runs: ``backend`` and the size of a tile (orbits per task/write; by
+    default ``defaults.TILE_ORBITS``, on the GPU ``defaults.TILE_ORBITS_CUDA``)."""
+
+    backend: Literal[tuple(BACKEND_WORDS)] = "cpu"
+    tile_orbits: int | None = Field(default=None, ge=1)
+    workers: int | None = Field(default=None, ge=1)
+    scheduler: str | None = None
+
+
+class StabilityConfig(StrictModel):
+    """``atlas stability`` only (a grid run ignores it): the Gaussian perturbation's standard
+    deviations ``sigma_theta`` [rad] and ``sigma_theta_dot`` [rad s⁻¹] around each rest state
+    (both or neither; none: no Gaussian stability), and whether a 1-D study stores the
+    ``tipping`` probabilities between consecutive points."""
+
+    sigma_theta: Number | None = Field(default=None, gt=0)
+    sigma_theta_dot: Number | None = Field(default=None, gt=0)
+    tipping: bool = False
+
+    @model_validator(mode="after")
+    def _both_sigmas(self):
+        if (self.sigma_theta is None) != (self.sigma_theta_dot is None):
+            raise ValueError("give both sigma_theta and sigma_theta_dot, or neither")
+        return self
