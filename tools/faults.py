@@ -16,7 +16,7 @@ few minutes on two cores:
   assembled, while its summary and while its groups are written); the space is then freed;
 * hostile input: Hypothesis-generated configs (from the schema's keys, and mutations of a
   valid one) and byte-level damage to a valid atlas file, fed to ``atlas run``, ``info``,
-  ``plot`` and ``view`` (``tests/test_fuzz.py`` with ``ATLAS_FUZZ_SCALE=10``: ten times the
+  ``plot`` and ``view`` (``tests/commands/test_fuzz.py`` with ``ATLAS_FUZZ_SCALE=10``: ten times the
   examples of ``make test``);
 * racing takeovers of a lock whose holder was SIGKILLed (8 processes; no two may hold it
   at once, every one must get it);
@@ -267,21 +267,9 @@ class Soak:
     def hostile_input(self, scale: int) -> None:
         """The property tests of hostile input, ``scale`` times their ``make test`` size: each
         example exits 0 with a sound file, or 2 with one line and nothing created or
-        overwritten."""
-        tests = Path(_package_root()) / "tests" / "test_fuzz.py"
-        n = 4 * 40 * scale  # four property tests of 40 examples each at scale 1
-        if not tests.exists():
-            self.rows.append(("hostile input (skipped: tests/test_fuzz.py not found)", 1, 1, 1))
-            return
-        proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                               str(tests)], capture_output=True, text=True, cwd=_package_root(),
-                              env={**os.environ, "ATLAS_FUZZ_SCALE": str(scale)})
-        if proc.returncode != 0:
-            print(proc.stdout[-3000:], file=sys.stderr)
-        ok = n if proc.returncode == 0 else 0
-        self.rows.append((f"hostile input: fuzzed configs and damaged atlas files (up to {n} "
-                          "examples; recovered = exit 0 or one line, identical = nothing "
-                          "created or overwritten)", n, ok, ok))
+        overwritten. The row fails (nothing recovered) where the tests cannot be found or
+        ran none: a harness row must not read as passed while it runs nothing."""
+        self.rows.append(hostile_input_row(Path(_package_root()), scale))
 
     def lock_races(self, n: int, racers: int = 8) -> None:
         out = self.work / "race.h5"
@@ -481,6 +469,30 @@ def _in_mount_namespace(shell: str) -> bool:
                            shell], capture_output=True,
                           env={**os.environ, "PYTHONPATH": _package_root()})
     return done.returncode == 0
+
+
+#: The fuzz tests the soak runs at scale (``make faults``), from the checkout's root.
+FUZZ_TESTS = Path("tests") / "commands" / "test_fuzz.py"
+
+
+def hostile_input_row(root: Path, scale: int) -> tuple[str, int, int, int]:
+    """The table row of the fuzz tests at ``root`` / :data:`FUZZ_TESTS` run with
+    ``ATLAS_FUZZ_SCALE=scale``: (what, injected, recovered, identical). Not found, failed
+    or no test run (pytest's exit 5): recovered and identical 0."""
+    tests = root / FUZZ_TESTS
+    n = 4 * 40 * scale  # four property tests of 40 examples each at scale 1
+    what = (f"hostile input: fuzzed configs and damaged atlas files (up to {n} examples; "
+            "recovered = exit 0 or one line, identical = nothing created or overwritten)")
+    if not tests.exists():
+        return (f"hostile input: FAILED, {FUZZ_TESTS} not found", n, 0, 0)
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                           str(tests)], capture_output=True, text=True, cwd=root,
+                          env={**os.environ, "ATLAS_FUZZ_SCALE": str(scale)})
+    if proc.returncode != 0:
+        print(proc.stdout[-3000:], file=sys.stderr)
+        why = "no test ran" if proc.returncode == 5 else f"pytest exit {proc.returncode}"
+        return (f"hostile input: FAILED ({why}); {what}", n, 0, 0)
+    return (what, n, n, n)
 
 
 def _package_root() -> str:

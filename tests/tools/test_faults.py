@@ -10,6 +10,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -391,3 +392,17 @@ def test_the_disk_taken_by_another_process_at_any_phase(tmp_path, taken_referenc
     assert "run the same command again" in line and recovered
     for a, b in zip(_labels(tmp_path / "taken-copy.h5"), reference):
         np.testing.assert_array_equal(a, b)
+
+
+def test_the_fuzz_row_fails_where_its_tests_are_missing_or_run_none(tmp_path):
+    """The soak's hostile-input row read as passed ("skipped … not found", with counts equal)
+    after the fuzz tests moved: a missing file, or a file with no test, fails the row."""
+    from tools.faults import FUZZ_TESTS, hostile_input_row
+
+    assert (Path(__file__).resolve().parents[2] / FUZZ_TESTS).exists()  # the real tests
+    what, n, recovered, identical = hostile_input_row(tmp_path, 1)
+    assert "FAILED" in what and n > 0 and recovered == identical == 0
+    (tmp_path / FUZZ_TESTS).parent.mkdir(parents=True)
+    (tmp_path / FUZZ_TESTS).write_text('"""no test here"""\n')
+    what, n, recovered, identical = hostile_input_row(tmp_path, 1)
+    assert "no test ran" in what and recovered == identical == 0
