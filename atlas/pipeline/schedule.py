@@ -207,7 +207,8 @@ def point_results(task: Callable, points: list[tuple], *, backend: str = "cpu",
     kernels release the GIL, and a process pool would fork Numba's running OpenMP pool or
     import the caller's ``__main__`` again) or as Dask tasks, one per point ("dask": on
     ``scheduler`` if given, else a local cluster of ``workers`` processes; in the order
-    they finish). Each point is computed alone, so its result does not depend on where."""
+    they finish). Each point is computed alone, so its result does not depend on where.
+    Ctrl-C leaves the threads' points in flight (:func:`each_in_background`)."""
     if backend == "dask":
         from atlas.pipeline.distributed import dask_map
 
@@ -218,10 +219,7 @@ def point_results(task: Callable, points: list[tuple], *, backend: str = "cpu",
     if n < 2:
         yield from ((i, task(*point)) for i, point in enumerate(points))
         return
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(n) as pool:
-        yield from enumerate(pool.map(lambda point: task(*point), points))
+    yield from enumerate(each_in_background(lambda point: task(*point), points, n))
 
 
 class Scheduler(NamedTuple):

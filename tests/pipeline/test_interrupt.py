@@ -55,16 +55,16 @@ signal.signal(signal.SIGINT, signal.default_int_handler)
 signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 """
 
-#: A process that maps a call that never returns, and is sent SIGINT while the call runs:
-#: it must leave, through KeyboardInterrupt and the interpreter's normal exit, with the call
-#: still in flight. Under a ThreadPoolExecutor it would wait for that call for ever.
+#: A process that maps (CALL) a call that never returns, and is sent SIGINT while the call
+#: runs: it must leave, through KeyboardInterrupt and the interpreter's normal exit, with the
+#: call still in flight. Under a ThreadPoolExecutor it would wait for that call for ever.
 _STUCK = _AS_ON_A_TERMINAL + """\
 import os, signal, threading
-from atlas.pipeline.schedule import each_in_background
+from atlas.pipeline.schedule import each_in_background, point_results
 
 started = threading.Event()
 
-def never_returns(item):
+def never_returns(*item):
     started.set()
     threading.Event().wait()
 
@@ -74,15 +74,19 @@ def interrupt():
 
 threading.Thread(target=interrupt, daemon=True).start()
 try:
-    list(each_in_background(never_returns, range(4), 2))
+    list(CALL)
 except KeyboardInterrupt:
     print("interrupted while a call was in flight:", started.is_set())
 """
 
 
-def test_ctrl_c_leaves_each_in_background_with_its_calls_in_flight():
-    proc = subprocess.run([sys.executable, "-c", _STUCK], cwd=REPO, capture_output=True,
-                          text=True, timeout=600)  # a hang, not a time: it never ends
+@pytest.mark.parametrize("call", [
+    "each_in_background(never_returns, range(4), 2)",
+    "point_results(never_returns, [(i,) for i in range(16)], workers=2)",  # a study's points
+], ids=["each_in_background", "point_results"])
+def test_ctrl_c_leaves_the_calls_in_flight(call):
+    proc = subprocess.run([sys.executable, "-c", _STUCK.replace("CALL", call)], cwd=REPO,
+                          capture_output=True, text=True, timeout=600)  # a hang: never ends
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "interrupted while a call was in flight: True"
 
