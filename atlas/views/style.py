@@ -42,31 +42,41 @@ LABELLED_WELLS = 16
 # color space for image processing", 2020), whose lightness L (0 black … 1 white), chroma C
 # and hue h [deg] are perceptually uniform enough to place colours by. The colour of a well
 # is a function of k alone, the same in every figure and on the page, so that two figures can
-# be compared by colour:
-# * hue by the sign of k (k > 0 warm, yellow → crimson as |k| grows; k < 0 cool, cyan →
+# be compared by colour. With m = (|k| − 1) mod WELL_CYCLE:
+# * hue by the sign of k (k > 0 warm, amber … orange … crimson; k < 0 cool, cyan … blue …
 #   violet: the blue–yellow axis that red–green colour-blind readers keep), k = 0 green;
-# * lightness alternating with the parity of k (odd |k| light, even |k| dark), so that two
-#   neighbouring wells k, k + 1, whose bands touch on every map, differ most in lightness,
-#   which every reader sees (at least 27 CAM02-UCS units apart, also for a protanope);
-# * within a parity, lightness falling and hue turning with |k|: far wells darker, and no two
-#   wells of |k| ≤ WELL_CYCLE share a colour. Past WELL_CYCLE the sequence repeats (an
-#   even cycle keeps the parity alternation across the repeat; such maps name their bands).
-# Each colour takes the largest chroma up to _CHROMA that sRGB can show at its L and h. The
-# distances are checked in CAM02-UCS, also under simulated deuteranopia and protanopia
-# (colorspacious), by tests/views/test_palette.py.
-WELL_CYCLE = 14
-# Oklab L of the nearest and the farthest odd |k| (1, WELL_CYCLE − 1) and even |k| (2, WELL_CYCLE)
-_L_ODD, _L_EVEN = (0.93, 0.72), (0.58, 0.32)
-_HUE_POSITIVE, _HUE_NEGATIVE = (105.0, 10.0), (200.0, 310.0)  # h [deg], |k| = 1 … WELL_CYCLE
-_CHROMA = 0.16
-_ZERO_LCH = (0.66, 0.15, 145.0)     # k = 0: green, between the two lightness bands
-_RUNNING_L = 0.62                   # the running basin: neutral grey
-# Lines and markers on a white page (the curves, atlas orbit's certificate): the same hue
-# and chroma, lightness mapped linearly from [_L_EVEN[1], _L_ODD[0]] onto _LINE_L, so that the
-# light colours show as thin lines and the parity alternation remains; k = 0 and the running
-# basin at lightnesses of their own, between the light and the dark lines.
-_LINE_L = (0.23, 0.80)
-_ZERO_LINE_L, _RUNNING_LINE_L = 0.50, 0.45
+# * lightness by m mod 4: two light levels for odd |k| and two dark ones for even |k|
+#   (_L_LEVELS: |k| = 1, 2, 3, 4 light, dark, less light, darkest), so that two neighbouring
+#   wells k, k + 1, whose bands touch on every map, differ most in lightness, which every
+#   reader sees (at least 27 CAM02-UCS units apart, also for a protanope), and so that the
+#   four wells of each sign in the default map's −4 … 4 have four lightnesses: told apart by
+#   a colour-blind reader too; the levels drift by _L_DRIFT every four wells;
+# * hue by m mod 6: six places in the sign's hue range (_HUE_STEPS, fractions of the way from
+#   its first to its last hue), in an order chosen so that the wells sharing a lightness
+#   level (|k|, |k| + 4, |k| + 8) lie far apart in hue; ±k take the same place in their two
+#   ranges and the same lightness: a pair.
+# Within a cycle the pair (m mod 4, m mod 6) takes each of its 12 values once: no two wells
+# of |k| ≤ WELL_CYCLE share a colour, and past WELL_CYCLE the sequence repeats (such maps
+# name their bands). The levels, the hue order and the ranges were chosen by searching for
+# the largest least distance between the wells of −4 … 4 (maps) and of −6 … 6 (lines), every
+# pair of a figure distinct and neighbours far apart, for normal vision, deuteranopia and
+# protanopia (the numbers below, rounded; tests/views/test_palette.py checks the distances
+# that they reach). Each colour takes the largest chroma up to _CHROMA that sRGB
+# can show at its L and h.
+WELL_CYCLE = 12
+# Oklab L of m mod 4 = 0 … 3, and its change every four wells
+_L_LEVELS, _L_DRIFT = (0.917, 0.476, 0.695, 0.324), -0.036
+_HUE_STEPS = (0.129, 0.139, 0.734, 0.244, 0.741, 0.559)    # m mod 6 = 0 … 5
+_HUE_POSITIVE, _HUE_NEGATIVE = (89.1, -28.1), (189.7, 296.0)  # h [deg] at steps 0 and 1
+_CHROMA = 0.120
+_ZERO_LCH = (0.568, 0.15, 145.0)    # k = 0: green, between the light and the dark levels
+_RUNNING_L = 0.556                  # the running basin: neutral grey
+# Lines and markers on a white page (the curves, atlas orbit's certificate): the same hues
+# and chroma at levels of their own (_LINE_LEVELS, drifting by _LINE_DRIFT every four wells,
+# none lighter than 0.8), so that the light colours show as thin lines and the parity
+# alternation remains; k = 0 and the running basin at lightnesses of their own.
+_LINE_LEVELS, _LINE_DRIFT = (0.720, 0.317, 0.597, 0.202), 0.035
+_ZERO_LINE_L, _RUNNING_LINE_L = 0.423, 0.444
 #: Colour of "no certified label" (status unresolved or nonfinite) on every map, and of "no
 #: value" (no t_trap, no distance) on the t_trap and distance maps: white.
 NO_LABEL_COLOR = "#ffffff"
@@ -110,13 +120,10 @@ def _well_lch(k: int, lines: bool) -> tuple[float, float, float]:
     if k == 0:
         return (_ZERO_LINE_L if lines else _ZERO_LCH[0]), *_ZERO_LCH[1:]
     m = (abs(k) - 1) % WELL_CYCLE              # 0 … WELL_CYCLE − 1
-    near, far = _L_ODD if m % 2 == 0 else _L_EVEN
-    lightness = near + (m // 2) / (WELL_CYCLE // 2 - 1) * (far - near)
+    levels, drift = (_LINE_LEVELS, _LINE_DRIFT) if lines else (_L_LEVELS, _L_DRIFT)
+    lightness = levels[m % 4] + drift * (m // 4)
     first, last = _HUE_POSITIVE if k > 0 else _HUE_NEGATIVE
-    hue = first + m / (WELL_CYCLE - 1) * (last - first)
-    if lines:
-        lo, hi = _L_EVEN[1], _L_ODD[0]
-        lightness = _LINE_L[0] + (lightness - lo) / (hi - lo) * (_LINE_L[1] - _LINE_L[0])
+    hue = first + _HUE_STEPS[m % 6] * (last - first)
     return lightness, _CHROMA, hue
 
 
@@ -141,8 +148,9 @@ def well_palette(lines: bool = False) -> dict:
 
 def well_colour(k: int, lines: bool = False) -> str:
     """The colour ("#rrggbb") of well k: a function of k alone, the same in every figure and
-    on the page (module notes above: hue by sign, lightness alternating with the parity of k,
-    repeating every WELL_CYCLE wells on each side). ``lines``: the same hues darker, for
+    on the page (module notes above: hue by sign, lightness alternating with the parity of k
+    over four levels, repeating every WELL_CYCLE wells on each side). ``lines``: the same
+    hues at line lightnesses, for
     thin lines and markers on a white page, where the light map colours would vanish."""
     k, table = int(k), _TABLES[lines]
     if k == 0:

@@ -29,13 +29,30 @@ VISIONS = [("normal", None)] + [
 #: The least CAM02-UCS ΔE between two neighbouring wells k, k + 1 (whose bands touch on every
 #: map), in every vision: a ΔE of about 1 is a just noticeable difference of two patches side
 #: by side, 3.5 plainly visible; the old palette, which spread its lightness over the
-#: figure's wells, left neighbours about 5 apart with 27 wells. The palette reaches 27 (maps)
-#: and 32 (lines), under protanopia.
+#: figure's wells, left neighbours about 5 apart with 27 wells. The palette reaches 27.6
+#: (maps, deuteranopia) and 28.6 (lines, protanopia).
 LEAST_NEIGHBOUR_DELTA_E = 20.0
-#: The least ΔE between any two basins of a figure (wells −WELL_CYCLE … WELL_CYCLE, the
-#: running basin, no label): distinct, if not neighbours. The palette reaches, maps (lines):
-#: normal 6.3 (6.8), deuteranopia 3.9 (3.6), protanopia 5.6 (4.9).
-LEAST_DELTA_E = {"normal": 4.5, "deuteranomaly": 3.5, "protanomaly": 3.5}
+#: The least ΔE between any two basins of a figure of every well of a cycle (wells
+#: −WELL_CYCLE … WELL_CYCLE, the running basin, no label): distinct, if not at a glance (such
+#: a map names its bands). The palette reaches, maps (lines): normal 5.0 (4.0), deuteranopia
+#: 3.8 (3.6), protanopia 3.0 (4.0).
+LEAST_DELTA_E = {"normal": 4.0, "deuteranomaly": 3.0, "protanomaly": 2.5}
+#: The least ΔE between any two basins of the default map (wells −4 … 4, the running basin,
+#: no label): every class told apart at a glance, also across the map (not only neighbours).
+#: 15 is about three times the 3.5 of "plainly visible" for normal vision; under deuteranopia
+#: and protanopia the wells of one sign differ in lightness and in yellow–blue only, and 8 is
+#: what the palette keeps with a margin (it reaches normal 16.8, deuteranopia 12.1,
+#: protanopia 9.0: k = −1 against no-label white). The palette of 14 wells per cycle, hue and
+#: lightness turning slowly with |k|, reached 6.6, 4.0 and 6.2 (k = −3 and −1; 1 and 3).
+DEFAULT_MAP_WELLS, LEAST_DEFAULT_MAP_DELTA_E = range(-4, 5), {
+    "normal": 15.0, "deuteranomaly": 8.0, "protanomaly": 8.0}
+#: The same for the lines (lines=True: the fraction curves, atlas orbit's figure) of the wells
+#: −6 … 6 and the running basin's line, on a white page: the palette reaches normal 12.6,
+#: deuteranopia 5.5, protanopia 7.9 (the old one 6.9, 3.6 and 5.4: k = 2 and 4, 3 and 5, 1
+#: and 3, all nearly the same dark olive or pale gold); thin lines are told apart also by the
+#: legend, hence the lower bounds.
+CURVE_WELLS, LEAST_CURVE_DELTA_E = range(-6, 7), {
+    "normal": 12.0, "deuteranomaly": 5.0, "protanomaly": 7.0}
 
 
 def _rgb(colours: list[str]) -> np.ndarray:
@@ -92,6 +109,33 @@ def test_every_basin_of_a_figure_is_distinct(vision, cvd, lines):
     assert d[i, j] >= LEAST_DELTA_E[vision], (keys[i], keys[j], d[i, j])
 
 
+@pytest.mark.parametrize("vision, cvd", VISIONS, ids=[v for v, _ in VISIONS])
+def test_every_class_of_the_default_map_is_distinct_at_a_glance(vision, cvd):
+    """Every pair of the default map's classes (wells −4 … 4, running, no label), not only
+    neighbours, at least LEAST_DEFAULT_MAP_DELTA_E apart (the old palette drew k = −2 and −4
+    nearly the same teal, +1 and +3 both pale yellow, +2 and +4 both olive)."""
+    colours = basin_colours(DEFAULT_MAP_WELLS, running=True)
+    keys = list(colours)
+    d = _distances(list(colours.values()), cvd)
+    np.fill_diagonal(d, np.inf)
+    i, j = np.unravel_index(d.argmin(), d.shape)
+    assert d[i, j] >= LEAST_DEFAULT_MAP_DELTA_E[vision], (keys[i], keys[j], d[i, j])
+
+
+@pytest.mark.parametrize("vision, cvd", VISIONS, ids=[v for v, _ in VISIONS])
+def test_every_line_of_a_curve_figure_is_distinct(vision, cvd):
+    """The lines=True colours of the wells −6 … 6 and of the running basin: every pair at
+    least LEAST_CURVE_DELTA_E apart (the old ones drew k = ±2, ±4, ±6 nearly the same dark
+    olive)."""
+    colours = basin_colours(CURVE_WELLS, running=True, lines=True)
+    del colours["none"]  # no curve of its own
+    keys = list(colours)
+    d = _distances(list(colours.values()), cvd)
+    np.fill_diagonal(d, np.inf)
+    i, j = np.unravel_index(d.argmin(), d.shape)
+    assert d[i, j] >= LEAST_CURVE_DELTA_E[vision], (keys[i], keys[j], d[i, j])
+
+
 def test_the_palette_repeats_every_cycle_on_each_side():
     """Past ±WELL_CYCLE the sequence starts again (so that a map of any width has colours),
     the sign's hue family kept: the key and the band names tell such wells apart."""
@@ -104,22 +148,28 @@ def test_the_palette_repeats_every_cycle_on_each_side():
 @pytest.mark.parametrize("vision, cvd", VISIONS[:2], ids=["normal", "deuteranomaly"])
 def test_sign_is_the_hue_and_parity_the_lightness(vision, cvd):
     """Hue by sign: a line through grey in the (a', b') plane of CAM02-UCS parts the wells
-    k > 0 from the wells k < 0, every one more than 3 from it (also as a deuteranope sees
-    them); lightness by parity: every odd |k| lighter than every even |k| (neighbours differ
-    most in what every reader sees), lighter still the nearer the well within a parity; a
-    pair ±j closer in lightness than half the step to the next well."""
+    k > 0 from the wells k < 0, every one more than 3 from it (more than 1 as a deuteranope
+    sees them: the rose wells of k > 0, |k| = 3, 5, 9, 11, are near-grey to a deuteranope,
+    though still on the warm side, and told apart from the cool wells of their lightness by
+    the distance tests above); lightness by parity: every odd |k| lighter than every even
+    |k| (neighbours differ most in what every reader sees), and the four wells of each sign
+    in the default map's −4 … 4 at four lightnesses at least 15 apart in J' (told apart by
+    lightness alone); a pair
+    ±j closer in lightness than half the step to the next well."""
     ks = range(-WELL_CYCLE, WELL_CYCLE + 1)
     ucs = dict(zip(ks, _ucs([well_colour(k) for k in ks], cvd)))
     positive = np.array([ucs[k][1:] for k in range(1, WELL_CYCLE + 1)])
     negative = np.array([ucs[-k][1:] for k in range(1, WELL_CYCLE + 1)])
     across = positive.mean(axis=0) - negative.mean(axis=0)
     across /= np.hypot(*across)
-    assert (positive @ across).min() > 3 and (negative @ across).max() < -3
+    margin = 3 if cvd is None else 1
+    assert (positive @ across).min() > margin and (negative @ across).max() < -margin
     for sign in (1, -1):
         odd = [ucs[sign * j][0] for j in range(1, WELL_CYCLE + 1, 2)]
         even = [ucs[sign * j][0] for j in range(2, WELL_CYCLE + 1, 2)]
         assert min(odd) > max(even)
-        assert np.all(np.diff(odd) < 0) and np.all(np.diff(even) < 0)
+        near = np.sort([ucs[sign * j][0] for j in range(1, 5)])
+        assert np.diff(near).min() >= 15, near
     if cvd is None:
         assert all(abs(ucs[j][0] - ucs[-j][0]) < 0.5 * abs(ucs[j][0] - ucs[j + 1][0])
                    for j in range(1, WELL_CYCLE))
