@@ -96,11 +96,8 @@ def _cmd_run(args) -> int:
                          force=args.force, config_path=args.config, open_result=False,
                          confirm=ask(yes=args.yes, quiet=args.quiet))
     except KeyboardInterrupt as exc:
-        from atlas.store.partial import partial_path
-
         what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-        print(f"atlas: {what}; finished tiles are kept in {partial_path(cfg.output)}; "
-              "run the same command again to continue", file=sys.stderr)
+        print(f"atlas: {what}; {sweep.kept_after_interrupt(cfg.output)}", file=sys.stderr)
         return _interrupted(exc)
     if args.resume:  # said after the run, so that bad input still gets its one line
         print("atlas: --resume is deprecated and does nothing (an interrupted run is always "

@@ -76,15 +76,15 @@ def exact_boundaries(cfg: Config, pendulums: list[Pendulum], cycles: list,
     """The exact basin boundaries of every parameter point over the window
     (:func:`atlas.boundaries.exact.exact_boundaries`, given its running limit cycle), built
     once for both the separatrices and the certifier."""
-    from concurrent.futures import ThreadPoolExecutor
+    from atlas.pipeline.schedule import each_in_background
 
     def one(point):  # independent points, two at a time (compiled DOP853, polygons: nogil)
         p, cycle = point
         return exact.exact_boundaries(p, window(cfg), cycle=cycle)
 
-    with ThreadPoolExecutor(concurrent_points(len(pendulums))) as pool:
-        return list(track(pool.map(one, zip(pendulums, cycles)), len(pendulums),
-                          "exact boundaries"))
+    return list(track(each_in_background(one, zip(pendulums, cycles),
+                                         concurrent_points(len(pendulums))),
+                      len(pendulums), "exact boundaries"))
 
 
 def trace_separatrices(cfg: Config, pendulums: list[Pendulum], boundaries: list,
@@ -99,15 +99,15 @@ def trace_separatrices(cfg: Config, pendulums: list[Pendulum], boundaries: list,
     settings = {"tol": cfg.separatrices.tol, "max_spacing": cfg.separatrices.max_spacing,
                 "dt": cfg.integrator.dt, "t_max": cfg.integrator.t_max,
                 "method": cfg.integrator.method}
-    from concurrent.futures import ThreadPoolExecutor
+    from atlas.pipeline.schedule import each_in_background
 
     def one(point):  # the points are independent: two at a time overlap their serial parts
         p, b, barrier = point
         return trace(p, *window(cfg), exact=b, barrier=barrier, **settings)
 
-    with ThreadPoolExecutor(concurrent_points(len(pendulums))) as pool:
-        return list(track(pool.map(one, zip(pendulums, boundaries, barriers)),
-                          len(pendulums), "separatrices"))
+    return list(track(each_in_background(one, zip(pendulums, boundaries, barriers),
+                                         concurrent_points(len(pendulums))),
+                      len(pendulums), "separatrices"))
 
 
 def per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]

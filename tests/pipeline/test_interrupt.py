@@ -139,8 +139,6 @@ sys.exit(main(["run", sys.argv[1], "--quiet"]))
 """
 
 
-@pytest.mark.skip(reason="needs atlas/pipeline/points.py to map the points with "
-                  "schedule.each_in_background and atlas/cli.py to say kept_after_interrupt")
 def test_ctrl_c_while_a_point_computes_stops_the_run_at_once(tmp_path):
     """Ctrl-C in a run's first seconds (the exact boundaries, the separatrices, the kernels'
     first compilation) took effect only once the point in flight was done (half a minute
