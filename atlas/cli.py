@@ -4,7 +4,8 @@ Failures become messages here and nowhere else: every :class:`~atlas.errors.Atla
 with one line ``atlas: error: …`` on stderr and its ``exit_code``. Exit statuses: 0 done; 1 a
 failure of the environment during a run (disk full, write refused), finished tiles kept; 2 bad
 input (config, arguments, files, an output in the way), nothing created or overwritten; 3 the
-output is locked by another run; 130 interrupted by Ctrl-C (SIGINT) and 143 by SIGTERM,
+output is locked by another run; 4 a run wrote its file but its separatrix check exceeded its
+bound (0 with ``--accept-inexact``); 130 interrupted by Ctrl-C (SIGINT) and 143 by SIGTERM,
 finished tiles kept.
 """
 
@@ -106,7 +107,7 @@ def _cmd_run(args) -> int:
         from atlas.views.info import summary_lines
 
         print(f"wrote {cfg.output}")
-        for line in summary_lines(tree):
+        for line in summary_lines(tree, brief=True):
             print("  " + line)
     return sweep.accuracy_exit(tree, cfg.output, accept_inexact=args.accept_inexact)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (lazy_dask installs itself)
@@ -14,13 +15,21 @@ from atlas.store import reader as store
 from atlas.views.info_table import table_lines
 from atlas.views.selectors import choose_points
 
+#: Basins, saddles and crossings listed by a brief summary (``atlas run``'s): a window of
+#: many turns has dozens of each, which ``atlas info`` lists in full.
+BRIEF_ROWS = 9
 
-def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None) -> list[str]:
+
+def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None,
+                  brief: bool = False) -> list[str]:
     """Grid, then for every parameter point its parameters, exact basin fractions, grid
     fractions with their error, d_cert and the certified share, and its separatrices'
     summary; then the unresolved count and the run time. A parameter atlas: one table of
     all its points instead (:func:`atlas.views.info_table.table_lines`), or the detail of
-    the points ``chosen`` (:func:`atlas.views.selectors.choose_points`)."""
+    the points ``chosen`` (:func:`atlas.views.selectors.choose_points`). ``brief`` (``atlas
+    run``'s summary): at most :data:`BRIEF_ROWS` basins, saddles and crossings, with how many
+    more ``atlas info`` lists."""
+    most = BRIEF_ROWS if brief else None
     ds = tree.to_dataset(inherit=False)
     n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
     every = points(ds)
@@ -35,10 +44,10 @@ def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None) -> list[s
         lines.append(f"pendulum  {point_label(point)}")
         sep = point_group(tree, "separatrices", point)
         lines += ["  " + line for line in _basin_lines(at_point(ds, point),
-                                                       traced=sep is not None)]
+                                                       traced=sep is not None, most=most)]
         lines += ["  " + line for line in _torque_lines(tree, point)]
         if sep is not None:
-            lines += ["  " + line for line in separatrix_lines(sep)]
+            lines += ["  " + line for line in separatrix_lines(sep, most=most)]
     unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
     lines.append(f"unresolved {unresolved} orbits")
     if "run_time_s" in ds.attrs:
@@ -46,12 +55,28 @@ def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None) -> list[s
     return lines
 
 
-def _basin_lines(ds: xr.Dataset, traced: bool = False) -> list[str]:
+def _largest(values: np.ndarray, ks: np.ndarray, most: int | None) -> np.ndarray:
+    """Where ``values`` holds its ``most`` largest (to 6 digits; ties to the smaller |k|),
+    in their order; all where ``most`` is None or not exceeded."""
+    keep = np.ones(values.size, bool)
+    if most is not None and values.size > most:
+        keep[:] = False
+        keep[np.lexsort((np.abs(ks), -np.round(values, 6)))[:most]] = True
+    return keep
+
+
+def _basin_lines(ds: xr.Dataset, traced: bool = False, most: int | None = None) -> list[str]:
     """The basins of one parameter point: exact area fractions first, then the grid counts
     with their error bound and measured error, then d_cert and the certified share (why
     d_cert is missing: separatrices disabled, or, ``traced``, traced without measuring a
-    boundary shift)."""
+    boundary shift). ``most``: only the basins of the ``most`` largest fractions, and one line
+    saying how many more there are and their share."""
     present = (ds["basin_fraction_exact"].values > 0) | (ds["basin_fraction"].values > 0)
+    share = np.where(np.isnan(ds["basin_fraction_exact"].values),
+                     ds["basin_fraction"].values, ds["basin_fraction_exact"].values)[present]
+    shown = _largest(share, ds["k"].values[present], most)
+    left_out, left_share = int((~shown).sum()), float(share[~shown].sum())
+    present[present] = shown
     ks = ds["k"].values[present]
     exact = ds["basin_fraction_exact"].values[present]
     exact_err = ds["basin_fraction_exact_error"].values[present]
@@ -65,6 +90,9 @@ def _basin_lines(ds: xr.Dataset, traced: bool = False) -> list[str]:
               + f"   {g:.6f}     "
               + (f"{b:.1e}, {m:.1e}" if b == b else "not computed")
               for k, e, ee, g, b, m in zip(ks, exact, exact_err, grid, bound, measured)]
+    if left_out:
+        lines.append(f"          … {left_out} more basins, {left_share:.2e} of the window in "
+                     "all (`atlas info` of the file lists every one)")
     running, running_exact = float(ds["running_fraction"]), float(ds["running_fraction_exact"])
     if running or running_exact:
         lines.append(f"          run {running_exact:.14f} ± "
@@ -120,11 +148,19 @@ def _torque_lines(tree: xr.DataTree, point: dict) -> list[str]:
     return lines
 
 
-def separatrix_lines(ds: xr.Dataset) -> list[str]:
+def _listed(items: list[str], most: int | None) -> str:
+    """``items`` joined by commas; beyond ``most`` the first ones, "…", the last and the count."""
+    if most is None or len(items) <= most:
+        return ", ".join(items)
+    return f"{', '.join(items[:most - 1])}, …, {items[-1]} ({len(items)} in all)"
+
+
+def separatrix_lines(ds: xr.Dataset, most: int | None = None) -> list[str]:
     """One parameter point's ``/separatrices`` node (:mod:`atlas.store.separatrices`) in a
     few lines: its boundaries and branches, its symmetry check (the point reflection without
     torque, the 2π shift with), its check against the exact boundaries, its orbits, its
-    crossings of the axis θ0 = 0, its warnings."""
+    crossings of the axis θ0 = 0, its warnings. ``most``: at most that many saddles and
+    crossings named."""
     from atlas.store.separatrices import branches, max_discrepancy, warnings
 
     found = {(n, b) for n, b, *_ in branches(ds)}
@@ -135,7 +171,7 @@ def separatrix_lines(ds: xr.Dataset) -> list[str]:
     symmetry_bound = float(ds.attrs.get("symmetry_bound", math.nan))
     lines = [
         f"separatrices: {len(saddles)} basin boundaries (saddles n = "
-        f"{', '.join(map(str, saddles)) or '-'}), {len(found)} branches, "
+        f"{_listed(list(map(str, saddles)), most) or '-'}), {len(found)} branches, "
         f"{ds.sizes.get('point', 0)} points, located to tol {float(ds.attrs['tol']):.0e}"
         + (f" (rounding estimate of the shots ≤ {float(ds.attrs['rounding']):.1e})"
            if "rounding" in ds.attrs else "")
@@ -169,7 +205,7 @@ def separatrix_lines(ds: xr.Dataset) -> list[str]:
                                                  ds["k_below"].values, ds["k_above"].values,
                                                  strict=True))]
     lines.append("basin boundaries on theta0 = 0: theta_dot0 = "
-                 + (", ".join(cross) if cross else "none") + " rad/s (k below|above; "
+                 + (_listed(cross, most) if cross else "none") + " rad/s (k below|above; "
                  "* outside the window)")
     lines += [f"warning: {w}" for w in warnings(ds)]
     return lines

@@ -189,3 +189,31 @@ def test_a_study_plot_writes_no_figure_where_one_would_replace_a_foreign_file(tm
     code, printed, _ = cli("plot", out)
     assert code == 0 and all(KINDS["figure"].recognises(Path(line.removeprefix("wrote ")))
                              for line in printed.splitlines())
+
+
+def test_a_run_of_many_wells_summarises_and_info_lists_them_all(tmp_path):
+    """A window in degrees (57 turns) flooded `atlas run`'s terminal with 62 basin rows and
+    lines of 62 saddles: the run's summary names the 9 largest basins (ties to the smaller
+    |k|), says how many more and their share; `atlas info` lists every one."""
+    out = tmp_path / "deg.h5"
+    cfg = write_config(tmp_path / "deg.yaml", "grid:\n"
+                       "  theta0: {start: -180, stop: 180, num: 64}\n"
+                       "  theta_dot0: {start: -4, stop: 4, num: 32}\n"
+                       f"output: {out}\n")
+    code, printed, _ = cli("run", cfg)
+    assert code == 0
+    rows = [line.split() for line in printed.splitlines()
+            if re.match(r"^\s+[+-]\d+\s+0\.\d+ ±", line)]
+    assert [int(r[0]) for r in rows] == list(range(-4, 5))
+    more = next(line for line in printed.splitlines() if "more basins" in line)
+    n_more, share = re.search(r"… (\d+) more basins, ([\d.e+-]+) of the window", more).groups()
+    code, info, _ = cli("info", out)
+    every = [line.split() for line in info.splitlines()
+             if re.match(r"^\s+[+-]\d+\s+0\.\d+ ±", line)]
+    assert code == 0 and len(every) == 9 + int(n_more) > 50
+    shown = {int(r[0]) for r in rows}
+    assert float(share) == pytest.approx(sum(float(r[1]) for r in every
+                                             if int(r[0]) not in shown), rel=1e-2)
+    saddles = next(line for line in printed.splitlines() if "basin boundaries (saddles" in line)
+    assert "in all)" in saddles and len(saddles) < 300
+    assert max(map(len, printed.splitlines())) < 400
