@@ -283,9 +283,9 @@ def fig7_damping_regimes_angle(ax_or_fig=None, *, small=False, omega0=2.0,
                                alphas=(0.4, 2.0, 4.0), theta0=0.5, theta_dot0=0.0,
                                t_max=10.0) -> Figure:
     """Figure 7: θ(t) underdamped, critically damped, overdamped (eqs. 6, 11, 18 via
-    :func:`linear.solve`), in REGIME_COLORS (the essay's green, blue, red: not safe for
-    colour-blind readers). The essay gives no parameters: ω0 = 2 rad/s and α = 0.4, 2,
-    4 s⁻¹ by default."""
+    :func:`linear.solve`), in REGIME_COLORS (blue, black, vermilion of Okabe & Ito's
+    colour-blind-safe set, where the essay had green, blue, red). The essay gives no
+    parameters: ω0 = 2 rad/s and α = 0.4, 2, 4 s⁻¹ by default."""
     fig, (ax,) = _axes(ax_or_fig)
     t = _times(t_max, small)
     for label, color, theta, _ in _regimes(alphas, omega0, theta0, theta_dot0, t):

@@ -10,7 +10,8 @@ cycle). The palette, the colour maps and the markers come from :mod:`atlas.views
 the page's data: the script keeps no colours of its own. The map fills the window's width (a
 1920 px screen and a 400 px phone alike); it is drawn before the page's load event ends. A
 layer switch shows t_trap or the boundary distance instead, in the PNGs' colour maps
-(``T_TRAP_CMAP``, ``DISTANCE_CMAP``; log scales between the 1st and 99th percentiles); a hover
+(``T_TRAP_CMAP``, ``DISTANCE_CMAP``; log scales: t_trap from its least to its greatest
+positive value, the distance between its 1st and 99th percentiles); a hover
 line reads
 the stored label, status, t_trap and distance of the grid point under the pointer. A click, or
 a point typed in exact coordinates, integrates that orbit in the browser
