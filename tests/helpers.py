@@ -11,6 +11,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -146,3 +147,18 @@ grid:
   theta_dot0: {{start: -3, stop: 3, num: 2}}
 output: {output}
 """
+
+
+def host_has_fma() -> bool:
+    """Whether this host's CPU has fused multiply-add, as Numba's compiler (LLVM) sees it:
+    the pinned bytes of atlas's kernels (tests/kernels/test_torque_kernels.py,
+    tests/tools/test_identity.py) were made on such a host, where LLVM contracts a·b + c into
+    one rounding; a host without it rounds twice and gives other last bits."""
+    from llvmlite import binding
+
+    return bool(binding.get_host_cpu_features().get("fma"))
+
+
+#: Skip a test of pinned bytes on a host whose arithmetic rounds differently (no FMA).
+needs_fma = pytest.mark.skipif(not host_has_fma(), reason="the pinned bytes were made on a "
+                               "host with FMA; this CPU rounds a·b + c twice")

@@ -22,7 +22,7 @@ from atlas.labels.trap import energy_cap, n_checks_for, trap_margin
 from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import Pendulum
 from atlas.status import ATTRACTOR_FILL
-from tests.helpers import boundary_adjacent
+from tests.helpers import boundary_adjacent, needs_fma
 
 TWO_PI = 2 * math.pi
 #: Bistable cases: (α, ω0, τ, start of the hand-made barrier, its slope margin ε).
@@ -176,6 +176,7 @@ def _flip(theta0, lo, hi, **kw) -> float:
         lo, hi = (xs[j - 1] if j > 0 else lo), (xs[j] if j < xs.size else hi)
 
 
+@needs_fma
 @pytest.mark.parametrize("method,kernel,check_every", list(TAU_ZERO_PINS))
 def test_tau_zero_is_bit_identical_to_the_untilted_kernels(method, kernel, check_every):
     th, v = _pin_inputs()
