@@ -55,7 +55,8 @@ def check_output_target(output, config=None, *, force: bool = False) -> None:
         if same:
             raise OutputInTheWay(f"{output}: the output path is the config file being run; "
                                  "name another output with -o")
-    check_suffix(output, "atlas")
+    if not output.is_dir():  # a directory is refused as such (check_output_path)
+        check_suffix(output, "atlas")
     if force or not output.exists():
         return
     fmt = format_for(output)
