@@ -37,6 +37,19 @@ def _interrupted(exc: KeyboardInterrupt) -> int:
     return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
 
 
+def _interrupt_behind(exc: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM behind ``exc``, if any: a signal that arrives while a compiled
+    kernel calls back into Python (Numba's ``_numba_unpickle``) comes out of the kernel as a
+    SystemError ("returned a result with an exception set") caused by the KeyboardInterrupt."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors (no usage dump) and exit status 2."""
 
@@ -96,10 +109,13 @@ def _cmd_run(args) -> int:
         tree = sweep.run(cfg, restart=args.restart, quiet=args.quiet, backend=args.backend,
                          force=args.force, config_path=args.config, open_result=False,
                          confirm=ask(yes=args.yes, quiet=args.quiet))
-    except KeyboardInterrupt as exc:
-        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+    except (KeyboardInterrupt, SystemError) as exc:
+        interrupt = _interrupt_behind(exc)
+        if interrupt is None:
+            raise
+        what = "terminated (SIGTERM)" if isinstance(interrupt, Terminated) else "interrupted"
         print(f"atlas: {what}; {sweep.kept_after_interrupt(cfg.output)}", file=sys.stderr)
-        return _interrupted(exc)
+        return _interrupted(interrupt)
     if args.resume:  # said after the run, so that bad input still gets its one line
         print("atlas: --resume is deprecated and does nothing (an interrupted run is always "
               "continued); it will be removed", file=sys.stderr)
@@ -468,10 +484,13 @@ def main(argv: list[str] | None = None) -> int:
     except AtlasError as exc:
         print(f"atlas: error: {_one_line(str(exc))}", file=sys.stderr)
         return getattr(exc, "exit_code", EXIT_BAD_INPUT)
-    except KeyboardInterrupt as exc:
-        print("atlas: terminated (SIGTERM)" if isinstance(exc, Terminated)
+    except (KeyboardInterrupt, SystemError) as exc:
+        interrupt = _interrupt_behind(exc)
+        if interrupt is None:
+            raise
+        print("atlas: terminated (SIGTERM)" if isinstance(interrupt, Terminated)
               else "atlas: interrupted", file=sys.stderr)
-        return _interrupted(exc)
+        return _interrupted(interrupt)
     except BrokenPipeError:  # `atlas info x.h5 | head`: the reader left, nothing is wrong
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
