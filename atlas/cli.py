@@ -254,7 +254,7 @@ def _cmd_orbit(args) -> int:
             for name in ("alpha", "omega0", "torque", "dt", "t_max")}
     output = Path(args.output) if args.output else default_output(
         file, theta0, theta_dot0, {name: opts[name] for name in ("alpha", "omega0", "torque")})
-    check_output(output, "figure", inputs=(file,) if file else ())
+    check_output(output, "figure", inputs=(file,) if file else (), command="atlas orbit")
     orbit, lines, context = report(theta0, theta_dot0, file=file, **opts)
     _output_folder(output.parent)
     try:

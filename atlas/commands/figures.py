@@ -487,7 +487,8 @@ def write_all(outdir: Path, *, small: bool = False) -> list[Path]:
 
     outdir = Path(outdir)
     for stem in FIGURES:  # nothing is written where a figure would replace another file
-        check_output(outdir / f"{stem}.png", "figure", option="--outdir")
+        check_output(outdir / f"{stem}.png", "figure", option="--outdir",
+                     command="atlas figures")
     outdir.mkdir(parents=True, exist_ok=True)
     written = []
     with plt.rc_context(STYLE):
@@ -495,7 +496,7 @@ def write_all(outdir: Path, *, small: bool = False) -> list[Path]:
             fig = draw(small=small)
             fig.tight_layout()
             path = outdir / f"{stem}.png"
-            fig.savefig(path, metadata=figure_metadata(".png"))
+            fig.savefig(path, metadata=figure_metadata(".png", "atlas figures"))
             plt.close(fig)
             written.append(path)
     return written

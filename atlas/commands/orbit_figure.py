@@ -110,7 +110,7 @@ def plot_orbit(orbit: Orbit, output: str | Path, tree=None, index=None) -> Path:
                        f"{orbit.theta_dot0:.4g} rad/s\n(wells dashed, saddles dotted)")
         fig.tight_layout()
         try:
-            fig.savefig(output, metadata=figure_metadata(Path(output).suffix))
+            fig.savefig(output, metadata=figure_metadata(Path(output).suffix, "atlas orbit"))
         except OSError as exc:
             raise AtlasError(f"{output}: cannot write the figure ({exc.strerror or exc})"
                              ) from None

@@ -80,8 +80,9 @@ def zoom_config(file: str | Path, theta0: float, theta_dot0: float, width: float
                 output: str | Path | None = None) -> Zoom:
     """The config of the window ``width`` wide [rad, rad s⁻¹] centred on (``theta0``,
     ``theta_dot0``) at the parameter point of atlas ``file`` that ``alpha``, ``omega0``,
-    ``torque`` select; its output ``output`` (default: ``<file's stem>-zoom-<width>.h5``
-    next to the file). Bad input raises one AtlasError line."""
+    ``torque`` select; its output ``output`` (default, next to the file:
+    ``<file's stem>-zoom-<width>-at-<θ0>_<θ̇0>.h5``, so that two zooms of one width around
+    different points name different atlases). Bad input raises one AtlasError line."""
     import yaml
     from pydantic import ValidationError
 
@@ -102,7 +103,7 @@ def zoom_config(file: str | Path, theta0: float, theta_dot0: float, width: float
     sep.update({k: v for k, v in (stored.get("separatrices") or {}).items() if k in sep})
     enabled = bool(sep["enabled"])
     _check_window(theta0, theta_dot0, width, num)
-    tag = width_tag(width)
+    tag = f"{width_tag(width)}-at-{theta0:.10g}_{theta_dot0:.10g}"
     if output is None:
         output = path.with_name(f"{path.stem}-zoom-{tag}.h5")
     half, n = width / 2, _yaml_number

@@ -254,6 +254,7 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
     (:func:`inexact_points`), and the file is written all the same.
     """
     check_output_target(cfg.output, config_path, force=force)
+    _say_what_is_replaced(cfg)
     backend = backend or cfg.execution.backend
     device, _ = resolve(backend)
     try:
@@ -275,6 +276,25 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
         _make_output_folder(cfg.output)
         return _locked_run(cfg, restart, quiet, backend, open_result, layout, identity,
                            running_certificates)
+
+
+def _say_what_is_replaced(cfg: Config) -> None:
+    """Warn (one line, even with ``quiet``) where the output holds a finished atlas of another
+    config, which the run replaces: written over on purpose when a changed config is run
+    again, by mistake when two configs name one output."""
+    from atlas.pipeline.config import config_hash
+    from atlas.store.reader import describe, is_atlas_file
+
+    if not (cfg.output.exists() and is_atlas_file(cfg.output)):
+        return
+    try:
+        attrs = describe(cfg.output)["attrs"]
+    except InputFileError:
+        return
+    if attrs.get("config_hash") not in (None, config_hash(cfg)):
+        title = str(attrs.get("title", "")).removeprefix("atlas basin map: ")
+        log.warning("%s holds an atlas of another config%s; this run replaces it", cfg.output,
+                    f" ({title})" if title else "")
 
 
 def _preflight(cfg: Config, layout: Layout, barriers: list, device: str, backend: str,

@@ -15,9 +15,11 @@ path it will write, and is refused, in one line, where a path
   offers it.
 
 So no command writes over its input, or over anything but its own earlier output of the same
-kind. Figures carry their maker in their metadata (:func:`figure_metadata`: PNG ``Software``,
-SVG and PDF ``Creator``); figures that atlas wrote before it marked them are recognised as
-matplotlib's (every atlas figure is drawn by matplotlib).
+kind, by the same command: figures carry their maker and the command that drew them in their
+metadata (:func:`figure_metadata`: PNG ``Software``, SVG and PDF ``Creator``), so ``atlas orbit
+-o NAME.png`` does not write over the basin map ``atlas plot`` drew there, nor the reverse.
+Figures that ``atlas plot`` and ``atlas figures`` wrote at their fixed names before atlas
+marked them are recognised as matplotlib's (every atlas figure is drawn by matplotlib).
 """
 
 from __future__ import annotations
@@ -38,6 +40,9 @@ MAKER = "pendulum-atlas"
 #: Bytes of a file read to recognise it (a figure's metadata comes first in a PNG; SVG and
 #: PDF figures of atlas are at most a few MB, read whole up to this size).
 _HEAD_BYTES = 1 << 26
+#: The commands whose figures have fixed names (next to the atlas, or in the figures' folder),
+#: where a figure written before atlas marked its figures (matplotlib's) is taken as theirs.
+_FIXED_NAMES = ("atlas plot", "atlas figures")
 #: The first bytes of each figure format.
 _MAGIC = {".png": (b"\x89PNG\r\n\x1a\n",), ".pdf": (b"%PDF",), ".svg": (b"<?xml", b"<svg")}
 
@@ -62,14 +67,18 @@ def _is_study(path: Path) -> bool:
     return is_study_file(path)
 
 
-def _is_figure(path: Path) -> bool:
-    """A figure atlas wrote: the magic number of its suffix's format, and atlas (or, for
-    figures written before atlas marked them, matplotlib) as its maker."""
+def _is_figure(path: Path, command: str | None = None) -> bool:
+    """A figure atlas wrote (by ``command`` where given): the magic number of its suffix's
+    format, and atlas's mark (:func:`figure_metadata`) naming the command; or, for figures
+    written before atlas marked them, matplotlib as its maker, where ``command`` is one of
+    :data:`_FIXED_NAMES` (or None)."""
     data = _read(path)
     magic = _MAGIC.get(path.suffix.lower())
     if magic is None or not data.lstrip().startswith(magic):
         return False
-    return MAKER.encode() in data or b"matplotlib" in data.lower()
+    if MAKER.encode() in data:
+        return command is None or f"({command})".encode() in data
+    return (command is None or command in _FIXED_NAMES) and b"matplotlib" in data.lower()
 
 
 def _is_page(path: Path) -> bool:
@@ -138,12 +147,13 @@ def _same(a: Path, b: Path) -> bool:
 
 
 def check_output(path: str | Path, kind: str, *, inputs: Iterable[str | Path] = (),
-                 force: bool = False, option: str = "-o") -> None:
+                 force: bool = False, option: str = "-o", command: str | None = None) -> None:
     """Refuse (:class:`~atlas.errors.OutputInTheWay`, one line, exit status 2) to write a
     file of ``kind`` (a key of :data:`KINDS`) at ``path`` where it is one of ``inputs``
     (whatever ``force`` says), lacks the kind's suffix, or holds something other than a
-    file of that kind that atlas wrote (unless ``force``); ``option`` is the command-line
-    option that names the path, for the hint. Nothing is created."""
+    file of that kind that atlas wrote (by ``command``, for a figure: "atlas plot", "atlas
+    orbit", "atlas figures"; unless ``force``); ``option`` is the command-line option that
+    names the path, for the hint. Nothing is created."""
     path, spec = Path(path), KINDS[kind]
     for source in inputs:
         if _same(path, Path(source)):
@@ -156,6 +166,10 @@ def check_output(path: str | Path, kind: str, *, inputs: Iterable[str | Path] = 
     check_suffix(path, kind, option)
     if force or not (path.exists() or path.is_symlink()):
         return
+    if kind == "figure" and command is not None and spec.recognises(path) \
+            and not _is_figure(path, command):
+        raise OutputInTheWay(f"{path}: a figure of another atlas command is in the way of "
+                             f"{command}'s; move it, or name another output with {option}")
     if not spec.recognises(path):
         hint = " (--force writes over it)" if kind in ("atlas", "study") else ""
         raise OutputInTheWay(f"{path}: {_what_is(path)} is in the way of {spec.what}; move "
@@ -174,10 +188,11 @@ def check_suffix(path: str | Path, kind: str, option: str = "-o") -> None:
                              f"atlas command could write over it); name it with {option}")
 
 
-def figure_metadata(suffix: str) -> dict[str, str]:
-    """The metadata that marks a figure as atlas's, for matplotlib's ``savefig(metadata=…)``
-    in the format of ``suffix`` (.png: ``Software``; .svg and .pdf: ``Creator``)."""
+def figure_metadata(suffix: str, command: str) -> dict[str, str]:
+    """The metadata that marks a figure as drawn by atlas's ``command`` ("atlas plot", …),
+    for matplotlib's ``savefig(metadata=…)`` in the format of ``suffix`` (.png:
+    ``Software``; .svg and .pdf: ``Creator``)."""
     from atlas._version import __version__
 
-    maker = f"{MAKER} {__version__}"
+    maker = f"{MAKER} {__version__} ({command})"
     return {"Software": maker} if suffix.lower() == ".png" else {"Creator": maker}

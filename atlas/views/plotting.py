@@ -104,7 +104,7 @@ def _draw_figure(out: Path, size: tuple[float, float], draw, scene: dict,
         # (for tight_layout's placeholder engine) before drawing it into the PNG
         fig.set_layout_engine(None)
         suffix = Path(out).suffix.lower() if isinstance(out, (str, Path)) else ".png"
-        fig.savefig(out, dpi=dpi, metadata=figure_metadata(suffix),
+        fig.savefig(out, dpi=dpi, metadata=figure_metadata(suffix, "atlas plot"),
                     **({"pil_kwargs": PNG_OPTIONS} if suffix == ".png" else {}))
     return out
 
@@ -164,7 +164,8 @@ def plot_file(path: str | Path, outdir: str | Path | None = None, fmt: str = "pn
         finally:
             tree.close()
         for job in jobs:  # before any figure is written
-            check_output(job[0], "figure", inputs=(path,), option="--outdir")
+            check_output(job[0], "figure", inputs=(path,), option="--outdir",
+                         command="atlas plot")
         if outdir is not None:
             Path(outdir).mkdir(parents=True, exist_ok=True)
         if drawers is None:

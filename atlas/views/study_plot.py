@@ -53,7 +53,7 @@ def _figure(out: Path, size, draw, dpi) -> Path:
         draw(fig.add_subplot())
         fig.tight_layout()
         options = {"pil_kwargs": PNG_OPTIONS} if out.suffix == ".png" else {}
-        fig.savefig(out, metadata=figure_metadata(out.suffix), **options)
+        fig.savefig(out, metadata=figure_metadata(out.suffix, "atlas plot"), **options)
     return out
 
 
@@ -327,6 +327,7 @@ def plot_study(path: str | Path, outdir=None, fmt: str = "png", dpi=None) -> lis
         figures = [(f"{stem}_stability_map", MAP_SIZE, _stability_map(ds, x, y))]
     paths = [folder / f"{name}.{fmt}" for name, _, _ in figures]
     for out in paths:  # before any figure is written: never over the study or another file
-        check_output(out, "figure", inputs=(path,), option="--outdir")
+        check_output(out, "figure", inputs=(path,), option="--outdir",
+                     command="atlas plot")
     folder.mkdir(parents=True, exist_ok=True)
     return [_figure(out, size, draw, dpi) for out, (_, size, draw) in zip(paths, figures)]

@@ -217,3 +217,46 @@ def test_a_run_of_many_wells_summarises_and_info_lists_them_all(tmp_path):
     saddles = next(line for line in printed.splitlines() if "basin boundaries (saddles" in line)
     assert "in all)" in saddles and len(saddles) < 300
     assert max(map(len, printed.splitlines())) < 400
+
+
+def test_one_commands_figure_is_not_written_over_by_another(here):
+    """`atlas orbit FILE … -o NAME.png` replaced the basin map `atlas plot` drew there (and
+    `make run` then kept the orbit as the README's figure); the reverse too. Each command
+    writes over its own figures only."""
+    assert cli("plot", here / "q.h5")[0] == 0
+    basin_map = here / "q.png"
+    before = digest(basin_map)
+    refused(cli("orbit", here / "q.h5", "0", "1", "-o", basin_map), "another atlas command",
+            "atlas orbit")
+    assert digest(basin_map) == before
+    orbit = here / "mine.png"
+    assert cli("orbit", here / "q.h5", "0", "1", "-o", orbit)[0] == 0
+    assert cli("orbit", here / "q.h5", "0", "2", "-o", orbit)[0] == 0  # its own: written over
+    shutil.copy(here / "q.h5", here / "mine.h5")
+    before = digest(orbit)
+    refused(cli("plot", here / "mine.h5"), "mine.png", "another atlas command")
+    assert digest(orbit) == before
+
+
+def test_a_run_says_when_it_replaces_an_atlas_of_another_config(tmp_path, caplog):
+    """Running a config over the atlas of another one replaced it without a word; it is
+    allowed (a changed config run again writes over its own earlier atlas, as `make`
+    relies on), and said in one warning; the same config again says nothing."""
+    import logging
+
+    import atlas
+
+    out = tmp_path / "q.h5"
+    first = atlas.load_config(write_config(tmp_path / "a.yaml",
+                                           SMALL.format(sep="false", output=out)))
+    atlas.run(first, quiet=True).close()
+    with caplog.at_level(logging.WARNING, logger="atlas"):
+        atlas.run(first, quiet=True).close()
+    assert not [r for r in caplog.records if "another config" in r.getMessage()]
+    other = atlas.load_config(write_config(
+        tmp_path / "b.yaml", SMALL.format(sep="false", output=out).replace("alpha: 0.1",
+                                                                           "alpha: 0.3")))
+    with caplog.at_level(logging.WARNING, logger="atlas"):
+        atlas.run(other, quiet=True).close()
+    said = [r.getMessage() for r in caplog.records if "another config" in r.getMessage()]
+    assert said == [f"{out} holds an atlas of another config (small); this run replaces it"]

@@ -75,7 +75,8 @@ def test_the_config_is_centred_sized_and_carries_the_files_parameters(files, tmp
         0.005, 150.0, "rk4")
     assert cfg.separatrices.enabled
     assert (cfg.separatrices.tol, cfg.separatrices.max_spacing) == (3e-12, 0.1)
-    assert cfg.output == one.with_name(f"one-zoom-{width_tag(width)}.h5")
+    # named by its width and centre: two zooms of one width around two points never share it
+    assert cfg.output == one.with_name(f"one-zoom-{width_tag(width)}-at-0_{BOUNDARY:.10g}.h5")
 
 
 def test_without_o_the_config_goes_to_stdout_and_loads(files, tmp_path, capsys):
