@@ -375,7 +375,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", choices=tuple(BACKEND_WORDS),
                    help="override execution.backend: the device (cpu, cuda) or the CPU on a "
                    "Dask cluster (dask)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     p.add_argument("--yes", action="store_true", help="start a big run without asking "
                    "(on a terminal, a run of about 2 min or 1 GB or more asks first)")
     p.add_argument("--accept-inexact", action="store_true", help="exit 0 although the "

@@ -449,8 +449,8 @@ def fig12_linearised_flow_near_saddle(ax_or_fig=None, *, small=False, alpha=0.1,
         labelled.add(label)
     ax.plot([np.pi + phi0 for phi0, *_ in starts], [v for _, v, *_ in starts], "o",
             color="black", ms=3.5, ls="none", zorder=4,
-            label=f"starting points (t = 0);\nthe asymptotes' (θ̇0 = ±{asymptote_speed:g})\n"
-                  "under the saddle")
+            label=f"starting points (t = 0);\ntwo of them, θ̇0 = ±{asymptote_speed:g},\n"
+                  "lie under the saddle's marker")
     ax.plot([np.pi], [0.0], **SADDLE_MARKER, zorder=5, label="saddle (π, 0)")
     ax.set(xlim=(np.pi - half_width, np.pi + half_width), ylim=(-half_width, half_width),
            xlabel=THETA, ylabel=THETA_DOT,

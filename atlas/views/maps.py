@@ -262,8 +262,8 @@ def _draw_trap_time(ax, grid, image, separatrices, point: str):
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
         "t_trap [s]: time at which the label was certified\n(trapped in a well, or running)")
     draw_separatrices(ax, separatrices, faint=True)
-    ax.set_title(f"Time to a certified label, {point}\n(darkest: certified at t = 0, inside "
-                 "the trap; white: no label certified by t_max)")
+    ax.set_title(f"Time to a certified label, {point}\n(darkest: certified at t = 0; white: "
+                 "no label certified by t_max;\nfaint lines: the separatrices)")
     return ax
 
 
@@ -305,7 +305,8 @@ def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point:
             "certified for the exact equation" if measured else
             "d_cert not measured: labels certified for the RK4 map only")
     notes = ["white: no distance stored"] * bool(np.isnan(d).any()) + [note]
-    ax.set_title(f"Distance to tipping into another well, {point}\n({'; '.join(notes)})")
+    ax.set_title(f"Distance to the nearest basin boundary, {point}\n({'; '.join(notes)};\n"
+                 "faint lines: the separatrices)")
     return ax
 
 
