@@ -72,6 +72,15 @@ def _distances(colours: list[str], cvd) -> np.ndarray:
     return np.sqrt(((ucs[:, None] - ucs[None]) ** 2).sum(-1))
 
 
+def _closest_pair(colours: dict, cvd) -> tuple:
+    """(key, key, ΔE) of the two nearest of ``colours`` (CAM02-UCS, under ``cvd``)."""
+    keys = list(colours)
+    d = _distances(list(colours.values()), cvd)
+    np.fill_diagonal(d, np.inf)
+    i, j = np.unravel_index(d.argmin(), d.shape)
+    return keys[i], keys[j], d[i, j]
+
+
 @pytest.mark.parametrize("lines", [False, True], ids=["maps", "lines"])
 def test_a_wells_colour_is_the_same_whatever_the_figure_holds(lines):
     """The colour of k does not depend on the other wells of the figure (the 11-α atlas
@@ -101,12 +110,9 @@ def test_every_basin_of_a_figure_is_distinct(vision, cvd, lines):
     """The wells −WELL_CYCLE … WELL_CYCLE, the running basin and "no label": no two share a
     colour, every pair at least LEAST_DELTA_E apart."""
     colours = basin_colours(range(-WELL_CYCLE, WELL_CYCLE + 1), running=True, lines=lines)
-    keys = list(colours)
     assert len(set(colours.values())) == len(colours) == 2 * WELL_CYCLE + 3
-    d = _distances(list(colours.values()), cvd)
-    np.fill_diagonal(d, np.inf)
-    i, j = np.unravel_index(d.argmin(), d.shape)
-    assert d[i, j] >= LEAST_DELTA_E[vision], (keys[i], keys[j], d[i, j])
+    *pair, least = _closest_pair(colours, cvd)
+    assert least >= LEAST_DELTA_E[vision], (*pair, least)
 
 
 @pytest.mark.parametrize("vision, cvd", VISIONS, ids=[v for v, _ in VISIONS])
@@ -115,11 +121,8 @@ def test_every_class_of_the_default_map_is_distinct_at_a_glance(vision, cvd):
     neighbours, at least LEAST_DEFAULT_MAP_DELTA_E apart (the old palette drew k = −2 and −4
     nearly the same teal, +1 and +3 both pale yellow, +2 and +4 both olive)."""
     colours = basin_colours(DEFAULT_MAP_WELLS, running=True)
-    keys = list(colours)
-    d = _distances(list(colours.values()), cvd)
-    np.fill_diagonal(d, np.inf)
-    i, j = np.unravel_index(d.argmin(), d.shape)
-    assert d[i, j] >= LEAST_DEFAULT_MAP_DELTA_E[vision], (keys[i], keys[j], d[i, j])
+    *pair, least = _closest_pair(colours, cvd)
+    assert least >= LEAST_DEFAULT_MAP_DELTA_E[vision], (*pair, least)
 
 
 @pytest.mark.parametrize("vision, cvd", VISIONS, ids=[v for v, _ in VISIONS])
@@ -129,11 +132,8 @@ def test_every_line_of_a_curve_figure_is_distinct(vision, cvd):
     olive)."""
     colours = basin_colours(CURVE_WELLS, running=True, lines=True)
     del colours["none"]  # no curve of its own
-    keys = list(colours)
-    d = _distances(list(colours.values()), cvd)
-    np.fill_diagonal(d, np.inf)
-    i, j = np.unravel_index(d.argmin(), d.shape)
-    assert d[i, j] >= LEAST_CURVE_DELTA_E[vision], (keys[i], keys[j], d[i, j])
+    *pair, least = _closest_pair(colours, cvd)
+    assert least >= LEAST_CURVE_DELTA_E[vision], (*pair, least)
 
 
 def test_the_palette_repeats_every_cycle_on_each_side():
