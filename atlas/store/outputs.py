@@ -103,13 +103,18 @@ def _is_bench(path: Path) -> bool:
 
 @dataclass(frozen=True)
 class Kind:
-    """One kind of file atlas writes: ``what`` names it in messages, ``suffixes`` are the
-    names it is written with (lower case), ``recognises`` tells a file of this kind that
-    atlas wrote."""
+    """One kind of file atlas writes: ``what`` names it in messages, ``names`` are the
+    suffixes it is written with (lower case), or a function giving them (read on first use:
+    the formats' table imports their libraries, which a command that only draws need not
+    load before it forks), ``recognises`` tells a file of this kind that atlas wrote."""
 
     what: str
-    suffixes: tuple[str, ...]
+    names: tuple[str, ...] | Callable[[], tuple[str, ...]]
     recognises: Callable[[Path], bool]
+
+    @property
+    def suffixes(self) -> tuple[str, ...]:
+        return self.names() if callable(self.names) else self.names
 
 
 def _atlas_suffixes() -> tuple[str, ...]:
@@ -120,8 +125,8 @@ def _atlas_suffixes() -> tuple[str, ...]:
 
 #: Every kind of file atlas writes, by name.
 KINDS: dict[str, Kind] = {
-    "atlas": Kind("an atlas", _atlas_suffixes(), _is_atlas),
-    "study": Kind("a study", _atlas_suffixes(), _is_study),
+    "atlas": Kind("an atlas", _atlas_suffixes, _is_atlas),
+    "study": Kind("a study", _atlas_suffixes, _is_study),
     "figure": Kind("a figure", (".png", ".svg", ".pdf"), _is_figure),
     "page": Kind("a page", (".html", ".htm"), _is_page),
     "config": Kind("a config", (".yaml", ".yml"), _is_zoom_config),
