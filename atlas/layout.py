@@ -1,9 +1,10 @@
 """The shape of an atlas: its physical parameters, its grid of initial conditions, its tiles.
 
-One data model serves a single atlas and a parameter atlas alike. Every physical parameter
-(:data:`PARAMETERS`: α, ω0, τ) is a coordinate of the root group: a *scalar* coordinate
-where the config gives one value, a *dimension* (leading, in the order of
-:data:`PARAMETERS`) where it gives a list. A *parameter point* is one value of each; a single
+One data model serves a single atlas and a parameter atlas alike, whatever its model
+(:mod:`atlas.models`: the parameters and the grid's axes are the model's; the pendulum's are
+α, ω0, τ and θ0, θ̇0). Every physical parameter is a coordinate of the root group: a *scalar*
+coordinate where the config gives one value, a *dimension* (leading, in the order of the
+model's parameters) where it gives a list. A *parameter point* is one value of each; a single
 atlas has one, a parameter atlas the product of its swept values. Readers never ask which
 kind of atlas they hold: :func:`points` lists the points of any root dataset and
 :func:`at_point` selects one (each point's dataset carries every parameter as a scalar
@@ -11,9 +12,9 @@ coordinate), and :func:`point_group` finds a point's node of a per-point group
 (``/separatrices``, ``/critical_points``: one DataTree node per parameter point, the group
 itself when the atlas has one point).
 
-The grid (θ̇0 rows × θ0 columns) of each point is cut into tiles of whole rows; tile ``i``
-is row band ``i % bands`` of the ``i // bands``-th point, points in C order over the swept
-dims.
+The grid (the velocity axis along rows × the position axis along columns) of each point is
+cut into tiles of whole rows; tile ``i`` is row band ``i % bands`` of the ``i // bands``-th
+point, points in C order over the swept dims.
 """
 
 from __future__ import annotations
@@ -28,25 +29,23 @@ import numpy as np
 if TYPE_CHECKING:  # the readers only call the datasets' methods: no import at start-up
     import xarray as xr
 
-__all__ = ["PARAMETERS", "Layout", "points", "at_point", "point_of", "first_point",
-           "point_group", "point_nodes", "point_label", "node_name"]
+from atlas.models.base import Model
+from atlas.models.registry import DEFAULT as DEFAULT_MODEL
+from atlas.models.registry import lookup, of_attrs
 
-#: The physical parameters: name → (units, long_name). Their order is the order of the
-#: leading dims of a parameter atlas.
-PARAMETERS = {
-    "alpha": ("s-1", "damping constant"),
-    "omega0": ("rad s-1", "natural angular frequency"),
-    "torque": ("rad s-2", "constant torque per unit moment of inertia"),
-}
+__all__ = ["Layout", "points", "at_point", "point_of", "first_point", "parameter_names",
+           "point_group", "point_nodes", "point_label", "node_name"]
 
 
 @dataclass(frozen=True, eq=False)
 class Layout:
-    """Parameter values, grid axes and the row-band tiling of an atlas.
+    """Parameter values, grid axes and the row-band tiling of an atlas of ``model``.
 
-    ``parameters`` maps every name of :data:`PARAMETERS` to its values (1-D, one value where
-    it is not swept); ``swept`` names the parameters that are dims, in :data:`PARAMETERS`
-    order. A tile is one row band ``rows`` of one parameter point.
+    ``theta0`` and ``theta_dot0`` are the grid's column and row values (the model's two
+    axes: for the pendulum θ0 [rad] and θ̇0 [rad s⁻¹]). ``parameters`` maps every parameter
+    of the model to its values (1-D, one value where it is not swept); ``swept`` names the
+    parameters that are dims, in the model's order. A tile is one row band ``rows`` of one
+    parameter point.
     """
 
     theta0: np.ndarray
@@ -54,6 +53,7 @@ class Layout:
     parameters: dict
     swept: tuple
     rows_per_tile: int
+    model: Model = lookup(DEFAULT_MODEL)
 
     @property
     def parameter_shape(self) -> tuple[int, ...]:
@@ -73,8 +73,10 @@ class Layout:
 
     @property
     def dims(self) -> tuple[str, ...]:
-        """The basin map's dims: the swept parameters, then θ̇0 rows, θ0 columns."""
-        return (*self.swept, "theta_dot0", "theta0")
+        """The basin map's dims: the swept parameters, then the rows (the model's velocity
+        axis), the columns (its position axis)."""
+        columns, rows = self.model.axes
+        return (*self.swept, rows.name, columns.name)
 
     @property
     def chunk_rows(self) -> int:
@@ -101,47 +103,59 @@ class Layout:
         """The root group's coordinates: name → (dims, values, attrs); the swept parameters
         and the grid axes as dimension coordinates, the others as scalars."""
         out = {}
-        for name, (units, long_name) in PARAMETERS.items():
+        for name, (units, long_name) in self.model.parameters.items():
             values = self.parameters[name]
             dims = (name,) if name in self.swept else ()
             out[name] = (dims, values if dims else values[0],
                          {"units": units, "long_name": long_name})
-        out["theta_dot0"] = (("theta_dot0",), self.theta_dot0,
-                             {"units": "rad s-1", "long_name": "initial angular velocity"})
-        out["theta0"] = (("theta0",), self.theta0, {"units": "rad", "long_name": "initial angle"})
+        columns, rows = self.model.axes
+        for axis, values in ((rows, self.theta_dot0), (columns, self.theta0)):
+            out[axis.name] = ((axis.name,), values,
+                              {"units": axis.units, "long_name": axis.long_name})
         return out
 
     def to_json(self) -> dict:
-        return {"theta0": self.theta0.tolist(), "theta_dot0": self.theta_dot0.tolist(),
+        data = {"theta0": self.theta0.tolist(), "theta_dot0": self.theta_dot0.tolist(),
                 "parameters": {k: v.tolist() for k, v in self.parameters.items()},
                 "swept": list(self.swept), "rows_per_tile": self.rows_per_tile}
+        if self.model.name != DEFAULT_MODEL:  # the manifests of earlier runs stay valid
+            data["model"] = self.model.name
+        return data
 
     @classmethod
     def from_json(cls, data: dict) -> Layout:
+        model = lookup(data.get("model", DEFAULT_MODEL))
         parameters = {name: np.array(data["parameters"][name], np.float64)
-                      for name in PARAMETERS}
+                      for name in model.parameters}
         return cls(theta0=np.array(data["theta0"], np.float64),
                    theta_dot0=np.array(data["theta_dot0"], np.float64),
                    parameters=parameters, swept=tuple(data["swept"]),
-                   rows_per_tile=int(data["rows_per_tile"]))
+                   rows_per_tile=int(data["rows_per_tile"]), model=model)
 
 
 # --------------------------------------------------------------------------- reading
 
+def parameter_names(ds: xr.Dataset) -> tuple[str, ...]:
+    """The parameters of the model of ``ds`` (an atlas's dataset, or a one-point dataset of
+    it: its ``model`` attribute, the pendulum's where absent), in the model's order."""
+    return tuple(of_attrs(ds.attrs).parameters)
+
+
 def _swept(ds: xr.Dataset) -> list[str]:
-    return [name for name in PARAMETERS if name in ds.dims]
+    return [name for name in parameter_names(ds) if name in ds.dims]
 
 
 def points(ds: xr.Dataset) -> list[dict[str, float]]:
     """Every parameter point of an atlas's root dataset (C order over its swept dims), each
     as {parameter: value} of every parameter present."""
+    names = parameter_names(ds)
     swept = _swept(ds)
-    fixed = {name: float(ds[name]) for name in PARAMETERS if name in ds.coords
+    fixed = {name: float(ds[name]) for name in names if name in ds.coords
              and name not in swept}
     out = []
     for values in itertools.product(*(ds[name].values for name in swept)):
         out.append({**{n: float(v) for n, v in zip(swept, values)}, **fixed})
-    return [{name: p[name] for name in PARAMETERS if name in p} for p in out]
+    return [{name: p[name] for name in names if name in p} for p in out]
 
 
 def at_point(ds: xr.Dataset, point: dict[str, float]) -> xr.Dataset:
@@ -159,7 +173,7 @@ def at_point(ds: xr.Dataset, point: dict[str, float]) -> xr.Dataset:
 def point_of(ds: xr.Dataset) -> dict[str, float]:
     """The parameter point of a one-point dataset (:func:`at_point`'s result, or the root of
     an atlas of one point): every parameter's scalar value."""
-    return {name: float(ds[name]) for name in PARAMETERS if name in ds.coords}
+    return {name: float(ds[name]) for name in parameter_names(ds) if name in ds.coords}
 
 
 def first_point(ds: xr.Dataset, **index) -> xr.Dataset:

@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 from atlas.errors import AtlasError, OutputInTheWay
-from atlas.layout import PARAMETERS
+from atlas.models.pendulum.description import PARAMETERS
 
 __all__ = ["add_parser", "run_study", "MAX_POINTS"]
 

@@ -1,9 +1,11 @@
 """Sweep configs: YAML validated by pydantic v2. Every default is written once, in the
 sections (:mod:`atlas.pipeline.config_sections`).
 
-A config names the pendulum (α, ω0, τ — a list for any makes a parameter atlas), the
-(θ0, θ̇0) grid, the integrator, the separatrix tracing, the execution backend and the output
-path. Numbers may be written as π expressions: ``3pi``, ``-pi/2``, ``2*pi``, ``0.5pi``.
+A config names its model (``model``, :mod:`atlas.models`; the pendulum by default) and the
+model's parameters (for the pendulum α, ω0, τ — a list for any makes a parameter atlas), the
+grid of initial states (for the pendulum θ0, θ̇0), the integrator, the separatrix tracing,
+the execution backend and the output path. Numbers may be written as π expressions:
+``3pi``, ``-pi/2``, ``2*pi``, ``0.5pi``.
 Any problem is raised as :class:`atlas.errors.ConfigError` with one line naming the key (an
 unknown key first, with the schema's nearest key: "did you mean num?"). What is valid but
 likely a mistake (a θ0 window in degrees) or adjusted (a separatrix tol finer than double
@@ -24,11 +26,14 @@ import json
 import logging
 from pathlib import Path
 
-from pydantic import PrivateAttr, ValidationError, model_validator
+from pydantic import Field, PrivateAttr, ValidationError, model_validator
 
 from atlas import defaults
 from atlas.defaults import BACKEND_WORDS
 from atlas.errors import ConfigError
+from atlas.models.base import Model
+from atlas.models.registry import DEFAULT as DEFAULT_MODEL
+from atlas.models.registry import lookup, planner
 from atlas.pipeline import config_messages as messages
 from atlas.pipeline.config_numbers import parse_pi_expression
 from atlas.pipeline.config_sections import (
@@ -53,13 +58,19 @@ __all__ = ["Config", "load_config", "parse_pi_expression", "ConfigError", "confi
 class Config(StrictModel):
     """A whole sweep (see ``configs/default.yaml`` for a commented example).
 
-    ``check_radians`` (default true): warn when the θ0 window looks like degrees or spans
-    more than :data:`RADIANS_WARNING_TURNS` turns (:func:`radians_warning`); ``false``
-    silences that warning (it changes no result).
+    ``model`` names the equation (:mod:`atlas.models.registry`; "pendulum" by default); a
+    model other than the pendulum takes its parameters from the section its description
+    names (:attr:`atlas.models.base.Model.section`, validated by its planner's ``Section``)
+    and its grid's keys are its axes' names. ``check_radians`` (default true): warn when the
+    θ0 window looks like degrees or spans more than :data:`RADIANS_WARNING_TURNS` turns
+    (:func:`radians_warning`); ``false`` silences that warning (it changes no result).
     """
 
     name: str = "default"
+    model: str = DEFAULT_MODEL
     pendulum: PendulumConfig = PendulumConfig()
+    #: Another model's section, as written (validated into :attr:`section`).
+    model_section: dict | None = Field(default=None, exclude=True, repr=False)
     grid: GridConfig = GridConfig()
     integrator: IntegratorConfig = IntegratorConfig()
     separatrices: SeparatricesConfig = SeparatricesConfig()
@@ -69,6 +80,49 @@ class Config(StrictModel):
     check_radians: bool = True
     #: What validation changed: a ``separatrices.tol`` raised to what the window resolves.
     _adjusted: tuple[str, ...] = PrivateAttr(default=())
+    #: Another model's parameters, validated (the pendulum's are :attr:`pendulum`).
+    _section: object = PrivateAttr(default=None)
+
+    @property
+    def description(self) -> Model:
+        """The config's model (:class:`atlas.models.base.Model`)."""
+        return lookup(self.model)
+
+    @property
+    def section(self):
+        """The model's parameters: ``values(name)``, ``swept``, ``points``
+        (:attr:`pendulum` for the pendulum)."""
+        return self.pendulum if self._section is None else self._section
+
+    @model_validator(mode="before")
+    @classmethod
+    def _model_keys(cls, data):
+        """A model other than the pendulum: its section and its grid's axis names taken to
+        the places the config holds them (``model_section``; ``grid.theta0`` and
+        ``grid.theta_dot0``, the columns and rows). An unknown model is one line."""
+        if not isinstance(data, dict) or data.get("model", DEFAULT_MODEL) == DEFAULT_MODEL:
+            return data
+        data = dict(data)
+        if "model_section" in data:
+            raise ValueError("model_section: unknown key")
+        try:
+            model = lookup(data["model"])
+        except ValueError as exc:
+            raise ValueError(f"model: {exc}") from None
+        if "pendulum" in data:
+            raise ValueError(f"pendulum: not a section of model {model.name} (its parameters "
+                             f"are under {model.section})")
+        data["model_section"] = data.pop(model.section, None) or {}
+        grid = data.get("grid")
+        if isinstance(grid, dict):
+            columns, rows = model.axes
+            known = {columns.name: "theta0", rows.name: "theta_dot0"}
+            for key in grid:
+                if key not in known:
+                    raise ValueError(f"grid.{key}: unknown key (the grid of model "
+                                     f"{model.name} is {columns.name} × {rows.name})")
+            data["grid"] = {known[key]: value for key, value in grid.items()}
+        return data
 
     @property
     def warnings(self) -> tuple[str, ...]:
@@ -91,74 +145,24 @@ class Config(StrictModel):
         study (validation context ``{"study": True}``) integrates no grid: it skips the grid
         run's checks of the integrator and the window's reach, and takes the saddle-node."""
         from atlas.labels.backends import lookup as lookup_backend
-        from atlas.labels.labelling import check_integration, check_torque_reach
-        from atlas.labels.methods import lookup as lookup_method
-        from atlas.labels.trap import CHECK_EVERY
-        from atlas.limits import check_reach, check_separatrix_settings, check_study_window
 
-        dt, t_max = self.integrator.dt, self.integrator.t_max
         try:
             device = lookup_backend(BACKEND_WORDS[self.execution.backend][0])
             device.check_method(self.integrator.method)
         except ValueError as exc:
             raise ValueError(f"integrator.{exc}") from None
-        if not lookup_method(self.integrator.method).running and any(self.pendulum.torques):
-            raise ValueError(f"integrator.method: {self.integrator.method!r} is for the "
-                             "pendulum without torque (the running certificate is established "
-                             "for 'rk4' only); use method: rk4 with a torque")
-        if (info.context or {}).get("study"):
-            g = self.grid
+        model = planner(self.description)
+        if self.model_section is not None:
             try:
-                check_study_window((g.theta0.start, g.theta0.stop),
-                                   (g.theta_dot0.start, g.theta_dot0.stop))
-            except ValueError as exc:
-                raise ValueError(f"grid.{exc}") from None
-            swept = self.pendulum.swept
-            if self.stability is not None and self.stability.tipping and (
-                    len(swept) != 1 or len(self.pendulum.values(swept[0])) < 2):
-                over = (" and ".join(swept) if len(swept) != 1 else
-                        f"one value of {swept[0]}") if swept else "no parameter"
-                raise ValueError("stability.tipping: tipping probabilities are between "
-                                 "consecutive points of a 1-D study (one swept parameter); "
-                                 f"this study sweeps {over}")
-            return self
-        g = self.grid
-        theta_abs = max(abs(g.theta0.start), abs(g.theta0.stop))
-        speed_abs = max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop))
-        for point in self.pendulum.points:
-            a, w, t = point["alpha"], point["omega0"], point["torque"]
-            if abs(t) == w * w:
-                raise ValueError(
-                    f"pendulum.torque: |torque| = omega0^2 = {w * w:g} is the saddle-node "
-                    "bifurcation, where the rest state (pi/2, 0) is degenerate and atlas "
-                    "certifies no basin; take |torque| below or above omega0^2")
-            try:
-                check_integration(a, w, dt, t_max, torque=t)
-            except ValueError as exc:
-                raise ValueError(f"integrator.{exc}") from None
-            if t:
-                try:
-                    check_torque_reach(theta_abs, speed_abs, a, w, t,
-                                       t_max + CHECK_EVERY * dt)
-                except ValueError as exc:
-                    raise ValueError(f"grid: {exc}") from None
-        try:
-            check_reach(max(abs(g.theta0.start), abs(g.theta0.stop)),
-                        max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop)),
-                        min(self.pendulum.alphas))
-        except ValueError as exc:
-            raise ValueError(f"grid: {exc}") from None
-        if self.separatrices.enabled:
-            self._resolve_tol()
-            try:
-                check_separatrix_settings((g.theta0.start, g.theta0.stop),
-                                          (g.theta_dot0.start, g.theta_dot0.stop),
-                                          self.separatrices.tol, self.separatrices.max_spacing)
-            except ValueError as exc:
-                raise ValueError(f"separatrices.{exc}") from None
+                section = model.Section.model_validate(self.model_section)
+            except ValidationError as exc:
+                raise ValueError(f"{self.model}.{messages.first_error(exc, model.Section)}"
+                                 ) from None
+            self._section = section
+        model.check(self, bool((info.context or {}).get("study")))
         return self
 
-    def _resolve_tol(self) -> None:
+    def resolve_tol(self) -> None:
         """Raise ``separatrices.tol`` to the finest the window resolves where it asks for a
         finer one (:func:`atlas.limits.finest_tol`), noting it: a window far out (±180, say)
         then runs at 1.9e-12 instead of being refused over a setting its user never chose.
@@ -177,12 +181,29 @@ class Config(StrictModel):
 
     def to_json(self) -> str:
         """The validated config as canonical JSON (stored in every output file); keys at their
-        default that change no result (``stability`` unset, ``check_radians`` true) are left
-        out, so files keep the config JSON they had before the keys existed."""
+        default that change no result (``stability`` unset, ``check_radians`` true, ``model``
+        the pendulum) are left out, so files keep the config JSON they had before the keys
+        existed. Another model's parameters are under its section's key, and its grid's
+        axes under their names."""
         exclude = {"stability"} if self.stability is None else set()
         if self.check_radians:
             exclude.add("check_radians")
-        return json.dumps(self.model_dump(mode="json", exclude=exclude), sort_keys=True)
+        if self.model == DEFAULT_MODEL:
+            exclude.add("model")
+            return json.dumps(self.model_dump(mode="json", exclude=exclude), sort_keys=True)
+        return json.dumps(self._other_model_json(exclude), sort_keys=True)
+
+    def _other_model_json(self, exclude: set) -> dict:
+        """The config of a model other than the pendulum as its user wrote it (no
+        ``pendulum`` or ``separatrices``: the pendulum's; the model's section and grid
+        keys)."""
+        model = self.description
+        data = self.model_dump(mode="json", exclude=exclude | {"pendulum", "separatrices"})
+        data[model.section] = self.section.model_dump(mode="json")
+        columns, rows = model.axes
+        grid = data.pop("grid")
+        data["grid"] = {columns.name: grid["theta0"], rows.name: grid["theta_dot0"]}
+        return data
 
 
 def integrator_json(integrator: IntegratorConfig) -> dict:
@@ -199,8 +220,12 @@ def config_hash(cfg: Config) -> str:
     """Digest of the config apart from its name, output and execution settings, recorded in the
     file as provenance. (Whether a partial run may be continued is decided by the stricter
     :func:`atlas.pipeline.identity.run_identity`.)"""
-    data = cfg.model_dump(mode="json", exclude={"output", "execution", "name", "stability",
-                                                "check_radians"})
+    if cfg.model != DEFAULT_MODEL:
+        data = {key: value for key, value in json.loads(cfg.to_json()).items()
+                if key not in ("output", "execution", "name", "stability", "check_radians")}
+    else:
+        data = cfg.model_dump(mode="json", exclude={"output", "execution", "name",
+                                                    "stability", "check_radians", "model"})
     data["integrator"] = integrator_json(cfg.integrator)
     return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 

@@ -14,8 +14,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from atlas import defaults
 from atlas.defaults import BACKEND_WORDS, METHODS
-from atlas.layout import PARAMETERS
 from atlas.limits import MAX_RATE, MIN_RATE
+from atlas.models.pendulum.description import PARAMETERS
 from atlas.pipeline.config_numbers import Number, Numbers
 
 __all__ = ["StrictModel", "PendulumConfig", "Axis", "GridConfig", "IntegratorConfig",

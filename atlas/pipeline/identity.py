@@ -23,15 +23,16 @@ __all__ = ["run_identity", "identity_hash", "file_attrs", "library_versions"]
 
 def run_identity(cfg: Config, backend: str) -> dict:
     """What determines a run's tiles, so a partial run may be continued only by an equal one:
-    the grid, the physics (every ``pendulum`` key), the integrator, the kernels' trap-check
-    interval, the atlas version, the kernel class that computes the labels ('cuda' for the
-    GPU kernels; 'cpu' for the CPU kernels, which the Dask backend runs too), and the
-    separatrix settings when they are enabled (they measure d_cert, which decides each tile's
-    certified statuses). Not the tiling, the output path or the name."""
+    the grid, the physics (every key of the model's section: ``pendulum`` for the pendulum),
+    the integrator, the kernels' trap-check interval, the atlas version, the kernel class
+    that computes the labels ('cuda' for the GPU kernels; 'cpu' for the CPU kernels, which
+    the Dask backend runs too), and the separatrix settings when they are enabled (they
+    measure d_cert, which decides each tile's certified statuses). Not the tiling, the output
+    path or the name."""
     from atlas import __version__
 
     return {"grid": cfg.grid.model_dump(mode="json"),
-            "pendulum": cfg.pendulum.model_dump(mode="json"),
+            cfg.description.section: cfg.section.model_dump(mode="json"),
             "integrator": integrator_json(cfg.integrator),
             "separatrices": (cfg.separatrices.model_dump(mode="json")
                              if cfg.separatrices.enabled else {"enabled": False}),
@@ -59,6 +60,7 @@ def library_versions() -> dict:
 def file_attrs(cfg: Config, identity: dict) -> dict:
     attrs = {
         "title": f"atlas basin map: {cfg.name}",
+        "model": cfg.model,
         "Conventions": "CF-1.10",
         "format_version": np.int64(FORMAT_VERSION),
         "method": cfg.integrator.method,

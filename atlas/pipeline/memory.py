@@ -6,8 +6,8 @@ boundaries and areas, the tiles labelled and certified on the config's backend a
 the summary from the tiles' tallies); only where the tiles go differs. A file run hands them
 to a partial run on disk (:class:`atlas.store.partial.TileStore`) and its format assembles the
 file; here :class:`MemoryTiles` keeps them and assembles the same tree in memory: the same
-variables with the stored dtypes, fill values and CF attributes
-(:data:`atlas.store.schema.MAP_VARIABLES`), the same groups and root attributes, so the
+variables with the stored dtypes, fill values and CF attributes (the model's
+:attr:`~atlas.models.base.Model.map_variables`), the same groups and root attributes, so the
 arrays equal those of ``atlas.open`` of the file a run of the config writes (tested). What a
 file adds is the disk: no lock, no partial run to resume, nothing to clean up.
 
@@ -27,13 +27,14 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import AtlasError
 from atlas.layout import Layout
-from atlas.pipeline import points, progress
+from atlas.models.registry import planner
+from atlas.pipeline import progress
 from atlas.pipeline.config import Config
 from atlas.pipeline.identity import file_attrs, run_identity
 from atlas.pipeline.schedule import resolve
 from atlas.pipeline.sweep import Phases, finish_tiles, layout_of
 from atlas.pipeline.sweep import run as run_to_file
-from atlas.store.schema import MAP_VARIABLES, SCHEMA, summary_tree
+from atlas.store.schema import SCHEMA, map_variables, summary_tree
 
 __all__ = ["basins", "run", "MemoryTiles", "IN_MEMORY"]
 
@@ -57,7 +58,7 @@ class MemoryTiles:
         self.manifest = {"attrs": attrs}
         shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
         self.maps = {name: np.full(shape, var.padding, var.dtype)
-                     for name, var in MAP_VARIABLES.items()}
+                     for name, var in map_variables(layout).items()}
         self.tallies: dict[int, dict] = {}
         self.tree: xr.DataTree | None = None
 
@@ -84,10 +85,11 @@ class MemoryTiles:
         tree = summary_tree(layout, root_vars, groups, {
             **self.manifest["attrs"], "atlas_schema": SCHEMA, "complete": np.int8(1), **attrs})
         root = tree.to_dataset(inherit=False)
-        for name, var in MAP_VARIABLES.items():
+        variables = map_variables(layout)
+        for name, var in variables.items():
             fill = {} if var.fill is None else {"_FillValue": var.dtype(var.fill)}
             root[name] = (layout.dims, self.maps[name], {**var.attrs, **fill})
-        tree.dataset = root[[*MAP_VARIABLES, *root_vars.data_vars]]
+        tree.dataset = root[[*variables, *root_vars.data_vars]]
         self.tree = tree
 
     def set_aside(self, index: int) -> None:  # pragma: no cover (memory is never damaged)
@@ -114,10 +116,10 @@ def basins(cfg: Config, *, backend: str | None = None, quiet: bool = False) -> x
     device.require()
     identity = run_identity(cfg, backend)
     tiles = MemoryTiles(layout, file_attrs(cfg, identity))
-    running = points.running_certificates(points.pendulums(layout), cfg.integrator.dt)
+    begun = planner(layout.model).begin(cfg, layout)
     with progress.compile_notice(quiet):
         try:
-            finish_tiles(tiles, cfg, backend, quiet, time.perf_counter(), running, Phases())
+            finish_tiles(tiles, cfg, backend, quiet, time.perf_counter(), begun, Phases())
         except OverflowError as exc:  # an orbit beyond the wells an atlas can index
             raise AtlasError(f"{cfg.name}: {exc}") from None
     return tiles.tree

@@ -16,22 +16,21 @@ import os
 import shutil
 from pathlib import Path
 
-import numpy as np
-
 from atlas.errors import AtlasError, OutputInTheWay
 from atlas.layout import Layout
+from atlas.models.pendulum.description import PENDULUM
 from atlas.store.formats import format_for
 from atlas.store.outputs import check_suffix
 from atlas.store.reader import is_atlas_file
-from atlas.store.schema import MAP_VARIABLES
 
 __all__ = ["check_output_target", "check_output_path", "label_bytes", "human_size",
            "BYTES_PER_ORBIT"]
 
-#: Bytes one orbit takes on disk at most: every per-orbit variable of the file uncompressed,
-#: from their stored dtypes (attractor int16 + status int8 + t_trap float32 +
-#: boundary_distance float32 = 11 bytes; compression only lowers it).
-BYTES_PER_ORBIT = sum(np.dtype(v.dtype).itemsize for v in MAP_VARIABLES.values())
+#: Bytes one orbit of the pendulum takes on disk at most: every per-orbit variable of the
+#: file uncompressed, from their stored dtypes (attractor int16 + status int8 + t_trap
+#: float32 + boundary_distance float32 = 11 bytes; compression only lowers it). Another
+#: model's: :attr:`atlas.models.base.Model.bytes_per_orbit`.
+BYTES_PER_ORBIT = PENDULUM.bytes_per_orbit
 
 
 def check_output_target(output, config=None, *, force: bool = False) -> None:
@@ -91,8 +90,9 @@ def check_output_path(output: Path, layout: Layout) -> None:
 
 def label_bytes(layout: Layout) -> int:
     """Bytes the labels of ``layout`` take on disk at most: its orbits (every parameter point)
-    × :data:`BYTES_PER_ORBIT`."""
-    return layout.n_params * layout.theta0.size * layout.theta_dot0.size * BYTES_PER_ORBIT
+    × the bytes of one orbit (:data:`BYTES_PER_ORBIT` for the pendulum)."""
+    return (layout.n_params * layout.theta0.size * layout.theta_dot0.size
+            * layout.model.bytes_per_orbit)
 
 
 def human_size(n_bytes: float) -> str:

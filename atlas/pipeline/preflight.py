@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from atlas.layout import Layout
+from atlas.models.registry import planner
 from atlas.pipeline.config import Config
 from atlas.pipeline.output import human_size, label_bytes
 
@@ -116,12 +117,12 @@ def orbits_of(layout: Layout, tiles) -> int:
         * layout.theta0.size
 
 
-def measure_rate(cfg: Config, layout: Layout, barriers: list, seed: int = 0
+def measure_rate(cfg: Config, layout: Layout, begun: list, seed: int = 0
                  ) -> tuple[float, int]:
     """(orbits per second, orbits timed): the rate at which this machine's CPU labels the
     run's orbits, from seeded samples of stretches of :data:`STRETCH` consecutive θ0 of
-    random grid rows (as a tile holds them), labelled with the run's kernels (``barriers``:
-    the points' running barriers).
+    random grid rows (as a tile holds them), labelled with the run's kernels (the model's
+    sample of each point from ``begun``: :class:`atlas.models.base.Planner`).
 
     A first, untimed call of :data:`FIRST_SAMPLE` orbits at each point timed loads (or
     compiles) the kernels the timed calls take (it stops at the first trap test, so costs
@@ -133,8 +134,6 @@ def measure_rate(cfg: Config, layout: Layout, barriers: list, seed: int = 0
     up to :data:`MAX_POINTS` − 1 further random points. A call's fixed cost (starting the
     threads: tens of ms on a busy machine, which a run's big tiles pay once each) is measured
     by the same call stopped at its first trap test, and taken off."""
-    from atlas.labels.labelling import label
-
     rng = np.random.default_rng(seed)
     width = min(STRETCH, layout.theta0.size)
 
@@ -146,11 +145,9 @@ def measure_rate(cfg: Config, layout: Layout, barriers: list, seed: int = 0
                 np.repeat(layout.theta_dot0[rows], width))
 
     def seconds(p: int, orbits: tuple, t_max: float = cfg.integrator.t_max) -> float:
-        point = layout.point(p)
+        labeller = planner(layout.model).sample(cfg, begun, p)
         start = time.perf_counter()
-        label(*orbits, alpha=point["alpha"], omega0=point["omega0"], torque=point["torque"],
-              dt=cfg.integrator.dt, t_max=t_max, method=cfg.integrator.method,
-              running=barriers[p])
+        labeller.label(*orbits, t_max=t_max)
         return time.perf_counter() - start
 
     points = [int(p) for p in rng.permutation(layout.n_params)[:MAX_POINTS]]
@@ -181,7 +178,7 @@ def _next_sample(n: int, spent: float) -> int:
     return math.ceil(min(aimed, 4.0 * n, MAX_SAMPLE))
 
 
-def estimate(cfg: Config, layout: Layout, barriers: list, orbits: int, device: str,
+def estimate(cfg: Config, layout: Layout, begun: list, orbits: int, device: str,
              backend: str) -> Estimate:
     """The :class:`Estimate` of labelling ``orbits`` orbits of ``layout`` on ``device``
     ("cpu", "cuda"; ``backend`` the run's word), its time measured only where the run may be
@@ -189,7 +186,7 @@ def estimate(cfg: Config, layout: Layout, barriers: list, orbits: int, device: s
     steps = orbits * cfg.integrator.t_max / cfg.integrator.dt
     seconds, sample = None, 0
     if device == "cpu" and orbits and (orbits >= PREFLIGHT_ORBITS or steps >= CALIBRATE_STEPS):
-        rate, sample = measure_rate(cfg, layout, barriers)
+        rate, sample = measure_rate(cfg, layout, begun)
         seconds = orbits / rate
     return Estimate(orbits=orbits, points=layout.n_params, seconds=seconds, sample=sample,
                     disk_bytes=label_bytes(layout), backend=backend)

@@ -1,9 +1,10 @@
 """The tile scheduler: which tiles are computed where, and in what order they come back.
 
 A tile (grid rows of one parameter point) is labelled and certified by :func:`compute_tile`,
-a plain function of picklable arguments. The local scheduler labels one tile ahead in a
-background thread while it certifies the previous one and the caller writes it
-(:func:`local_results`); the Dask
+a plain function of picklable arguments: the point's plan (its model's
+:class:`~atlas.models.base.PointPlan`), the grid's columns and the tile's rows. The local
+scheduler labels one tile ahead in a background thread while it certifies the previous one
+and the caller writes it (:func:`local_results`); the Dask
 scheduler (:mod:`atlas.pipeline.distributed`) sends tiles to workers, which for a format that
 takes parallel writes (Zarr) write them themselves (:func:`compute_tile_into_store`). Which
 device labels a tile (CPU or CUDA kernels) is the ``backend`` argument, independent of the
@@ -18,15 +19,14 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future
 from typing import NamedTuple
 
-from atlas import defaults
-from atlas.boundaries.certificate import Certifier
+import numpy as np
+
 from atlas.defaults import BACKEND_WORDS
-from atlas.kernels.threads import concurrent_points, use_threads
+from atlas.kernels.threads import concurrent_points
 from atlas.labels.backends import Backend
 from atlas.labels.backends import lookup as lookup_backend
-from atlas.labels.labelling import label
 from atlas.layout import Layout
-from atlas.physics.barrier import RunningBarrier
+from atlas.models.base import PointPlan
 from atlas.pipeline.config import Config
 from atlas.store.partial import TileStore
 
@@ -36,46 +36,37 @@ __all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "label_tile", "
            "compute_tile_into_store", "dask_tile_results"]
 
 
-def compute_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice, dt, t_max,
-                 method=defaults.METHOD, backend="cpu", numba_threads=None):
-    """Label and certify the orbits of one tile: the grid rows ``rows`` of ``certifier``'s
-    parameter point (θ0 [rad] along columns × θ̇0 [rad s⁻¹] along rows); ``barrier`` the
-    point's running certificate (None where it has no running limit cycle); ``dt`` [s],
-    ``t_max`` [s] and ``method`` the integrator's.
+def compute_tile(point: PointPlan, x0: np.ndarray, v0: np.ndarray, rows: slice,
+                 backend: str = "cpu", numba_threads: int | None = None):
+    """Label and certify the orbits of one tile: the grid rows ``rows`` (initial velocities
+    ``v0``) × the columns ``x0`` (initial positions) of the parameter point ``point``, on
+    ``backend``'s kernels with ``numba_threads`` threads where given.
 
     Returns ({variable: array shaped (rows, columns)} for every per-orbit variable of the
     file, the tile's tally). A plain function of picklable arguments, so it can run as a Dask
     task on another machine.
     """
-    res = label_tile(certifier, barrier, rows, dt, t_max, method, backend, numba_threads)
-    return certify_tile(certifier, rows, res)
+    res = label_tile(point, x0, v0, rows, backend, numba_threads)
+    return certify_tile(point, rows, res, numba_threads)
 
 
-def label_tile(certifier: Certifier, barrier: RunningBarrier | None, rows: slice, dt, t_max,
-               method=defaults.METHOD, backend="cpu", numba_threads=None):
-    """The first half of :func:`compute_tile`: the tile's labels (the RK4 map and its
-    certificates, :func:`atlas.label`), with ``numba_threads`` threads where given."""
-    use_threads(numba_threads)
-    p = certifier.pendulum
-    return label(certifier.theta0[None, :], certifier.theta_dot0[rows][:, None], alpha=p.alpha,
-                 omega0=p.omega0, torque=p.torque, dt=dt, t_max=t_max, backend=backend,
-                 method=method, running=barrier)
+def label_tile(point: PointPlan, x0: np.ndarray, v0: np.ndarray, rows: slice,
+               backend: str = "cpu", numba_threads: int | None = None):
+    """The first half of :func:`compute_tile`: the tile's labels (``point.label``)."""
+    return point.label(x0[None, :], v0[:, None], rows, backend, numba_threads)
 
 
-def certify_tile(certifier: Certifier, rows: slice, res, numba_threads=None):
+def certify_tile(point: PointPlan, rows: slice, res, numba_threads: int | None = None):
     """The second half of :func:`compute_tile`: the labels ``res`` of :func:`label_tile`
-    certified for the exact equation (status, boundary distance), as the tile's arrays and
-    tally, with ``numba_threads`` threads where given."""
-    use_threads(numba_threads)
-    status, distance, tally = certifier.tile(rows, res.attractor, res.status)
-    return {"attractor": res.attractor, "status": status, "t_trap": res.t_trap,
-            "boundary_distance": distance}, tally
+    certified (``point.certify``), as the tile's arrays and tally."""
+    return point.certify(rows, res, numba_threads)
 
 
-def tile_args(cfg: Config, layout: Layout, certifiers: list, index: int) -> tuple:
-    certifier, barrier = certifiers[index // layout.bands]
-    return (certifier, barrier, layout.tile(index)[1], cfg.integrator.dt, cfg.integrator.t_max,
-            cfg.integrator.method)
+def tile_args(cfg: Config, layout: Layout, points: list, index: int) -> tuple:
+    """The arguments of :func:`compute_tile` for tile ``index``: its point's plan, the
+    grid's columns, the tile's rows and their slice."""
+    _, rows = layout.tile(index)
+    return points[index // layout.bands], layout.theta0, layout.theta_dot0[rows], rows
 
 
 #: Held by the thread computing (or labelling) a tile ahead: a sweep's tile waits for one that
@@ -140,7 +131,7 @@ def each_in_background(fn: Callable, items: Iterable, workers: int) -> Iterator:
         stop.set()
 
 
-def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
+def local_results(cfg, tiles: TileStore, points, todo, device: str
                   ) -> Iterator[tuple[int, tuple]]:
     """(index, (arrays, tally)) of the tiles ``todo`` in order, each labelled one tile ahead
     in a background thread: tile i+1 is labelled while tile i is certified, in a second
@@ -166,7 +157,7 @@ def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
 
     def start(index):
         return _in_background(label_tile if staged else compute_tile,
-                              *tile_args(cfg, layout, certifiers, index), backend=device,
+                              *tile_args(cfg, layout, points, index), backend=device,
                               numba_threads=threads)
 
     ahead = start(todo[0]) if len(todo) else None
@@ -175,8 +166,8 @@ def local_results(cfg, tiles: TileStore, certifiers, todo, device: str
         if position + 1 < len(todo):
             ahead = start(todo[position + 1])
         if staged:
-            certifier, _, rows, *_ = tile_args(cfg, layout, certifiers, index)
-            result = _in_background(certify_tile, certifier, rows, result, lock=None,
+            point, _, _, rows = tile_args(cfg, layout, points, index)
+            result = _in_background(certify_tile, point, rows, result, lock=None,
                                     numba_threads=threads).result()
         yield index, result
 
@@ -191,7 +182,7 @@ def compute_tile_into_store(tile_run, folder, layout, index, *args, numba_thread
     return tally
 
 
-def dask_tile_results(cfg, tiles: TileStore, certifiers, todo, device: str = "cpu"
+def dask_tile_results(cfg, tiles: TileStore, points, todo, device: str = "cpu"
                       ) -> Iterator[tuple[int, tuple]]:
     """(index, (arrays, tally)), or for a format that takes parallel writes (Zarr)
     (index, tally) of a tile the worker has written itself. The workers run the CPU kernels
@@ -202,12 +193,12 @@ def dask_tile_results(cfg, tiles: TileStore, certifiers, todo, device: str = "cp
     if tiles.tile_run.parallel_tile_writes:
         def args_of(i):
             return (tiles.tile_run, tiles.path, layout, i,
-                    *tile_args(cfg, layout, certifiers, i))
+                    *tile_args(cfg, layout, points, i))
 
         task = compute_tile_into_store
     else:
         def args_of(i):
-            return tile_args(cfg, layout, certifiers, i)
+            return tile_args(cfg, layout, points, i)
 
         task = compute_tile
     yield from dask_results(cfg, todo, args_of, task, tiles.manifest["attrs"]["run_identity"])
@@ -238,7 +229,7 @@ def point_results(task: Callable, points: list[tuple], *, backend: str = "cpu",
 
 
 class Scheduler(NamedTuple):
-    """A way to run a sweep's tiles: ``results(cfg, tiles, certifiers, todo, device)`` yields
+    """A way to run a sweep's tiles: ``results(cfg, tiles, points, todo, device)`` yields
     (index, (arrays, tally)) for the caller to write, or (index, tally) for a tile that its
     worker wrote itself, which is the case where ``worker_writes(tiles)``."""
 

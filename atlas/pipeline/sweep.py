@@ -38,11 +38,10 @@ import numpy as np
 import xarray as xr
 
 from atlas import defaults, lazy_dask  # noqa: F401 (lazy_dask installs itself)
-from atlas.boundaries.certificate import Certifier, add_tallies
 from atlas.errors import EXIT_INEXACT, AtlasError, InputFileError, StorageError
-from atlas.labels.trap import energy_cap, trap_margin
-from atlas.layout import PARAMETERS, Layout, point_label
-from atlas.pipeline import points, preflight, progress
+from atlas.layout import Layout
+from atlas.models.registry import planner
+from atlas.pipeline import preflight, progress
 from atlas.pipeline.config import Config
 from atlas.pipeline.identity import file_attrs, run_identity
 from atlas.pipeline.lock import output_lock
@@ -58,10 +57,10 @@ from atlas.store.partial import (
     partial_path,
 )
 from atlas.store.reader import open_atlas
-from atlas.store.schema import summary_dataset, summary_tree
+from atlas.store.schema import summary_tree
 
-__all__ = ["run", "layout_of", "inexact_points", "accuracy_exit", "kept_after_interrupt",
-           "finish_tiles", "Phases"]
+__all__ = ["run", "layout_of", "inexact_points", "inexact_line", "accuracy_exit",
+           "kept_after_interrupt", "finish_tiles", "Phases"]
 
 log = logging.getLogger(__name__)
 
@@ -72,37 +71,27 @@ def layout_of(cfg: Config, backend: str | None = None) -> Layout:
     fills the GPU)."""
     device, _ = resolve(backend or cfg.execution.backend)
     tile = cfg.execution.tile_orbits or device.tile_orbits
-    g = cfg.grid
+    g, model, section = cfg.grid, cfg.description, cfg.section
     theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
     theta_dot0 = np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num)
     return Layout(
         theta0=theta0, theta_dot0=theta_dot0,
-        parameters={name: np.array(cfg.pendulum.values(name), np.float64)
-                    for name in PARAMETERS},
-        swept=cfg.pendulum.swept,
+        parameters={name: np.array(section.values(name), np.float64)
+                    for name in model.parameters},
+        swept=section.swept,
         rows_per_tile=max(1, min(g.theta_dot0.num, tile // g.theta0.num)),
+        model=model,
     )
 
 
-def _summary(cfg: Config, tiles: TileStore, certifiers: list[Certifier]) -> xr.Dataset:
-    """The summary variables from the tiles' tallies (O(tiles) numbers, no label re-read)."""
+def _summary(tiles: TileStore, plan) -> xr.Dataset:
+    """The summary variables from the tiles' tallies (O(tiles) numbers, no label re-read):
+    the plan's (:class:`atlas.models.base.Plan`)."""
     layout = tiles.layout
-    tallies = [[] for _ in certifiers]
+    tallies = [[] for _ in plan.points]
     for index in range(layout.n_tiles):  # a damaged record raises DamagedTile
         tallies[index // layout.bands].append(tiles.read_tally(index))
-    points = []
-    for p, ((cert, _), point) in enumerate(zip(certifiers, tallies)):
-        summary = cert.summary(add_tallies(point))
-        pendulum = cert.pendulum
-        summary["trap_margin"] = trap_margin(cfg.integrator.dt, pendulum.alpha, pendulum.omega0)
-        summary["trap_energy_cap"] = energy_cap(cfg.integrator.dt, pendulum.alpha,
-                                                pendulum.omega0, pendulum.torque)
-        if summary["side_mismatches"]:
-            log.warning("%s: %d labels farther than d_cert from every boundary disagree with "
-                        "the exact side; they are flagged near_boundary",
-                        point_label(layout.point(p)), summary["side_mismatches"])
-        points.append(summary)
-    return summary_dataset(layout, points)
+    return plan.summary(tallies)
 
 
 def _make_output_folder(out: Path) -> None:
@@ -150,14 +139,14 @@ def _open_tiles(cfg: Config, layout: Layout, identity: dict, restart: bool) -> T
     return tiles
 
 
-def _compute_into(tiles: TileStore, cfg: Config, certifiers: list[Certifier], device: str,
+def _compute_into(tiles: TileStore, cfg: Config, points: list, device: str,
                   scheduler: Scheduler, quiet: bool) -> None:
     """Label and certify the tiles still to do on ``device`` ("cpu", "cuda") and store each as
     it finishes, as ``scheduler`` runs them (the local one computes the next tile meanwhile:
     :func:`atlas.pipeline.schedule.local_results`)."""
     layout, todo = tiles.layout, tiles.todo()
     written_by_workers = scheduler.worker_writes(tiles)
-    results = scheduler.results(cfg, tiles, certifiers, todo, device)
+    results = scheduler.results(cfg, tiles, points, todo, device)
     total = preflight.orbits_of(layout, range(layout.n_tiles))
     with progress.bar(total, "tiles", "orbit", quiet,
                       initial=total - preflight.orbits_of(layout, todo)) as bar:
@@ -193,28 +182,25 @@ class Phases:
 
 
 def finish_tiles(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start: float,
-                 running_certificates: tuple[list, list], phase: Phases) -> xr.DataTree:
-    """Trace the separatrices (they measure d_cert, which certifying a tile needs), compute
-    and certify what is missing, then assemble the file. A tile file found damaged is set
-    aside (renamed, not deleted) and computed again. Logs each phase's time (``-v``).
-    Returns what was written beyond the basin map (:func:`atlas.store.schema.summary_tree`)."""
-    pendulums = points.pendulums(tiles.layout)
-    cycles, barriers = running_certificates
+                 begun: list, phase: Phases) -> xr.DataTree:
+    """Prepare every parameter point (the model's :func:`plan`, from what ``begun`` holds:
+    for the pendulum the separatrices, which measure d_cert, which certifying a tile
+    needs), compute and certify what is missing, then assemble the file. A tile file found
+    damaged is set aside (renamed, not deleted) and computed again. Logs each phase's time
+    (``-v``). Returns what was written beyond the basin map
+    (:func:`atlas.store.schema.summary_tree`)."""
     track = functools.partial(progress.tracked, quiet=quiet)
-    boundaries = points.exact_boundaries(cfg, pendulums, cycles, track)  # timed with the
-    traced = points.trace_separatrices(cfg, pendulums, boundaries, barriers, track)  # trace
-    phase.done("separatrices")
-    _warn_inexact(tiles.layout, traced)
-    certifiers = points.certifiers(tiles.layout, pendulums, traced, boundaries, barriers,
-                                   track)
-    groups = points.groups(tiles.layout, pendulums, traced, cycles, barriers)
-    phase.done("exact boundaries and areas")
+    plan = planner(tiles.layout.model).plan(cfg, tiles.layout, begun, track)
+    phase.done("per-point plans (separatrices)")
+    for line in plan.warnings:  # on stderr even with --quiet
+        log.warning(line)
+    groups = plan.groups
     for _ in range(3):
         device, scheduler = resolve(backend)
-        _compute_into(tiles, cfg, certifiers, device.name, scheduler, quiet)
+        _compute_into(tiles, cfg, plan.points, device.name, scheduler, quiet)
         phase.done("map (label and certify tiles)")
         try:
-            summary = _summary(cfg, tiles, certifiers)
+            summary = _summary(tiles, plan)
             phase.done("summary")
             attrs = {"run_time_s": time.perf_counter() - start, "backend": backend}
             manifest_attrs = tiles.manifest["attrs"]  # read before finalize removes the tiles
@@ -269,13 +255,13 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
     identity = run_identity(cfg, backend)
     if not restart:
         _check_partial(partial, identity)
-    running_certificates = points.running_certificates(points.pendulums(layout), cfg.integrator.dt)
+    begun = planner(layout.model).begin(cfg, layout)
     with progress.compile_notice(quiet):
-        _preflight(cfg, layout, running_certificates[1], device.name, backend, quiet,
+        _preflight(cfg, layout, begun, device.name, backend, quiet,
                    confirm, None if restart else partial)
         _make_output_folder(cfg.output)
         return _locked_run(cfg, restart, quiet, backend, open_result, layout, identity,
-                           running_certificates)
+                           begun)
 
 
 def _say_what_is_replaced(cfg: Config) -> None:
@@ -297,7 +283,7 @@ def _say_what_is_replaced(cfg: Config) -> None:
                     f" ({title})" if title else "")
 
 
-def _preflight(cfg: Config, layout: Layout, barriers: list, device: str, backend: str,
+def _preflight(cfg: Config, layout: Layout, begun: list, device: str, backend: str,
                quiet: bool, confirm, partial: Path | None) -> None:
     """Say a big run's estimate, or ask ``confirm`` for one big enough to ask (``partial``:
     the partial run to be continued, whose finished tiles are not counted)."""
@@ -308,7 +294,7 @@ def _preflight(cfg: Config, layout: Layout, barriers: list, device: str, backend
             layout, todo = done.layout, done.todo()
         except PartialStoreError:
             pass  # _open_tiles says what is wrong with it, under the lock
-    est = preflight.estimate(cfg, layout, barriers, preflight.orbits_of(layout, todo), device,
+    est = preflight.estimate(cfg, layout, begun, preflight.orbits_of(layout, todo), device,
                              backend)
     if confirm is not None and est.asks:
         if not confirm(est):
@@ -319,7 +305,7 @@ def _preflight(cfg: Config, layout: Layout, barriers: list, device: str, backend
 
 
 def _locked_run(cfg: Config, restart: bool, quiet: bool, backend: str, open_result: bool,
-                layout: Layout, identity: dict, running_certificates) -> xr.DataTree:
+                layout: Layout, identity: dict, begun: list) -> xr.DataTree:
     """:func:`run` from the output's lock on: the partial run, the tiles, the file."""
     partial = partial_path(cfg.output)
     start = time.perf_counter()
@@ -331,7 +317,7 @@ def _locked_run(cfg: Config, restart: bool, quiet: bool, backend: str, open_resu
         try:
             tiles = _open_tiles(cfg, layout, identity, restart)
             phase.done("partial run (open or resume)")
-            written = finish_tiles(tiles, cfg, backend, quiet, start, running_certificates, phase)
+            written = finish_tiles(tiles, cfg, backend, quiet, start, begun, phase)
         except OverflowError as exc:
             raise AtlasError(f"{cfg.output}: {exc}") from None
         except OSError as exc:
@@ -352,20 +338,15 @@ def _discrepancy(ds: xr.Dataset) -> tuple[float, float]:
             float(ds.attrs.get("discrepancy_bound", math.nan)))
 
 
-def _inexact_line(where: str, disc: float, bound: float) -> str:
+def inexact_line(where: str, separatrices: xr.Dataset) -> str | None:
+    """The warning for one ``/separatrices`` node whose check against the DOP853 stable
+    manifold exceeds its bound, naming it ``where``; None where it is within its bound."""
+    disc, bound = _discrepancy(separatrices)
+    if not disc > bound:
+        return None
     return (f"{where}: check vs DOP853 stable manifold: max distance {disc:.1e} EXCEEDS bound "
             f"{bound:.0e}: labels near the basin boundaries are less certain than the bound "
             "assumes; lower separatrices.tol or integrator.dt")
-
-
-def _warn_inexact(layout: Layout, traced: list) -> None:
-    """Log (WARNING: on stderr even with ``--quiet``) each parameter point whose traced
-    separatrices exceed their bound against the DOP853 stable manifold."""
-    for p, sep in enumerate(traced):
-        if sep is not None:
-            disc, bound = _discrepancy(sep)
-            if disc > bound:
-                log.warning(_inexact_line(point_label(layout.point(p)), disc, bound))
 
 
 def inexact_points(tree: xr.DataTree) -> list[str]:
@@ -374,9 +355,8 @@ def inexact_points(tree: xr.DataTree) -> list[str]:
     the node (empty where every check is within its bound, or there are none)."""
     if "separatrices" not in tree.children:
         return []
-    return [_inexact_line(node.path, disc, bound)
-            for node in tree["separatrices"].subtree
-            for disc, bound in [_discrepancy(node)] if disc > bound]
+    return [line for node in tree["separatrices"].subtree
+            for line in [inexact_line(node.path, node)] if line]
 
 
 def accuracy_exit(tree: xr.DataTree, output: Path, accept_inexact: bool = False) -> int:

@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
-from atlas.layout import PARAMETERS
+from atlas.models.pendulum.description import PARAMETERS
 from atlas.stability import bifurcations as bif
 from atlas.stability.study import POINT_STATUS, PointResult, StudySettings
 from atlas.store.study import (

@@ -33,14 +33,13 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import Layout
+from atlas.models.base import LABELS
 from atlas.store.durable import fsync
 from atlas.store.format import Container, TileRun, reason
 from atlas.store.schema import (
-    FILLS,
-    LABEL_VARIABLES,
-    MAP_VARIABLES,
     SCHEMA,
     chunks_of,
+    map_variables,
     not_an_atlas,
 )
 
@@ -63,7 +62,8 @@ class HDF5Tiles(TileRun):
     def write_tile(self, folder: Path, layout: Layout, index: int,
                    values: dict) -> dict[str, bytes]:
         rows = layout.chunk_rows
-        return {name: encode_chunk(values[name], rows, FILLS[name]) for name in MAP_VARIABLES}
+        return {name: encode_chunk(values[name], rows, var.padding)
+                for name, var in map_variables(layout).items()}
 
     def finalize(self, tiles, output: Path, groups: dict[str, xr.Dataset],
                  root_vars: xr.Dataset, attrs: dict) -> None:
@@ -147,7 +147,7 @@ def root_attrs(path: Path) -> tuple[dict, bool]:
         with h5py.File(path, "r") as f:
             attrs = {name: _plain_attr(value) for name, value in f.attrs.items()
                      if not name.startswith("_")}
-            has_map = all(isinstance(f.get(name), h5py.Dataset) for name in LABEL_VARIABLES)
+            has_map = all(isinstance(f.get(name), h5py.Dataset) for name in LABELS)
     except Exception as exc:  # OSError for most damage; h5py raises others too
         raise InputFileError(f"{path}: not a readable HDF5 file ({reason(exc)})") from None
     return attrs, has_map
@@ -209,7 +209,7 @@ def _create_map(f: h5netcdf.File, layout: Layout) -> None:
         var = f.create_variable(name, dims, np.float64, data=values)
         var.attrs.update(attrs)
     chunks = chunks_of(layout)
-    for name, spec in MAP_VARIABLES.items():
+    for name, spec in map_variables(layout).items():
         var = f.create_variable(name, layout.dims, spec.dtype, fillvalue=spec.fill,
                                 chunks=chunks, **_COMPRESSION)
         var.attrs.update(spec.attrs)
@@ -227,7 +227,7 @@ def _copy_tiles(f: h5netcdf.File, tiles) -> None:
     """Copy every tile's stored chunks into the file (a damaged tile file raises
     :class:`~atlas.store.partial.DamagedTile` from ``tiles.read_tile``)."""
     layout = tiles.layout
-    datasets = {name: f._h5group[name] for name in MAP_VARIABLES}
+    datasets = {name: f._h5group[name] for name in map_variables(layout)}
     for index in range(layout.n_tiles):
         tile = tiles.read_tile(index)
         params, rows = layout.tile(index)

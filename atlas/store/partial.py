@@ -169,8 +169,8 @@ class TileStore:
 
     def write(self, index: int, values: dict, tally: dict) -> None:
         """Store tile ``index`` durably and atomically: ``values`` maps each map variable
-        (:data:`atlas.store.schema.MAP_VARIABLES`) to its array (shaped (rows, n_theta0)),
-        written by the format; ``tally`` holds the tile's named count arrays."""
+        (the model's :attr:`~atlas.models.base.Model.map_variables`) to its array (shaped
+        (rows, columns)), written by the format; ``tally`` holds the tile's named count arrays."""
         self.record(index, tally, self.tile_run.write_tile(self.path, self.layout, index,
                                                            values))
 

@@ -23,7 +23,7 @@ import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
-from atlas.layout import PARAMETERS
+from atlas.models.pendulum.description import PARAMETERS
 from atlas.store.formats import format_for
 from atlas.store.schema import STUDY_SCHEMA
 

@@ -24,21 +24,19 @@ import numpy as np
 
 from atlas import defaults
 from atlas.errors import InputFileError
-from atlas.layout import PARAMETERS, point_nodes
-from atlas.status import STATUS_MEANINGS
+from atlas.layout import point_nodes
+from atlas.models.base import Model
+from atlas.models.registry import of_attrs
 from atlas.store.schema import (
     BARRIER_ATTRS,
     BARRIER_DIM,
-    BASIN_VARIABLES,
     CERTIFICATE_FORMAT,
-    CERTIFICATE_POINT_VARIABLES,
     FORMAT_VERSION,
-    MAP_VARIABLES,
     OLDEST_FORMAT,
-    POINT_VARIABLES,
 )
 
-__all__ = ["check_tree", "check_dataset", "parse_config", "format_version", "file_method"]
+__all__ = ["check_tree", "check_dataset", "model_of", "parse_config", "format_version",
+           "file_method"]
 
 
 def _refuse(path, what: str):
@@ -146,7 +144,16 @@ def _parameter(ds, name: str, path) -> None:
         _refuse(path, f"coordinate {name} is out of range")
 
 
-def _flags(attrs: dict, path) -> None:
+def model_of(attrs: dict, path) -> Model:
+    """The model of the file at ``path`` (its ``model`` attribute: the pendulum where
+    absent); one InputFileError line for a model this atlas does not know."""
+    try:
+        return of_attrs(attrs)
+    except ValueError as exc:
+        _refuse(path, f"an atlas of a {exc}; it cannot be read here")
+
+
+def _flags(attrs: dict, path, model: Model) -> None:
     values, meanings = attrs.get("flag_values"), attrs.get("flag_meanings")
     if values is None or not isinstance(meanings, str):
         _refuse(path, "status has no flag_values/flag_meanings attributes")
@@ -155,9 +162,9 @@ def _flags(attrs: dict, path) -> None:
     if values.dtype.kind not in "iu" or values.ndim != 1 or values.size != len(words):
         _refuse(path, "status's flag_values and flag_meanings do not pair up")
     for value, word in zip(values.tolist(), words):
-        if STATUS_MEANINGS.get(value) != word:
+        if model.statuses.get(value) != word:
             _refuse(path, f"status flag {value} means {word!r} in this file, not "
-                    f"{STATUS_MEANINGS.get(value, 'anything atlas writes')!r}")
+                    f"{model.statuses.get(value, 'anything atlas writes')!r}")
 
 
 def check_dataset(ds, path) -> int:
@@ -166,13 +173,15 @@ def check_dataset(ds, path) -> int:
     Returns the file's format version."""
     attrs = ds.attrs
     version = format_version(attrs, path)
-    lead = tuple(name for name in PARAMETERS if name in ds.dims)
-    dims = (*lead, "theta_dot0", "theta0")
-    for name in ("theta0", "theta_dot0"):
-        _axis(ds, name, path, increasing=True)
-    for name in PARAMETERS:
+    model = model_of(attrs, path)
+    lead = tuple(name for name in model.parameters if name in ds.dims)
+    columns, rows = model.axes
+    dims = (*lead, rows.name, columns.name)
+    for axis in (columns, rows):
+        _axis(ds, axis.name, path, increasing=True)
+    for name in model.parameters:
         _parameter(ds, name, path)
-    for name, spec in MAP_VARIABLES.items():
+    for name, spec in model.map_variables.items():
         if name not in ds.data_vars:
             _refuse(path, f"no {name} variable")
         var = ds[name]
@@ -180,12 +189,12 @@ def check_dataset(ds, path) -> int:
             _refuse(path, f"variable {name} is {var.dtype}, not {np.dtype(spec.dtype)}")
         if var.dims != dims:
             _refuse(path, f"variable {name} has dims {var.dims}, not {dims}")
-    _flags(ds["status"].attrs, path)
+    _flags(ds["status"].attrs, path, model)
     if "k" not in ds.coords or ds["k"].dims != ("k",) or ds["k"].dtype.kind not in "iu":
         _refuse(path, "no integer k coordinate (the basins' summary)")
-    point_names = [name for name in POINT_VARIABLES if version >= CERTIFICATE_FORMAT
-                   or name not in CERTIFICATE_POINT_VARIABLES]
-    for names, want in ((BASIN_VARIABLES, (*lead, "k")), (point_names, lead)):
+    point_names = [name for name in model.point_variables
+                   if version >= model.since.get(name, OLDEST_FORMAT)]
+    for names, want in ((model.basin_variables, (*lead, "k")), (point_names, lead)):
         for name in names:
             if name not in ds.data_vars:
                 _refuse(path, f"no {name} variable (the summary)")
@@ -198,7 +207,7 @@ def check_dataset(ds, path) -> int:
         every = _number(attrs, "check_every", path, positive=True)
         if every != int(every):
             _refuse(path, f"attribute check_every = {every!r} is not an integer")
-    if version >= CERTIFICATE_FORMAT:
+    if "trap_energy_cap" in point_names:
         cap = np.asarray(ds["trap_energy_cap"].values)
         if np.isnan(cap).any() or (cap == np.inf).any():
             _refuse(path, "variable trap_energy_cap holds NaN or +inf (a cap is finite, or "
@@ -259,7 +268,7 @@ def _check_barrier(cycle, group: str, path, direction: float) -> None:
 
 
 def _point_attrs(node, path) -> None:
-    for name in PARAMETERS:
+    for name in of_attrs(node.root.attrs).parameters:
         _number(node.attrs, name, path, where=f"{node.path} ")
 
 

@@ -29,7 +29,7 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import BackendUnavailable, InputFileError
 from atlas.layout import Layout
 from atlas.store.format import Container, TileRun
-from atlas.store.schema import MAP_VARIABLES, SCHEMA, chunks_of, not_an_atlas
+from atlas.store.schema import SCHEMA, chunks_of, map_variables, not_an_atlas
 
 __all__ = ["Zarr", "ZarrTiles", "DATA", "root_attrs"]
 
@@ -62,7 +62,7 @@ class ZarrTiles(TileRun):
         chunks = chunks_of(layout)
         shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
         data, encoding = {}, {}
-        for name, spec in MAP_VARIABLES.items():
+        for name, spec in map_variables(layout).items():
             empty = da.zeros(shape, dtype=spec.dtype, chunks=chunks)
             data[name] = (layout.dims, empty, spec.attrs)
             encoding[name] = {"chunks": chunks, "_FillValue": spec.fill}

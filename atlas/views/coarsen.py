@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from atlas.layout import PARAMETERS
+from atlas.layout import parameter_names
 from atlas.status import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
 
 if TYPE_CHECKING:
@@ -75,7 +75,7 @@ def coarsen_blocks(values: np.ndarray, how: str) -> np.ndarray:
 def _point_index(ds: xr.Dataset, index: dict) -> dict[str, int]:
     """The parameter point that :func:`atlas.layout.first_point` selects with ``index``, as
     an index (≥ 0) into each swept dim."""
-    return {name: range(ds.sizes[name])[index.get(name, 0)] for name in PARAMETERS
+    return {name: range(ds.sizes[name])[index.get(name, 0)] for name in parameter_names(ds)
             if name in ds.dims}
 
 

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from atlas.layout import PARAMETERS, point_label, point_nodes
+from atlas.layout import parameter_names, point_label, point_nodes
 from atlas.views.style import CURVE_SIZE, axes, basin_colours
 
 if TYPE_CHECKING:
@@ -59,7 +59,7 @@ _SHAPES = ("o", "s", "^", "D", "v", "P", "X", "<", ">", "h")
 
 def _held(full: xr.Dataset, ds: xr.Dataset, dim: str) -> str:
     """The title's second line: the swept parameters other than ``dim`` at the values held."""
-    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and n in full.dims}
+    held = {n: float(ds[n]) for n in parameter_names(full) if n != dim and n in full.dims}
     return f"\nat {point_label(held)}" if held else ""
 
 
@@ -80,7 +80,7 @@ def _cycle_onset(tree: xr.DataTree, ds: xr.Dataset, dim: str) -> tuple[float, fl
     it or is not over τ."""
     if dim != "torque" or "limit_cycle" not in tree.children:
         return None
-    held = {n: float(ds[n]) for n in PARAMETERS if n != dim and ds[n].ndim == 0}
+    held = {n: float(ds[n]) for n in parameter_names(ds) if n != dim and ds[n].ndim == 0}
     with_cycle = {float(node.attrs["torque"]) for node in point_nodes(tree, "limit_cycle")
                   if "torque" in node.attrs and all(
                       float(node.attrs.get(n, np.nan)) == v for n, v in held.items())}
@@ -321,7 +321,7 @@ def _stability_scene(tree: xr.DataTree, dim: str = "torque",
     basin's shares (exact and grid counts, with the grid error bound), the colours, the
     bifurcation marks and the labels."""
     full = tree.to_dataset(inherit=False)
-    ds = full.isel({d: 0 for d in PARAMETERS if d in full.dims and d != dim})
+    ds = full.isel({d: 0 for d in parameter_names(full) if d in full.dims and d != dim})
     colours = basin_colours([0], running=True, lines=True)
     return {"x": ds[dim].values,
             "exact": ds["basin_fraction_exact"].sum("k", skipna=False).values,

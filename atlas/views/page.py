@@ -47,6 +47,7 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import AtlasError, InputFileError
 from atlas.layout import at_point, point_group
 from atlas.layout import points as parameter_points
+from atlas.models.registry import of_attrs
 from atlas.physics.pendulum import Pendulum, tilt, tilt_versine
 from atlas.status import (
     NEAR_BOUNDARY,
@@ -56,7 +57,6 @@ from atlas.status import (
     TRAPPED,
 )
 from atlas.store.reader import open_atlas, require_certificate, stored_certificate
-from atlas.store.schema import LABEL_VARIABLES
 from atlas.store.separatrices import branches
 from atlas.store.validate import file_method
 from atlas.views.style import (
@@ -383,7 +383,7 @@ def write_view(path: str | Path, output: str | Path | None = None) -> Path:
         raise AtlasError(f"{output}: the output folder {output.parent} is not a directory")
     tree = open_atlas(path)
     try:
-        for name in LABEL_VARIABLES:
+        for name in of_attrs(tree.attrs).label_variables:
             if name not in tree.to_dataset(inherit=False):
                 raise InputFileError(f"{path}: no {name} variable in this atlas")
         page = build_page(tree, path)

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from atlas.errors import AtlasError
-from atlas.layout import PARAMETERS, points
+from atlas.layout import parameter_names, points
 from atlas.store.outputs import check_output, figure_metadata
 from atlas.views.coarsen import read_maps, workers
 from atlas.views.curves import CURVE_FIGURES, basin_stability, fraction_curves
@@ -73,7 +73,7 @@ def _figure_jobs(tree: xr.DataTree, path: Path, outdir: Path | None = None,
                         scene, dpi))
     fractions, stability = CURVE_FIGURES["fractions"], CURVE_FIGURES["basin_stability"]
     swept = tree.to_dataset(inherit=False).dims
-    for dim in (name for name in PARAMETERS if name in swept):
+    for dim in (name for name in parameter_names(tree) if name in swept):
         jobs.append((out(f"_fractions_{dim}"), CURVE_SIZE, fractions[1],
                      fractions[0](tree, dim), dpi))
         if dim == "torque":

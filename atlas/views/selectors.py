@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from atlas.errors import AtlasError
-from atlas.layout import PARAMETERS, points
+from atlas.layout import parameter_names, points
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -35,8 +35,8 @@ _RANGE_TOLERANCE = 1e-9
 
 def swept(ds: xr.Dataset) -> list[str]:
     """The swept parameters of an atlas's root dataset (its parameter dims), in
-    :data:`~atlas.layout.PARAMETERS` order."""
-    return [name for name in PARAMETERS if name in ds.dims]
+    the order of its model's parameters."""
+    return [name for name in parameter_names(ds) if name in ds.dims]
 
 
 def value_text(name: str, value: float) -> str:
@@ -83,7 +83,7 @@ def choose_points(ds: xr.Dataset, point: list[int] | None = None,
     at once. AtlasError (one line naming the option) for an index or a value the atlas does
     not hold."""
     asked = {name: list(v) for name, v in values.items() if v}
-    unknown = sorted(set(asked) - set(PARAMETERS))
+    unknown = sorted(set(asked) - set(parameter_names(ds)))
     if unknown:
         raise TypeError(f"not a parameter: {', '.join(unknown)}")
     if not point and not asked:

@@ -131,11 +131,11 @@ def _config(tmp_path, name="look.h5", backend="cpu"):
     return atlas.load_config(path)
 
 
-def _sequential(cfg, tiles, certifiers, todo, device):
+def _sequential(cfg, tiles, points, todo, device):
     """The sweep as it was: each tile computed when the one before is written."""
     for index in todo:
         yield index, schedule.compute_tile(
-            *schedule.tile_args(cfg, tiles.layout, certifiers, index), backend=device)
+            *schedule.tile_args(cfg, tiles.layout, points, index), backend=device)
 
 
 def _arrays(tree):
@@ -158,11 +158,11 @@ def _spy(monkeypatch):
     events, started = [], {}
     compute, write = schedule.label_tile, TileStore.write
 
-    def computing(certifier, barrier, rows, *args, **kwargs):
+    def computing(point, x0, v0, rows, *args, **kwargs):
         index = rows.start // 2  # 2 rows per tile, one parameter point
         events.append(("compute", index))
         started.setdefault(index, threading.Event()).set()
-        return compute(certifier, barrier, rows, *args, **kwargs)
+        return compute(point, x0, v0, rows, *args, **kwargs)
 
     def writing(self, index, *args):
         if index + 1 < self.layout.n_tiles:
@@ -209,16 +209,16 @@ def test_tile_i_is_certified_while_tile_i_plus_1_is_labelled(tmp_path, monkeypat
     started, overlaps, off_main = {}, [], []
     labelling, certify = schedule.label_tile, schedule.certify_tile
 
-    def labelling_spy(certifier, barrier, rows, *args, **kwargs):
+    def labelling_spy(point, x0, v0, rows, *args, **kwargs):
         started.setdefault(rows.start // 2, threading.Event()).set()
-        return labelling(certifier, barrier, rows, *args, **kwargs)
+        return labelling(point, x0, v0, rows, *args, **kwargs)
 
-    def certify_spy(certifier, rows, res, **kwargs):
+    def certify_spy(point, rows, res, **kwargs):
         index = rows.start // 2
         off_main.append(threading.current_thread() is not threading.main_thread())
         if index + 1 < 8:
             overlaps.append(started.setdefault(index + 1, threading.Event()).wait(5.0))
-        return certify(certifier, rows, res, **kwargs)
+        return certify(point, rows, res, **kwargs)
 
     monkeypatch.setattr(schedule, "label_tile", labelling_spy)
     monkeypatch.setattr(schedule, "certify_tile", certify_spy)
@@ -236,11 +236,11 @@ def test_a_failure_of_the_tile_ahead_comes_after_the_tile_being_written(tmp_path
     failed = threading.Event()
     compute, write = schedule.label_tile, TileStore.write
 
-    def computing(certifier, barrier, rows, *args, **kwargs):
+    def computing(point, x0, v0, rows, *args, **kwargs):
         if rows.start // 2 == 3:
             failed.set()
             raise ValueError("tile 3: no such orbit")
-        return compute(certifier, barrier, rows, *args, **kwargs)
+        return compute(point, x0, v0, rows, *args, **kwargs)
 
     def writing(self, index, *args):
         if index == 2:
@@ -265,11 +265,11 @@ def test_a_failed_write_abandons_the_tile_ahead_and_the_run_resumes(tmp_path, mo
     release, state = threading.Event(), {}
     compute, write = schedule.label_tile, TileStore.write
 
-    def computing(certifier, barrier, rows, *args, **kwargs):
+    def computing(point, x0, v0, rows, *args, **kwargs):
         if rows.start // 2 == 2:
             release.wait(10.0)
             state["tile 2 finished"] = True
-        return compute(certifier, barrier, rows, *args, **kwargs)
+        return compute(point, x0, v0, rows, *args, **kwargs)
 
     def writing(self, index, *args):
         if index == 1:
@@ -307,9 +307,9 @@ cfg = atlas.load_config({config!r})
 got = atlas.run(cfg, quiet=True).to_dataset(inherit=False)
 pinned = len(made)
 
-def sequential(cfg, tiles, certifiers, todo, device):
+def sequential(cfg, tiles, points, todo, device):
     for index in todo:
-        yield index, schedule.compute_tile(*schedule.tile_args(cfg, tiles.layout, certifiers,
+        yield index, schedule.compute_tile(*schedule.tile_args(cfg, tiles.layout, points,
                                                                index), backend=device)
 
 schedule.SCHEDULERS["local"] = schedule.Scheduler(sequential, lambda tiles: False)

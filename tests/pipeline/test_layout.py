@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from atlas.layout import PARAMETERS, Layout, at_point, first_point, node_name, points
+from atlas.layout import Layout, at_point, first_point, node_name, points
+from atlas.models.pendulum.description import PARAMETERS
 
 REPO = Path(__file__).resolve().parents[2]
 

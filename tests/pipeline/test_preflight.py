@@ -11,6 +11,7 @@ import pytest
 
 import atlas
 from atlas.errors import AtlasError
+from atlas.models.pendulum.plan import begin
 from atlas.pipeline import preflight, sweep
 from atlas.pipeline.output import BYTES_PER_ORBIT
 from tests.helpers import SMALL, write_config
@@ -55,7 +56,7 @@ def test_the_rate_is_the_per_orbit_cost_without_a_calls_fixed_cost(tmp_path, mon
 
     monkeypatch.setattr(labelling, "label", fake_label)
     monkeypatch.setattr(preflight.time, "perf_counter", lambda: clock[0])
-    rate, timed = preflight.measure_rate(cfg, layout, [None])
+    rate, timed = preflight.measure_rate(cfg, layout, begin(cfg, layout))
     assert rate == pytest.approx(50_000, rel=1e-9)
     assert timed >= preflight.FIRST_SAMPLE
     width = min(preflight.STRETCH, layout.theta0.size)
@@ -75,17 +76,14 @@ def test_every_kernel_the_timed_calls_take_is_loaded_before_timing(tmp_path, mon
     to compile theirs (a first big run once announced 37 min for a 5 s sweep)."""
     import atlas.labels.labelling as labelling
     from atlas.kernels.lanes import n_chunks
-    from atlas.physics.pendulum import Pendulum
-    from atlas.physics.running import running_certificate
 
     cfg = atlas.load_config(write_config(tmp_path / "c.yaml", SMALL.format(
         sep="false", output=tmp_path / "small.h5").replace(
         "pendulum: {alpha: 0.1, omega0: 1.0}",
         "pendulum: {alpha: 0.1, omega0: 1.0, torque: [0.0, 0.1, 0.5, 0.9]}")))
     layout = sweep.layout_of(cfg)
-    barriers = [running_certificate(Pendulum(**layout.point(p)), cfg.integrator.dt)[1]
-                for p in range(layout.n_params)]
-    assert barriers[0] is None and barriers[-1] is not None
+    begun = begin(cfg, layout)
+    assert begun[0].barrier is None and begun[-1].barrier is not None
     loaded, late = set(), []
 
     def fake_label(theta0, theta_dot0, *, t_max, torque, running, **kw):
@@ -97,7 +95,7 @@ def test_every_kernel_the_timed_calls_take_is_loaded_before_timing(tmp_path, mon
 
     monkeypatch.setattr(labelling, "label", fake_label)
     monkeypatch.setattr(preflight, "MAX_POINTS", layout.n_params)  # every point timed
-    preflight.measure_rate(cfg, layout, barriers)
+    preflight.measure_rate(cfg, layout, begun)
     assert len(loaded) == 2 and not late, (loaded, late)
 
 
@@ -119,7 +117,7 @@ def test_the_sample_grows_to_about_one_call_of_call_s(tmp_path, monkeypatch):
 
     monkeypatch.setattr(labelling, "label", fake_label)
     monkeypatch.setattr(preflight.time, "perf_counter", lambda: clock[0])
-    rate, timed = preflight.measure_rate(cfg, layout, [None])
+    rate, timed = preflight.measure_rate(cfg, layout, begin(cfg, layout))
     assert rate == pytest.approx(100_000, rel=1e-9)
     final = spent[-min(preflight.MAX_POINTS, layout.n_params):]
     stretch = 10e-6 * min(preflight.STRETCH, layout.theta0.size)

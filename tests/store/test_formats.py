@@ -13,6 +13,7 @@ import xarray as xr
 import atlas
 from atlas.errors import InputFileError
 from atlas.layout import Layout, points
+from atlas.models.pendulum.description import PENDULUM
 from atlas.store.formats import DEFAULT, FORMATS, format_for, format_named
 from atlas.store.hdf5 import HDF5
 from atlas.store.partial import TileStore, partial_path
@@ -23,16 +24,15 @@ from atlas.store.reader import (
     stores_certificate,
 )
 from atlas.store.schema import (
-    BASIN_VARIABLES,
-    FILLS,
     FORMAT_VERSION,
-    MAP_VARIABLES,
-    POINT_VARIABLES,
     SCHEMA,
     summary_dataset,
     with_barrier,
 )
 from atlas.store.zarrformat import Zarr
+
+MAP_VARIABLES, FILLS = PENDULUM.map_variables, PENDULUM.fills
+BASIN_VARIABLES, POINT_VARIABLES = PENDULUM.basin_variables, PENDULUM.point_variables
 
 TORQUES = (0.3, -0.4)  # a parameter atlas over torque: one running cycle per point
 CAPS = (1.25, -np.inf)  # the second point: no well can trap

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 import atlas
+from atlas.models.pendulum.description import MAP_VARIABLES
 from atlas.status import ATTRACTOR_FILL, IN_FILE, NEAR_BOUNDARY, STATUS_MEANINGS, TRAPPED
-from atlas.store.schema import MAP_VARIABLES
 
 
 def test_the_status_flags_are_those_of_the_status_module():

@@ -49,14 +49,14 @@ def test_identity_decides_what_a_run_continues(cfg):
         update={"method": "rk4-trigfree"})})
     assert run_identity(other, "cpu") != same and config_hash(other) != config_hash(cfg)
     # with the default method, identity and hash are those of the versions before the keys
-    # (method; and check_radians and stability, which change no grid result)
+    # (method; and check_radians, stability and model, which change no pendulum's result)
     # (so their partial runs continue and their files' hashes stay comparable)
     assert "method" not in same["integrator"] and cfg.integrator.method == "rk4"
     import hashlib
     import json
 
     before = cfg.model_dump(mode="json", exclude={"output", "execution", "name", "stability",
-                                                  "check_radians"})
+                                                  "check_radians", "model"})
     del before["integrator"]["method"]
     assert config_hash(cfg) == hashlib.sha256(
         json.dumps(before, sort_keys=True).encode()).hexdigest()[:16]
