@@ -33,10 +33,21 @@ from typing import Any, Protocol
 
 import numpy as np
 
-__all__ = ["LABELS", "Axis", "MapVariable", "Model", "Planner", "PointPlan", "Plan", "status_flags"]
+__all__ = ["LABELS", "units_text", "Axis", "MapVariable", "Model", "Planner", "PointPlan",
+           "Plan", "status_flags"]
 
 #: The map variables of every model: the label of each orbit and how it was decided.
 LABELS = ("attractor", "status")
+
+
+def units_text(units: str) -> str:
+    """CF units (UDUNITS strings) as a text writes them: "rad s-1" → "rad/s", "s-1" →
+    "1/s", "rad s-2" → "rad/s^2"."""
+    words = units.split()
+    over = [w[:-2] + ("^" + w[-1] if w[-1] != "1" else "") for w in words if w[-2:-1] == "-"]
+    over = [w.replace("^1", "") for w in over]
+    top = " ".join(w for w in words if w[-2:-1] != "-") or ("1" if over else units)
+    return top + "".join(f"/{w}" for w in over)
 
 
 def status_flags(statuses: dict[int, str], in_file: dict[int, str]) -> dict:
@@ -58,9 +69,14 @@ class Axis:
     symbol: str
 
     @property
+    def unit_text(self) -> str:
+        """The units as a text writes them: "rad s-1" → "rad/s", "s-1" → "1/s"."""
+        return units_text(self.units)
+
+    @property
     def label(self) -> str:
-        """"θ0 [rad]": an axis label of a figure (units as written in a text)."""
-        return f"{self.symbol} [{self.units.replace('s-1', '/s')}]"
+        """"θ0 [rad]": an axis label of a figure."""
+        return f"{self.symbol} [{self.unit_text}]"
 
 
 @dataclass(frozen=True)
@@ -82,6 +98,8 @@ class Model:
     leading dims. ``axes``: the grid's (column, row) axes, the position x0 then the velocity
     v0. ``section``: the config key of the parameters. ``statuses``: ``status`` code → the
     word of its CF ``flag_meanings``; ``in_file``: code → what it means in a file.
+    ``labelled``: the status codes under which ``attractor`` holds a label k; ``running``:
+    those of an attractor without a k (the pendulum's running cycle; none for most models).
     ``map_variables``: the basin map's variables, in file order (``attractor`` and
     ``status`` among them); ``label_variables``: those every file of the model has.
     ``basin_variables`` / ``point_variables``: the summary per attractor index ``k`` / per
@@ -103,6 +121,8 @@ class Model:
     point_variables: dict[str, dict]
     attractor: str
     planner: str
+    labelled: tuple[int, ...] = (0,)
+    running: tuple[int, ...] = ()
     #: Summary variables absent from files of older formats: name → the first format with it.
     since: dict[str, int] = field(default_factory=dict)
 
@@ -110,6 +130,15 @@ class Model:
     def status_flags(self) -> dict:
         """``status``'s CF flags and comment (:func:`status_flags`)."""
         return status_flags(self.statuses, self.in_file)
+
+    def status_kinds(self) -> np.ndarray:
+        """A table over the int8 status codes (index code + 128): 1 where ``attractor``
+        holds a label k (:attr:`labelled`), 2 for an attractor without a k
+        (:attr:`running`), 0 for no label; the compiled reductions of the views read it."""
+        table = np.zeros(256, np.int8)
+        table[np.array(self.labelled, np.int64) + 128] = 1
+        table[np.array(self.running, np.int64) + 128] = 2
+        return table
 
     @property
     def fills(self) -> dict[str, object]:

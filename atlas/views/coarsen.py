@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from atlas.layout import parameter_names
-from atlas.status import NEAR_BOUNDARY, RUNNING, RUNNING_NEAR_BOUNDARY, TRAPPED
+from atlas.models.registry import of_attrs
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -84,21 +84,24 @@ def _chunk_rows(da: xr.DataArray) -> int:
     if da.chunks:  # dask
         return int(da.chunks[0][0])
     preferred = da.encoding.get("preferred_chunks") or {}
-    if "theta_dot0" in preferred:
-        return int(preferred["theta_dot0"])
+    if da.dims[-2] in preferred:  # the rows
+        return int(preferred[da.dims[-2]])
     sizes = da.encoding.get("chunksizes") or da.encoding.get("chunks")
     return int(sizes[-2]) if sizes and len(sizes) >= 2 else 1
 
 
 class _MapRows:
-    """One map of one parameter point (rows θ̇0, columns θ0), read a range of rows at a time:
+    """One map of one parameter point (rows: the model's velocity axis, columns: its
+    position axis; for the pendulum θ̇0 and θ0), read a range of rows at a time:
     through xarray (from memory, or the file's own decoding for a lazy tree), or for a map
     that is coarsened and stored as an atlas file stores it (deflated, shuffled, chunks of
     whole rows), as its stored chunks inflated in this process
     (:func:`atlas.store.reader.stored_rows`)."""
 
     def __init__(self, ds: xr.Dataset, name: str, point: dict[str, int], coarsened=False):
-        self.da = ds[name].isel(point).transpose("theta_dot0", "theta0")
+        columns, rows = of_attrs(ds.attrs).axes
+        self.rows = rows.name
+        self.da = ds[name].isel(point).transpose(rows.name, columns.name)
         self.shape = self.da.shape
         from atlas.store.reader import stored_rows
 
@@ -110,7 +113,7 @@ class _MapRows:
             rows = self.raw.read(r0, r1)
             if rows is not None:
                 return rows
-        return np.asarray(self.da.isel(theta_dot0=slice(r0, r1)).values)
+        return np.asarray(self.da.isel({self.rows: slice(r0, r1)}).values)
 
     def close(self) -> None:
         if self.raw is not None:
@@ -142,7 +145,8 @@ def workers() -> int:
 def _blocks(ds: xr.Dataset) -> tuple[int, int, np.ndarray]:
     """(fr, fc, an empty image): the block of the coarsening of the maps of ``ds``, and an
     image of one pixel per block."""
-    rows, cols = ds.sizes["theta_dot0"], ds.sizes["theta0"]
+    columns, rows = of_attrs(ds.attrs).axes
+    rows, cols = ds.sizes[rows.name], ds.sizes[columns.name]
     fr, fc = _factors((rows, cols))
     return fr, fc, np.empty((-(-rows // fr), -(-cols // fc)))
 
@@ -184,11 +188,12 @@ def _kernels():
     from atlas.kernels import cached_njit
 
     @cached_njit(nogil=True)
-    def mode_blocks(attractor, status, fr, fc, out, stats):  # pragma: no cover - compiled
+    def mode_blocks(attractor, status, kinds, fr, fc, out, stats):  # pragma: no cover
         """out[i, j]: the most frequent well label of block (i, j) of these rows (ties: the
         smallest k), inf if running cells outnumber every well label, NaN if no cell has a
         label. stats: the smallest and largest well label, and the number of running cells.
-        """
+        ``kinds``: the model's :meth:`~atlas.models.base.Model.status_kinds` (1 a label k,
+        2 running, over status + 128)."""
         h, w = attractor.shape
         nr, nc = out.shape
         counts = np.zeros(65536, np.int64)
@@ -198,13 +203,13 @@ def _kernels():
                 lo, hi, n_run = 1 << 20, -(1 << 20), 0
                 for r in range(i * fr, min(i * fr + fr, h)):
                     for c in range(j * fc, min(j * fc + fc, w)):
-                        s = status[r, c]
-                        if s == TRAPPED or s == NEAR_BOUNDARY:
+                        s = kinds[np.int64(status[r, c]) + 128]
+                        if s == 1:
                             k = np.int64(attractor[r, c])
                             counts[k + 32768] += 1
                             lo = min(lo, k)
                             hi = max(hi, k)
-                        elif s == RUNNING or s == RUNNING_NEAR_BOUNDARY:
+                        elif s == 2:
                             n_run += 1
                 best, best_k = 0, 0
                 for k in range(lo, hi + 1):
@@ -245,12 +250,12 @@ def _kernels():
     return mode_blocks, extreme_blocks
 
 
-def _int16_labels(attractor: np.ndarray, status: np.ndarray) -> np.ndarray:
+def _int16_labels(attractor: np.ndarray, status: np.ndarray, kinds: np.ndarray) -> np.ndarray:
     """``attractor`` as int16 (the file's type, which the mode kernel indexes by), or
     ValueError if a labelled cell holds no int16."""
     if attractor.dtype == np.int16:
         return attractor
-    labelled = np.isin(status, (TRAPPED, NEAR_BOUNDARY))
+    labelled = kinds[status.astype(np.int64) + 128] == 1
     k = attractor[labelled]
     if k.size and not (np.all(k == np.round(k)) and k.min() >= -32768 and k.max() <= 32767):
         raise ValueError("attractor labels that are not int16")
@@ -264,22 +269,26 @@ def _read_labels(ds: xr.Dataset, point: dict[str, int] | None = None
     kmin, kmax, running). The image holds each cell's (block's most frequent) well label k
     where status is trapped or near_boundary, kmax + 1 for the running basin (status running
     or running_near_boundary), NaN for no label; kmin and kmax span the well labels of the
-    whole map (0, 0 if none); running: whether any cell runs."""
+    whole map (0, 0 if none); running: whether any cell runs. Which statuses carry a label
+    (and which run) is the file's model's (:meth:`atlas.models.base.Model.status_kinds`)."""
     fr, fc, out = _blocks(ds)
+    kinds = of_attrs(ds.attrs).status_kinds()
 
     def reduce(r0, r1, arrays):
         a, s = arrays
         if fr == fc == 1:
+            kind = kinds[s.astype(np.int64) + 128]
             k = a.astype(float)
-            k[~np.isin(s, (TRAPPED, NEAR_BOUNDARY))] = np.nan
-            running = (s == RUNNING) | (s == RUNNING_NEAR_BOUNDARY)
+            k[kind != 1] = np.nan
+            running = kind == 2
             k[running] = np.inf
             finite = k[np.isfinite(k)]
             out[r0:r1] = k
             lo, hi = (finite.min(), finite.max()) if finite.size else (np.inf, -np.inf)
             return lo, hi, bool(running.any())
         stats = np.empty(3, np.int64)
-        _kernels()[0](_int16_labels(a, s), s, fr, fc, out[r0 // fr:-(-r1 // fr)], stats)
+        _kernels()[0](_int16_labels(a, s, kinds), s, kinds, fr, fc, out[r0 // fr:-(-r1 // fr)],
+                      stats)
         return stats[0], stats[1], bool(stats[2])
 
     stats = _reduce_bands(ds, ["attractor", "status"], point or {}, fr, fc, reduce)

@@ -11,7 +11,9 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.errors import AtlasError
 from atlas.layout import at_point, point_group, point_label, points
+from atlas.models.registry import DEFAULT, of_attrs
 from atlas.store import reader as store
+from atlas.views.described import described_lines, grid_line
 from atlas.views.info_table import table_lines
 from atlas.views.selectors import choose_points
 
@@ -28,15 +30,18 @@ def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None,
     all its points instead (:func:`atlas.views.info_table.table_lines`), or the detail of
     the points ``chosen`` (:func:`atlas.views.selectors.choose_points`). ``brief`` (``atlas
     run``'s summary): at most :data:`BRIEF_ROWS` basins, saddles and crossings, with how many
-    more ``atlas info`` lists."""
+    more ``atlas info`` lists. An atlas of another model than the pendulum: what its
+    description declares (:func:`atlas.views.described.described_lines`)."""
     most = BRIEF_ROWS if brief else None
     ds = tree.to_dataset(inherit=False)
-    n_orbits = ds.sizes["theta0"] * ds.sizes["theta_dot0"]
+    model = of_attrs(ds.attrs)
+    columns, rows = model.axes
+    n_orbits = ds.sizes[columns.name] * ds.sizes[rows.name]
     every = points(ds)
-    lines = [f"grid      {ds.sizes['theta0']} x {ds.sizes['theta_dot0']} (theta0 x theta_dot0)"
-             f" = {n_orbits:,} orbits per parameter point, {len(every)} parameter point"
-             f"{'s' if len(every) != 1 else ''} (alpha [1/s], omega0 [rad/s], "
-             "torque [rad/s^2])"]
+    if model.name != DEFAULT:
+        lines = described_lines(tree, model, chosen)
+        return lines + _closing_lines(ds, n_orbits)
+    lines = [grid_line(ds, model, len(every))]
     detail = chosen if chosen is not None else every if len(every) == 1 else []
     if not detail:
         lines += table_lines(tree)
@@ -48,8 +53,16 @@ def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None,
         lines += ["  " + line for line in _torque_lines(tree, point)]
         if sep is not None:
             lines += ["  " + line for line in separatrix_lines(sep, most=most)]
-    unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
-    lines.append(f"unresolved {unresolved} orbits")
+    return lines + _closing_lines(ds, n_orbits)
+
+
+def _closing_lines(ds: xr.Dataset, n_orbits: int) -> list[str]:
+    """The unresolved count (where the model stores ``unresolved_fraction``) and the run
+    time."""
+    lines = []
+    if "unresolved_fraction" in ds:
+        unresolved = int(round(float(ds["unresolved_fraction"].sum()) * n_orbits))
+        lines.append(f"unresolved {unresolved} orbits")
     if "run_time_s" in ds.attrs:
         lines.append(f"time      {float(ds.attrs['run_time_s']):.2f} s")
     return lines

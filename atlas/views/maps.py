@@ -28,6 +28,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from atlas.layout import first_point, point_group, point_of
+from atlas.models.base import Axis
+from atlas.models.registry import DEFAULT, lookup, of_attrs
 from atlas.views.coarsen import read_maps
 from atlas.views.style import (
     CYCLE_COLOR,
@@ -59,25 +61,30 @@ TWO_PI = 2.0 * np.pi
 
 def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
                ) -> tuple[xr.Dataset, dict]:
-    """The point drawn (its dataset) and what every map figure shows of it: the grid (θ0
-    [rad], θ̇0 [rad/s]), the map ``name`` as :func:`read_maps` reads it, the separatrix
-    branches (θ [rad], θ̇ [rad/s]; none where not stored) and the point's parameters as a
-    title line (:func:`point_title`)."""
+    """The point drawn (its dataset) and what every map figure shows of it: the grid (its
+    model's axes: for the pendulum θ0 [rad], θ̇0 [rad/s]) and the axes themselves, the map
+    ``name`` as :func:`read_maps` reads it, the separatrix branches (θ [rad], θ̇ [rad/s];
+    none where not stored) and the point's parameters as a title line
+    (:func:`point_title`)."""
     from atlas.store.separatrices import branches
 
     ds = first_point(tree.to_dataset(inherit=False), **index)
     sep = point_group(tree, "separatrices", point_of(ds))
-    return ds, {"grid": (ds["theta0"].values, ds["theta_dot0"].values),
+    columns, rows = of_attrs(ds.attrs).axes
+    return ds, {"grid": (ds[columns.name].values, ds[rows.name].values),
+                "axes": (columns, rows),
                 "image": (maps or read_maps(tree, name, **index))[name],
                 "separatrices": [] if sep is None else
                 [(theta, theta_dot) for _, _, theta, theta_dot in branches(sep)],
                 "point": point_title(point_of(ds))}
 
 
-def grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kwargs):
-    """Draw a map over the grid (θ0, θ̇0: columns, rows) as an image whose pixels are the
-    grid's cells (centred on the grid points); ``image``: the map already coarsened to the
-    figure's resolution (its blocks then span the same extent)."""
+def grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray,
+               axes: tuple[Axis, Axis] = lookup(DEFAULT).axes, **kwargs):
+    """Draw a map over the grid (columns, rows: the model's ``axes``, by default the
+    pendulum's θ0 and θ̇0) as an image whose pixels are the grid's cells (centred on the grid
+    points); ``image``: the map already coarsened to the figure's resolution (its blocks then
+    span the same extent). An axis in radians gets ticks at multiples of π."""
     th, v = grid
     half_t = 0.5 * (th[-1] - th[0]) / max(th.size - 1, 1)
     half_v = 0.5 * (v[-1] - v[0]) / max(v.size - 1, 1)
@@ -86,8 +93,10 @@ def grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray, **kwa
                       aspect="auto", interpolation="nearest", **kwargs)
     ax.set_xlim(th[0], th[-1])
     ax.set_ylim(v[0], v[-1])
-    window_ticks(ax, th[0], th[-1], "x", "θ0", "rad", pi=True)
-    window_ticks(ax, v[0], v[-1], "y", "θ̇0", "rad/s")
+    columns, rows = axes
+    window_ticks(ax, th[0], th[-1], "x", columns.symbol, columns.unit_text,
+                 pi=columns.units == "rad")
+    window_ticks(ax, v[0], v[-1], "y", rows.symbol, rows.unit_text)
     return image
 
 
@@ -184,10 +193,12 @@ def label_bands(ax, grid, image: np.ndarray, ks: list[int]) -> None:
 
 
 def basin_key(wells: list[int], running: bool, unlabelled: bool):
-    """The colour key of basin maps showing ``wells`` (contiguous k), with the running basin
+    """The colour key of basin maps showing ``wells`` (ascending k), with the running basin
     and "no label" where present: (colormap, norm, tick values, tick names, what the colours
     mean, in a line). Each well has its own fixed colour (:func:`basin_colours`). An image
-    holds k for a well, ``wells[-1] + 1`` for the running basin, NaN for no label."""
+    holds k for a well, ``wells[-1] + 1`` for the running basin, NaN for no label; a k
+    between two wells that is none (a model whose labels skip it) has no colour of its own,
+    the norm's bins lying halfway between the values drawn."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     palette = basin_colours(wells, running=running)
@@ -198,22 +209,34 @@ def basin_key(wells: list[int], running: bool, unlabelled: bool):
     if unlabelled:  # no certified label (NaN, drawn as "bad"): one more entry of the key
         colors.append(palette["none"])
         names.append("no label")
-    start = wells[0] if wells else 0
+    top = wells[-1] if wells else -1
+    values = np.array([*wells, *range(top + 1, top + 1 + len(colors) - len(wells))], float)
     cmap = ListedColormap(colors).with_extremes(bad=palette["none"])
-    norm = BoundaryNorm(np.arange(start, start + len(colors) + 1) - 0.5, cmap.N)
+    edges = np.r_[values[0] - 0.5, 0.5 * (values[1:] + values[:-1]), values[-1] + 0.5]
+    norm = BoundaryNorm(edges, cmap.N)
     meaning = ("colour: the well k at whose rest state the orbit settles"
                + ("; running: it rotates (the running limit cycle)" if running else "")
                + ("; no label: unresolved by t_max, or not finite" if unlabelled else ""))
-    return cmap, norm, list(range(start, start + len(colors))), names, meaning
+    return cmap, norm, values.astype(int).tolist(), names, meaning
 
 
-def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str):
+def drawn_wells(image: np.ndarray, kmin: int, kmax: int) -> list[int]:
+    """The wells a basin map's key names: every k from ``kmin`` to ``kmax`` (the whole
+    map's, read at full resolution) that the drawn ``image`` holds, and both ends (a well
+    of a model whose labels skip a k, as the Duffing oscillator's −1 and +1, gets no key
+    entry for the k between)."""
+    held = {int(k) for k in np.unique(image[np.isfinite(image) & (image <= kmax)])}
+    return [k for k in range(kmin, kmax + 1) if k in held or k in (kmin, kmax)]
+
+
+def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str,
+                axes: tuple[Axis, Axis] = lookup(DEFAULT).axes):
     """Draw :func:`_basin_scene` (as :func:`basin_map`)."""
     k, kmin, kmax, running = image
-    wells = list(range(kmin, kmax + 1))
+    wells = drawn_wells(k, kmin, kmax)
     unlabelled = bool(np.isnan(k).any())
     cmap, norm, ticks, names, _ = basin_key(wells, running, unlabelled)
-    mesh = grid_image(ax, grid, k, cmap=cmap, norm=norm)
+    mesh = grid_image(ax, grid, k, axes, cmap=cmap, norm=norm)
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
     cbar.ax.set_yticklabels(names, fontsize=8 if len(names) <= 24 else 6)
     cbar.set_label("attractor k: orbit settles at the rest state of well k"
@@ -243,7 +266,8 @@ def _trap_time_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> di
     return _map_scene(tree, "t_trap", maps, index)[1]
 
 
-def _draw_trap_time(ax, grid, image, separatrices, point: str):
+def _draw_trap_time(ax, grid, image, separatrices, point: str,
+                    axes: tuple[Axis, Axis] = lookup(DEFAULT).axes):
     """Draw :func:`_trap_time_scene` (as :func:`trap_time_map`); ``point``: the parameter
     point's title line."""
     from matplotlib import colormaps
@@ -258,12 +282,14 @@ def _draw_trap_time(ax, grid, image, separatrices, point: str):
     # t_trap = 0 (certified at once: the orbit starts inside the trap) is the shortest time
     # there is: drawn below the scale in the scale's own dark end, not in a colour of its own
     cmap = cmap.with_extremes(under=cmap(0.0), bad=NO_LABEL_COLOR)
-    mesh = grid_image(ax, grid, np.where(t == 0, lo / 2, t), cmap=cmap, norm=LogNorm(lo, hi))
+    mesh = grid_image(ax, grid, np.where(t == 0, lo / 2, t), axes, cmap=cmap,
+                      norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
         "t_trap [s]: time at which the label was certified\n(trapped in a well, or running)")
     draw_separatrices(ax, separatrices, faint=True)
     ax.set_title(f"Time to a certified label, {point}\n(darkest: certified at t = 0; white: "
-                 "no label certified by t_max;\nfaint lines: the separatrices)")
+                 "no label certified by t_max"
+                 + (";\nfaint lines: the separatrices)" if separatrices else ")"))
     return ax
 
 
@@ -280,7 +306,8 @@ def _boundary_distance_scene(tree: xr.DataTree, maps: dict | None = None, **inde
     return scene | {"d_cert": float(ds["d_cert"])}
 
 
-def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point: str):
+def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point: str,
+                            axes: tuple[Axis, Axis] = lookup(DEFAULT).axes):
     """Draw :func:`_boundary_distance_scene` (as :func:`boundary_distance_map`); ``point``:
     the parameter point's title line."""
     from matplotlib import colormaps
@@ -290,7 +317,7 @@ def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point:
     measured = d_cert == d_cert
     lo, hi = _spread(d[np.isfinite(d) & (d > (d_cert if measured else 0.0))])
     cmap = colormaps[DISTANCE_CMAP].with_extremes(bad=NO_LABEL_COLOR)
-    mesh = grid_image(ax, grid, d, cmap=cmap, norm=LogNorm(lo, hi))
+    mesh = grid_image(ax, grid, d, axes, cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="both").set_label(
         "distance to the nearest basin boundary\n[rad (θ) and rad/s (θ̇) as one Euclidean "
         "unit];\ncolours span its 1st to 99th percentile")

@@ -100,7 +100,7 @@ def multiples_scene(tree: xr.DataTree) -> dict:
                                "image": image, "wells": wells,
                                "running_value": kmax + 1 if running else None})
     found = sorted({k for panel in panels for k in panel["wells"]})
-    wells = list(range(found[0], found[-1] + 1)) if found else []
+    wells = found  # the wells drawn in some panel (a model may skip a k)
     top = wells[-1] if wells else -1  # no well anywhere: the running basin is 0
     running = any(panel["running_value"] is not None for panel in panels)
     for panel in panels:  # one value for the running basin in every panel: top + 1
@@ -130,7 +130,8 @@ def draw_multiples(ax, panels: list[dict], wells: list[int], running: bool, titl
     for i, panel in enumerate(panels):
         ax = fig.add_subplot(grid[i // cols, i % cols], sharex=first, sharey=first)
         first = first or ax
-        mesh = grid_image(ax, panel["grid"], panel["image"], cmap=cmap, norm=norm)
+        mesh = grid_image(ax, panel["grid"], panel["image"], panel["axes"], cmap=cmap,
+                          norm=norm)
         if len(panel["wells"]) > LABELLED_WELLS:  # named where a label fits in the panel
             step = max(1, -(-max(panel["image"].shape) // _LABEL_ROWS))
             label_bands(ax, panel["grid"], panel["image"][::step, ::step], panel["wells"])

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import base64
 import hashlib
-import io
 import json
 import math
 import os
@@ -47,18 +46,17 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import AtlasError, InputFileError
 from atlas.layout import at_point, point_group
 from atlas.layout import points as parameter_points
-from atlas.models.registry import of_attrs
+from atlas.models.registry import DEFAULT, of_attrs
 from atlas.physics.pendulum import Pendulum, tilt, tilt_versine
 from atlas.status import (
-    NEAR_BOUNDARY,
     RUNNING,
     RUNNING_NEAR_BOUNDARY,
     STATUS_MEANINGS,
-    TRAPPED,
 )
 from atlas.store.reader import open_atlas, require_certificate, stored_certificate
 from atlas.store.separatrices import branches
 from atlas.store.validate import file_method
+from atlas.views.map_png import labelled_wells, map_png
 from atlas.views.style import (
     ATTRACTOR_MARKER,
     DISTANCE_CMAP,
@@ -73,7 +71,6 @@ from atlas.views.style import (
     SEPARATRIX_FAINT,
     T_TRAP_CMAP,
     colormap_table,
-    well_colour,
     well_palette,
 )
 
@@ -84,11 +81,6 @@ __all__ = ["write_view", "build_page", "pack_distance", "unpack_distance", "safe
 DIST_STEPS = 256
 _DIST_OFFSET = 128  # log2 d from -128 to +128 fits uint16 at 256 steps per octave
 _T_NAN = np.iinfo(np.uint32).max
-
-
-def _rgb(colour: str) -> list[int]:
-    """"#rrggbb" as [r, g, b]."""
-    return [int(colour[i:i + 2], 16) for i in (1, 3, 5)]
 
 
 def pack_distance(d: np.ndarray) -> np.ndarray:
@@ -122,34 +114,6 @@ def _uniform(values: np.ndarray, name: str, path) -> list[float]:
             atol=16 * np.finfo(float).eps * float(np.abs(values).max())):
         raise InputFileError(f"{path}: {name} is not a uniformly spaced axis")
     return [float(values[0]), float(values[-1]), int(values.size)]
-
-
-def _labelled_wells(attractor: np.ndarray, status: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(where a well label is certified, the wells k that occur there, ascending)."""
-    labelled = (status == TRAPPED) | (status == NEAR_BOUNDARY)
-    return labelled, np.unique(attractor[labelled]).astype(int)
-
-
-def _map_png(attractor: np.ndarray, status: np.ndarray, wells: np.ndarray) -> str:
-    """The basin map as a palette PNG data URI, one pixel per grid point, θ̇ upward: the i-th
-    well of ``wells`` in palette entry i (:func:`atlas.views.style.well_colour`, as the
-    page's key), no certified label white,
-    running in the running basin's grey. At most 254 wells fit a palette; the rest (never
-    met in practice) share the last well's entry."""
-    from PIL import Image
-
-    labelled, _ = _labelled_wells(attractor, status)
-    wells = wells[:254]
-    where = np.clip(np.searchsorted(wells, attractor), 0, max(len(wells) - 1, 0))
-    index = np.where(labelled, where, len(wells)).astype(np.uint8)
-    index[(status == RUNNING) | (status == RUNNING_NEAR_BOUNDARY)] = len(wells) + 1
-    image = Image.fromarray(index[::-1], mode="P")
-    palette = ([v for k in wells for v in _rgb(well_colour(k))] + _rgb(NO_LABEL_COLOR)
-               + _rgb(RUNNING_COLOR_HEX))
-    image.putpalette(palette)
-    buffer = io.BytesIO()
-    image.save(buffer, format="PNG", optimize=True)
-    return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode()
 
 
 #: Band names keep this fraction of the window's height off θ̇ = 0 (where the rest states
@@ -278,6 +242,7 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
     ds = tree.to_dataset(inherit=False)
     dt, t_max = float(ds.attrs["dt"]), float(ds.attrs["t_max"])
     check_every = int(ds.attrs["check_every"])
+    kinds = of_attrs(ds.attrs).status_kinds()
     points = []
     for params in parameter_points(ds):
         point = at_point(ds, params)
@@ -291,12 +256,12 @@ def payload(tree: xr.DataTree, path: Path) -> dict:
         certificate = stored_certificate(tree, params)
         distance = (point["boundary_distance"].values if "boundary_distance" in point
                     else np.full(attractor.shape, np.nan))
-        labelled, wells = _labelled_wells(attractor, status)
+        labelled, wells = labelled_wells(attractor, status, kinds)
         running = np.isin(status, (RUNNING, RUNNING_NEAR_BOUNDARY))
         points.append({
             "alpha": alpha, "omega0": omega0, "margin": float(point["trap_margin"]),
             "d_cert": d_cert if math.isfinite(d_cert) else None,
-            "png": _map_png(attractor, status, wells),
+            "png": map_png(attractor, status, wells, kinds),
             "band_labels": _band_labels(attractor, labelled, wells, distance,
                                         point["theta0"].values, point["theta_dot0"].values),
             "key": {"wells": wells.tolist(), "running": bool(running.any()),
@@ -373,8 +338,9 @@ def build_page(tree: xr.DataTree, path: Path) -> str:
 
 def write_view(path: str | Path, output: str | Path | None = None) -> Path:
     """Write the page of the atlas file ``path`` to ``output`` (default: next to it, .html);
-    returns the page's path. Bad files, and files of format 3 (which do not store the
-    certificate the page integrates with), raise :class:`InputFileError`."""
+    returns the page's path. An atlas of another model than the pendulum gets the static
+    page of :mod:`atlas.views.page_described`. Bad files, and files of format 3 (which do not
+    store the certificate the page integrates with), raise :class:`InputFileError`."""
     path = Path(path)
     output = Path(output) if output is not None else path.with_suffix(".html")
     if output.is_dir():
@@ -383,10 +349,16 @@ def write_view(path: str | Path, output: str | Path | None = None) -> Path:
         raise AtlasError(f"{output}: the output folder {output.parent} is not a directory")
     tree = open_atlas(path)
     try:
-        for name in of_attrs(tree.attrs).label_variables:
+        model = of_attrs(tree.attrs)
+        for name in model.label_variables:
             if name not in tree.to_dataset(inherit=False):
                 raise InputFileError(f"{path}: no {name} variable in this atlas")
-        page = build_page(tree, path)
+        if model.name == DEFAULT:
+            page = build_page(tree, path)
+        else:  # the page's orbits are the pendulum's: another model's page shows the map
+            from atlas.views.page_described import described_page
+
+            page = described_page(tree, path, model)
     finally:
         tree.close()
     tmp = output.with_name(f".{output.name}.{os.getpid()}.tmp")

@@ -52,15 +52,19 @@ def _figure_jobs(tree: xr.DataTree, path: Path, outdir: Path | None = None,
     def out(suffix: str) -> Path:
         return folder / f"{path.stem}{suffix}.{fmt}"
 
+    stored = [name for name in ("basin", "t_trap", "boundary_distance")  # what the model
+              if (name if name != "basin" else "attractor") in ds]  # stores of the three
+
     def map_jobs(prefix: str, index: dict, basin: bool = True) -> list[tuple]:
-        read = [name for name in ("basin", "t_trap", "boundary_distance")
-                if basin or name != "basin"]
+        read = [name for name in stored if basin or name != "basin"]
         maps = read_maps(tree, *read, **index)
         return [(out(prefix + suffix), MAP_SIZE, MAP_FIGURES[name][1],
                  MAP_FIGURES[name][0](tree, maps, **index), dpi)
-                for name, suffix in (("basin", ""), ("trap_time", "_t_trap"),
-                                     ("boundary_distance", "_boundary_distance"))
-                if basin or name != "basin"]
+                for name, suffix, map_name in (("basin", "", "basin"),
+                                               ("trap_time", "_t_trap", "t_trap"),
+                                               ("boundary_distance", "_boundary_distance",
+                                                "boundary_distance"))
+                if map_name in read]
 
     if chosen is not None:
         return [job for point in chosen
@@ -73,7 +77,8 @@ def _figure_jobs(tree: xr.DataTree, path: Path, outdir: Path | None = None,
                         scene, dpi))
     fractions, stability = CURVE_FIGURES["fractions"], CURVE_FIGURES["basin_stability"]
     swept = tree.to_dataset(inherit=False).dims
-    for dim in (name for name in parameter_names(tree) if name in swept):
+    exact = "basin_fraction_exact" in ds  # the curves draw the exact fractions
+    for dim in (name for name in parameter_names(tree) if name in swept and exact):
         jobs.append((out(f"_fractions_{dim}"), CURVE_SIZE, fractions[1],
                      fractions[0](tree, dim), dpi))
         if dim == "torque":

@@ -40,8 +40,9 @@ def swept(ds: xr.Dataset) -> list[str]:
 
 
 def value_text(name: str, value: float) -> str:
-    """"α = 0.02 s⁻¹": one parameter's value with its symbol and unit (``%g``)."""
-    symbol, unit = SYMBOLS[name]
+    """"α = 0.02 s⁻¹": one parameter's value with its symbol and unit (``%g``; another
+    model's parameter by its name)."""
+    symbol, unit = SYMBOLS.get(name, (name, ""))
     return f"{symbol} = {value:g} {unit}"
 
 

@@ -264,7 +264,10 @@ def window_ticks(ax, lo: float, hi: float, axis: str, name: str, unit: str,
 
 
 def point_title(point: dict[str, float]) -> str:
-    """"α = 0.1 s⁻¹, ω0 = 1 rad/s" (and τ where the pendulum has a torque)."""
+    """"α = 0.1 s⁻¹, ω0 = 1 rad/s" (and τ where the pendulum has a torque); another model's
+    point as "name = value" of each parameter."""
+    if not {"alpha", "omega0"} <= set(point):
+        return ", ".join(f"{name} = {value:g}" for name, value in point.items())
     text = f"α = {point['alpha']:g} s⁻¹, ω0 = {point['omega0']:g} rad/s"
     torque = point.get("torque", 0.0)
     return text + (f", τ = {torque:g} rad/s²" if torque else "")

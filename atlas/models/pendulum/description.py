@@ -7,7 +7,15 @@ from __future__ import annotations
 import numpy as np
 
 from atlas.models.base import Axis, MapVariable, Model, status_flags
-from atlas.status import ATTRACTOR_FILL, IN_FILE, STATUS_MEANINGS
+from atlas.status import (
+    ATTRACTOR_FILL,
+    IN_FILE,
+    NEAR_BOUNDARY,
+    RUNNING,
+    RUNNING_NEAR_BOUNDARY,
+    STATUS_MEANINGS,
+    TRAPPED,
+)
 
 __all__ = ["PARAMETERS", "AXES", "MAP_VARIABLES", "BASIN_VARIABLES", "POINT_VARIABLES",
            "PENDULUM"]
@@ -111,5 +119,7 @@ PENDULUM = Model(
     point_variables=POINT_VARIABLES,
     attractor="the rest state (theta* + 2*pi*k, 0), theta* = asin(torque/omega0^2)",
     planner="atlas.models.pendulum.plan",
+    labelled=(TRAPPED, NEAR_BOUNDARY),
+    running=(RUNNING, RUNNING_NEAR_BOUNDARY),
     since={"trap_energy_cap": 4},
 )

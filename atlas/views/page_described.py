@@ -1,0 +1,116 @@
+"""``atlas view`` of an atlas of any model but the pendulum: one static, self-contained HTML
+page of what the file stores, from its model's description (:class:`atlas.models.base.Model`).
+
+Per parameter point: the basin map as a PNG at the grid's native resolution (each label k in
+its colour of every figure, :func:`atlas.views.style.well_colour`; no label white), its axes
+by the model's axes and the window's ends, and a key with each basin's stored share of the
+grid; then what each status code means in the file. No script: the pendulum's page
+(:mod:`atlas.views.page`) integrates a clicked orbit with the pendulum's own RK4 step and
+certificate in the browser, which another model does not have, and the page says so rather
+than follow an orbit of the wrong equation.
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from atlas.layout import at_point, point_label, points
+from atlas.models.base import Model
+from atlas.views.map_png import labelled_wells, map_png
+from atlas.views.style import NO_LABEL_COLOR, RUNNING_COLOR_HEX, well_colour
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+__all__ = ["described_page"]
+
+_STYLE = """
+body { font: 14px/1.4 "DejaVu Sans", system-ui, sans-serif; margin: 10px 16px; color: #222; }
+h1 { font-size: 18px; margin: 0 0 2px; } h2 { font-size: 15px; margin: 14px 0 4px; }
+p { margin: 2px 0; color: #444; }
+section { max-width: 960px; }
+img { width: 100%; image-rendering: pixelated; border: 1px solid #888; }
+table { border-collapse: collapse; margin: 6px 0; } td, th { padding: 1px 8px; text-align: left; }
+.swatch { display: inline-block; width: 14px; height: 14px; border: 1px solid #555;
+          vertical-align: middle; }
+"""
+
+
+def _esc(value) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _ends(values: np.ndarray) -> str:
+    return f"{float(values[0]):g} to {float(values[-1]):g}"
+
+
+def _point_section(ds: xr.Dataset, model: Model, title: str) -> str:
+    """One parameter point: its map, the window, the key with the stored shares."""
+    columns, rows = model.axes
+    kinds = model.status_kinds()
+    attractor = ds["attractor"].values.astype(np.int16)
+    status = ds["status"].values.astype(np.int8)
+    labelled, wells = labelled_wells(attractor, status, kinds)
+    share = dict(zip(ds["k"].values.tolist(), ds["basin_fraction"].values.tolist())
+                 ) if "basin_fraction" in ds else {}
+    key = [(well_colour(int(k)), f"k = {int(k):+d}",
+            f"{share[int(k)]:.4f} of the grid" if int(k) in share else "") for k in wells]
+    running = kinds[status.astype(np.int64) + 128] == 2
+    if running.any():
+        key.append((RUNNING_COLOR_HEX, "running", f"{running.mean():.4f} of the grid"))
+    if (~labelled & ~running).any():
+        key.append((NO_LABEL_COLOR, "no label", f"{(~labelled & ~running).mean():.4f} of "
+                    "the grid"))
+    cells = "".join(f'<tr><td><span class="swatch" style="background:{colour}"></span></td>'
+                    f"<td>{_esc(name)}</td><td>{_esc(text)}</td></tr>"
+                    for colour, name, text in key)
+    return (f"<section><h2>{_esc(title)}</h2>"
+            f'<img src="{map_png(attractor, status, wells, kinds)}" alt="basin map">'
+            f"<p>{_esc(columns.label)} from {_esc(_ends(ds[columns.name].values))} (left to "
+            f"right), {_esc(rows.label)} from {_esc(_ends(ds[rows.name].values))} (bottom "
+            f"to top); one pixel per grid point.</p><table>{cells}</table></section>")
+
+
+def described_page(tree: xr.DataTree, path: Path, model: Model) -> str:
+    """The whole HTML page of the atlas ``tree`` of ``model``, read from ``path``."""
+    ds = tree.to_dataset(inherit=False)
+    columns, rows = model.axes
+    sections = "".join(_point_section(at_point(ds, point), model, point_label(point))
+                       for point in points(ds))
+    meanings = "".join(f"<tr><td>{code}</td><td>{_esc(word)}</td><td>"
+                       f"{_esc(model.in_file.get(code, ''))}</td></tr>"
+                       for code, word in model.statuses.items())
+    return f"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src data:; \
+style-src 'unsafe-inline'">
+<title>{_esc(Path(path).name)} · atlas view</title>
+<style>{_STYLE}</style>
+</head>
+<body>
+<header>
+<h1>Basins of the {_esc(model.title)} (model {_esc(model.name)}): {_esc(Path(path).name)}</h1>
+<p>Grid {ds.sizes[columns.name]} × {ds.sizes[rows.name]} ({_esc(columns.long_name)} ×
+{_esc(rows.long_name)}); dt = {_esc(ds.attrs.get("dt", "?"))} s, t_max =
+{_esc(ds.attrs.get("t_max", "?"))} s. Each pixel is an initial state, coloured by the label
+the file stores for it.</p>
+<p>This page shows the stored labels only: following a clicked orbit is the pendulum's page's
+(it integrates the pendulum's own equation in the browser), not this model's.</p>
+</header>
+{sections}
+<footer>
+<h2>What each status means in this file</h2>
+<table>{meanings}</table>
+<p>{_esc(ds.attrs.get("title", ""))}; created {_esc(ds.attrs.get("created", ""))} by atlas
+{_esc(ds.attrs.get("atlas_version", ""))}.</p>
+</footer>
+</body>
+</html>
+"""
