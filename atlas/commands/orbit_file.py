@@ -19,8 +19,9 @@ import numpy as np
 import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
-from atlas.errors import AtlasError
+from atlas.errors import AtlasError, InputFileError
 from atlas.layout import at_point, point_group, points
+from atlas.models.registry import DEFAULT, of_attrs
 from atlas.physics.barrier import RunningBarrier
 from atlas.physics.running import LimitCycle
 from atlas.status import NEAR_BOUNDARY, TRAPPED
@@ -69,10 +70,16 @@ def open_point(file: str | Path, alpha: float | None = None, omega0: float | Non
                t_max: float | None = None) -> FilePoint:
     """The parameter point (α, ω0, τ) of the atlas ``file`` (the only one when none is
     given) with the certificate stored for it. ``dt``, ``t_max``: refused (AtlasError) unless
-    they are the file's. A file of format 3 is refused with one InputFileError line."""
+    they are the file's. A file of format 3, or an atlas of another model than the pendulum
+    (whose orbits these commands integrate), is refused with one InputFileError line."""
     path = Path(file)
     tree = open_atlas(path)
     try:
+        model = of_attrs(tree.attrs)
+        if model.name != DEFAULT:
+            raise InputFileError(f"{path}: an atlas of the {model.title} (model "
+                                 f"{model.name}); atlas orbit and atlas zoom integrate the "
+                                 "pendulum's orbits, so they read the pendulum's atlases only")
         require_certificate(tree, path)
         ds = tree.to_dataset(inherit=False)
         params, index = _select(ds, path, alpha, omega0, torque)

@@ -86,7 +86,8 @@ def choose_points(ds: xr.Dataset, point: list[int] | None = None,
     asked = {name: list(v) for name, v in values.items() if v}
     unknown = sorted(set(asked) - set(parameter_names(ds)))
     if unknown:
-        raise TypeError(f"not a parameter: {', '.join(unknown)}")
+        raise AtlasError(f"--{unknown[0]}: not a parameter of this atlas (its parameters: "
+                         f"{', '.join(parameter_names(ds))}; --point I chooses any point)")
     if not point and not asked:
         return None
     every = points(ds)

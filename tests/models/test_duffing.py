@@ -147,3 +147,37 @@ def test_its_bad_input_is_one_line(tmp_path, capsys):
     assert main(["run", str(unknown)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "model" in err[0] and "lorenz" in err[0]
+
+
+def test_the_command_line_runs_it_and_says_what_is_the_pendulums(duffing_atlas, tmp_path,
+                                                                   capsys):
+    """``atlas run`` of the model's config prints its summary; the commands that integrate
+    the pendulum's own orbits (orbit, zoom), its selectors (--alpha) and its study refuse
+    the second model's file or config in one line, exit status 2, nothing written."""
+    cfg = write_config(tmp_path / "d.yaml", CONFIG.format(delta=0.3, output=tmp_path / "d.h5"))
+    assert main(["run", str(cfg)]) == 0
+    assert "duffing   delta = 0.3" in capsys.readouterr().out
+    for argv, word in ((["orbit", str(duffing_atlas), "0.5", "0.1"], "atlas orbit"),
+                       (["zoom", str(duffing_atlas), "0.5", "0.1", "--width", "0.1"],
+                        "atlas zoom"),
+                       (["info", str(duffing_atlas), "--alpha", "0.1"], "--alpha"),
+                       (["stability", str(cfg), "-o", str(tmp_path / "s.h5")], "no study")):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and word in err[0], (argv, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.h5", "d.yaml"]
+
+
+def test_a_file_of_a_model_atlas_does_not_know_is_one_line(duffing_atlas, tmp_path, capsys):
+    import shutil
+
+    import h5py
+
+    copy = tmp_path / "lorenz.h5"
+    shutil.copy(duffing_atlas, copy)
+    with h5py.File(copy, "r+") as f:
+        f.attrs["model"] = "lorenz"
+    for command in ("info", "plot", "view"):
+        assert main([command, str(copy)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "'lorenz' is not one atlas knows" in err[0], err
