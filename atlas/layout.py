@@ -41,15 +41,15 @@ __all__ = ["Layout", "points", "at_point", "point_of", "first_point", "parameter
 class Layout:
     """Parameter values, grid axes and the row-band tiling of an atlas of ``model``.
 
-    ``theta0`` and ``theta_dot0`` are the grid's column and row values (the model's two
-    axes: for the pendulum θ0 [rad] and θ̇0 [rad s⁻¹]). ``parameters`` maps every parameter
-    of the model to its values (1-D, one value where it is not swept); ``swept`` names the
-    parameters that are dims, in the model's order. A tile is one row band ``rows`` of one
-    parameter point.
+    ``x0`` and ``v0`` are the grid's column and row values: the model's two axes, its
+    initial positions and velocities (for the pendulum θ0 [rad] and θ̇0 [rad s⁻¹]).
+    ``parameters`` maps every parameter of the model to its values (1-D, one value where it
+    is not swept); ``swept`` names the parameters that are dims, in the model's order. A
+    tile is one row band ``rows`` of one parameter point.
     """
 
-    theta0: np.ndarray
-    theta_dot0: np.ndarray
+    x0: np.ndarray
+    v0: np.ndarray
     parameters: dict
     swept: tuple
     rows_per_tile: int
@@ -65,7 +65,7 @@ class Layout:
 
     @property
     def bands(self) -> int:
-        return -(-self.theta_dot0.size // self.rows_per_tile)
+        return -(-self.v0.size // self.rows_per_tile)
 
     @property
     def n_tiles(self) -> int:
@@ -80,7 +80,7 @@ class Layout:
 
     @property
     def chunk_rows(self) -> int:
-        return min(self.rows_per_tile, self.theta_dot0.size)
+        return min(self.rows_per_tile, self.v0.size)
 
     def point_index(self, p: int) -> tuple[int, ...]:
         """Index over the swept dims of the ``p``-th parameter point."""
@@ -96,7 +96,7 @@ class Layout:
         """(index over the swept dims, row slice) of tile ``index``."""
         p, band = divmod(index, self.bands)
         rows = slice(band * self.rows_per_tile,
-                     min((band + 1) * self.rows_per_tile, self.theta_dot0.size))
+                     min((band + 1) * self.rows_per_tile, self.v0.size))
         return self.point_index(p), rows
 
     def coords(self) -> dict[str, tuple]:
@@ -109,13 +109,13 @@ class Layout:
             out[name] = (dims, values if dims else values[0],
                          {"units": units, "long_name": long_name})
         columns, rows = self.model.axes
-        for axis, values in ((rows, self.theta_dot0), (columns, self.theta0)):
+        for axis, values in ((rows, self.v0), (columns, self.x0)):
             out[axis.name] = ((axis.name,), values,
                               {"units": axis.units, "long_name": axis.long_name})
         return out
 
     def to_json(self) -> dict:
-        data = {"theta0": self.theta0.tolist(), "theta_dot0": self.theta_dot0.tolist(),
+        data = {"theta0": self.x0.tolist(), "theta_dot0": self.v0.tolist(),
                 "parameters": {k: v.tolist() for k, v in self.parameters.items()},
                 "swept": list(self.swept), "rows_per_tile": self.rows_per_tile}
         if self.model.name != DEFAULT_MODEL:  # the manifests of earlier runs stay valid
@@ -127,8 +127,8 @@ class Layout:
         model = lookup(data.get("model", DEFAULT_MODEL))
         parameters = {name: np.array(data["parameters"][name], np.float64)
                       for name in model.parameters}
-        return cls(theta0=np.array(data["theta0"], np.float64),
-                   theta_dot0=np.array(data["theta_dot0"], np.float64),
+        return cls(x0=np.array(data["theta0"], np.float64),
+                   v0=np.array(data["theta_dot0"], np.float64),
                    parameters=parameters, swept=tuple(data["swept"]),
                    rows_per_tile=int(data["rows_per_tile"]), model=model)
 

@@ -56,7 +56,7 @@ class MemoryTiles:
     def __init__(self, layout: Layout, attrs: dict):
         self.layout = layout
         self.manifest = {"attrs": attrs}
-        shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
+        shape = (*layout.parameter_shape, layout.v0.size, layout.x0.size)
         self.maps = {name: np.full(shape, var.padding, var.dtype)
                      for name, var in map_variables(layout).items()}
         self.tallies: dict[int, dict] = {}
@@ -66,7 +66,7 @@ class MemoryTiles:
         return np.setdiff1d(np.arange(self.layout.n_tiles), list(self.tallies))
 
     def write(self, index: int, values: dict, tally: dict) -> None:
-        """Keep tile ``index``: each map variable's rows (shaped (rows, n_theta0)), and its
+        """Keep tile ``index``: each map variable's rows (shaped (rows, columns)), and its
         tally."""
         params, rows = self.layout.tile(index)
         for name, array in self.maps.items():

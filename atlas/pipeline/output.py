@@ -91,7 +91,7 @@ def check_output_path(output: Path, layout: Layout) -> None:
 def label_bytes(layout: Layout) -> int:
     """Bytes the labels of ``layout`` take on disk at most: its orbits (every parameter point)
     × the bytes of one orbit (:data:`BYTES_PER_ORBIT` for the pendulum)."""
-    return (layout.n_params * layout.theta0.size * layout.theta_dot0.size
+    return (layout.n_params * layout.x0.size * layout.v0.size
             * layout.model.bytes_per_orbit)
 
 

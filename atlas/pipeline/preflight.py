@@ -114,7 +114,7 @@ def _duration(s: float) -> str:
 def orbits_of(layout: Layout, tiles) -> int:
     """The orbits of the tiles ``tiles`` of ``layout`` (indices)."""
     return sum(layout.tile(i)[1].stop - layout.tile(i)[1].start for i in tiles) \
-        * layout.theta0.size
+        * layout.x0.size
 
 
 def measure_rate(cfg: Config, layout: Layout, begun: list, seed: int = 0
@@ -135,14 +135,14 @@ def measure_rate(cfg: Config, layout: Layout, begun: list, seed: int = 0
     threads: tens of ms on a busy machine, which a run's big tiles pay once each) is measured
     by the same call stopped at its first trap test, and taken off."""
     rng = np.random.default_rng(seed)
-    width = min(STRETCH, layout.theta0.size)
+    width = min(STRETCH, layout.x0.size)
 
     def sample(n: int) -> tuple[np.ndarray, np.ndarray]:
         k = -(-n // width)
-        rows = rng.integers(layout.theta_dot0.size, size=k)
-        cols = rng.integers(layout.theta0.size - width + 1, size=k)
-        return (layout.theta0[cols[:, None] + np.arange(width)].ravel(),
-                np.repeat(layout.theta_dot0[rows], width))
+        rows = rng.integers(layout.v0.size, size=k)
+        cols = rng.integers(layout.x0.size - width + 1, size=k)
+        return (layout.x0[cols[:, None] + np.arange(width)].ravel(),
+                np.repeat(layout.v0[rows], width))
 
     def seconds(p: int, orbits: tuple, t_max: float = cfg.integrator.t_max) -> float:
         labeller = planner(layout.model).sample(cfg, begun, p)

@@ -66,7 +66,7 @@ def tile_args(cfg: Config, layout: Layout, points: list, index: int) -> tuple:
     """The arguments of :func:`compute_tile` for tile ``index``: its point's plan, the
     grid's columns, the tile's rows and their slice."""
     _, rows = layout.tile(index)
-    return points[index // layout.bands], layout.theta0, layout.theta_dot0[rows], rows
+    return points[index // layout.bands], layout.x0, layout.v0[rows], rows
 
 
 #: Held by the thread computing (or labelling) a tile ahead: a sweep's tile waits for one that

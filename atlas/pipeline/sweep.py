@@ -72,10 +72,9 @@ def layout_of(cfg: Config, backend: str | None = None) -> Layout:
     device, _ = resolve(backend or cfg.execution.backend)
     tile = cfg.execution.tile_orbits or device.tile_orbits
     g, model, section = cfg.grid, cfg.description, cfg.section
-    theta0 = np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num)
-    theta_dot0 = np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num)
     return Layout(
-        theta0=theta0, theta_dot0=theta_dot0,
+        x0=np.linspace(g.theta0.start, g.theta0.stop, g.theta0.num),
+        v0=np.linspace(g.theta_dot0.start, g.theta_dot0.stop, g.theta_dot0.num),
         parameters={name: np.array(section.values(name), np.float64)
                     for name in model.parameters},
         swept=section.swept,

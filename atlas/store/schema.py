@@ -48,7 +48,7 @@ def map_variables(layout: Layout) -> dict[str, MapVariable]:
 
 def chunks_of(layout: Layout) -> tuple[int, ...]:
     """The map variables' chunks: one per tile (one parameter point, a band of whole rows)."""
-    return (*(1 for _ in layout.swept), layout.chunk_rows, layout.theta0.size)
+    return (*(1 for _ in layout.swept), layout.chunk_rows, layout.x0.size)
 
 
 def summary_dataset(layout: Layout, points: list[dict]) -> xr.Dataset:

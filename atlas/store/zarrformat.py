@@ -60,7 +60,7 @@ class ZarrTiles(TileRun):
         import dask.array as da
 
         chunks = chunks_of(layout)
-        shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
+        shape = (*layout.parameter_shape, layout.v0.size, layout.x0.size)
         data, encoding = {}, {}
         for name, spec in map_variables(layout).items():
             empty = da.zeros(shape, dtype=spec.dtype, chunks=chunks)

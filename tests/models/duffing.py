@@ -143,7 +143,7 @@ class DuffingPlan:
         self.layout, self.points, self.groups, self.warnings = layout, points, {}, []
 
     def summary(self, tallies: list[list[dict]]) -> xr.Dataset:
-        orbits = self.layout.theta0.size * self.layout.theta_dot0.size
+        orbits = self.layout.x0.size * self.layout.v0.size
         out = []
         for point in tallies:
             total = {name: sum(int(t[name]) for t in point) for name in point[0]}

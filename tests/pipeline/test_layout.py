@@ -16,13 +16,13 @@ REPO = Path(__file__).resolve().parents[2]
 def _layout(swept: dict) -> Layout:
     parameters = {name: np.array(swept.get(name, [default]), np.float64)
                   for name, default in zip(PARAMETERS, (0.1, 1.0, 0.0))}
-    return Layout(theta0=np.linspace(-1, 1, 5), theta_dot0=np.linspace(-2, 2, 7),
+    return Layout(x0=np.linspace(-1, 1, 5), v0=np.linspace(-2, 2, 7),
                   parameters=parameters, swept=tuple(n for n in PARAMETERS if n in swept),
                   rows_per_tile=3)
 
 
 def _dataset(layout: Layout) -> xr.Dataset:
-    shape = (*layout.parameter_shape, layout.theta_dot0.size, layout.theta0.size)
+    shape = (*layout.parameter_shape, layout.v0.size, layout.x0.size)
     values = np.arange(np.prod(shape), dtype=float).reshape(shape)
     return xr.Dataset({"x": (layout.dims, values)},
                       coords={n: (d, v, a) for n, (d, v, a) in layout.coords().items()})

@@ -12,7 +12,7 @@ from atlas.store.schema import SCHEMA
 
 
 def _layout(n=4, alphas=1) -> Layout:
-    return Layout(theta0=np.linspace(-1, 1, n), theta_dot0=np.linspace(-1, 1, n),
+    return Layout(x0=np.linspace(-1, 1, n), v0=np.linspace(-1, 1, n),
                   parameters={"alpha": np.linspace(0.1, 1, alphas), "omega0": np.array([1.0]),
                               "torque": np.array([0.0])},
                   swept=("alpha",) if alphas > 1 else (), rows_per_tile=2)

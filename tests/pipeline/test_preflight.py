@@ -59,13 +59,13 @@ def test_the_rate_is_the_per_orbit_cost_without_a_calls_fixed_cost(tmp_path, mon
     rate, timed = preflight.measure_rate(cfg, layout, begin(cfg, layout))
     assert rate == pytest.approx(50_000, rel=1e-9)
     assert timed >= preflight.FIRST_SAMPLE
-    width = min(preflight.STRETCH, layout.theta0.size)
+    width = min(preflight.STRETCH, layout.x0.size)
     for theta0, theta_dot0, _ in calls:
         rows, cols = theta0.reshape(-1, width), theta_dot0.reshape(-1, width)
         for th, v in zip(rows, cols):  # consecutive θ0 of one grid row, as in a tile
-            start = int(np.flatnonzero(layout.theta0 == th[0])[0])
-            np.testing.assert_array_equal(th, layout.theta0[start:start + width])
-            assert np.all(v == v[0]) and v[0] in layout.theta_dot0
+            start = int(np.flatnonzero(layout.x0 == th[0])[0])
+            np.testing.assert_array_equal(th, layout.x0[start:start + width])
+            assert np.all(v == v[0]) and v[0] in layout.v0
 
 
 def test_every_kernel_the_timed_calls_take_is_loaded_before_timing(tmp_path, monkeypatch):
@@ -120,7 +120,7 @@ def test_the_sample_grows_to_about_one_call_of_call_s(tmp_path, monkeypatch):
     rate, timed = preflight.measure_rate(cfg, layout, begin(cfg, layout))
     assert rate == pytest.approx(100_000, rel=1e-9)
     final = spent[-min(preflight.MAX_POINTS, layout.n_params):]
-    stretch = 10e-6 * min(preflight.STRETCH, layout.theta0.size)
+    stretch = 10e-6 * min(preflight.STRETCH, layout.x0.size)
     assert all(preflight.CALL_S <= s <= 1.25 * preflight.CALL_S + stretch for s in final), spent
 
 

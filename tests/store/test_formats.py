@@ -46,7 +46,7 @@ class _Barrier:
 
 
 def _layout() -> Layout:
-    return Layout(theta0=np.linspace(-3.0, 3.0, 7), theta_dot0=np.linspace(-2.0, 2.0, 5),
+    return Layout(x0=np.linspace(-3.0, 3.0, 7), v0=np.linspace(-2.0, 2.0, 5),
                   parameters={"alpha": np.array([0.1]), "omega0": np.array([1.0]),
                               "torque": np.array(TORQUES)},
                   swept=("torque",), rows_per_tile=2)
@@ -55,7 +55,7 @@ def _layout() -> Layout:
 def _values(layout: Layout, index: int) -> dict:
     """Tile ``index``'s label arrays: distinct values from the tile's index."""
     _, rows = layout.tile(index)
-    shape = (rows.stop - rows.start, layout.theta0.size)
+    shape = (rows.stop - rows.start, layout.x0.size)
     ramp = np.arange(np.prod(shape)).reshape(shape) + 100 * index
     return {"attractor": (ramp % 5 - 2).astype(np.int16),
             "status": (ramp % 6).astype(np.int8),

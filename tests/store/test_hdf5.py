@@ -173,7 +173,7 @@ def test_a_write_failing_in_a_group_leaves_the_file_closed(tmp_path, monkeypatch
         return real(group, name, *args, **kwargs)
 
     monkeypatch.setattr(h5py.Group, "create_dataset", full_disk)
-    layout = Layout(theta0=np.linspace(-1.0, 1.0, 3), theta_dot0=np.linspace(-1.0, 1.0, 2),
+    layout = Layout(x0=np.linspace(-1.0, 1.0, 3), v0=np.linspace(-1.0, 1.0, 2),
                     parameters={"alpha": np.array([0.1]), "omega0": np.array([1.0]),
                                 "torque": np.array([0.3, -0.4])},
                     swept=("torque",), rows_per_tile=2)

@@ -152,7 +152,7 @@ def certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, boundari
                                     len(pendulums), "certificates"):
         shift, tol = ((float(sep.attrs["discrepancy"]), float(sep.attrs["tol"]))
                       if sep is not None else (np.nan, np.nan))
-        out.append((certifier_for(p, layout.theta0, layout.theta_dot0, shift, tol, b),
+        out.append((certifier_for(p, layout.x0, layout.v0, shift, tol, b),
                     barrier))
     return out
 
@@ -195,7 +195,7 @@ def groups(layout: Layout, pendulums: list[Pendulum], traced: list, cycles: list
            barriers: list) -> dict[str, xr.Dataset]:
     """The per-point groups (path → dataset): ``/critical_points``, ``/separatrices`` and
     ``/limit_cycle`` (points with a running cycle only)."""
-    lo, hi = float(layout.theta0[0]), float(layout.theta0[-1])
+    lo, hi = float(layout.x0[0]), float(layout.x0[-1])
     return {**per_point(layout, "critical_points",
                          [critical_points_dataset(p, lo, hi) for p in pendulums]),
             **per_point(layout, "separatrices", traced),
