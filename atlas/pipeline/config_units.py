@@ -35,8 +35,11 @@ def radians_warning(cfg) -> str | None:
     spans more than :data:`RADIANS_WARNING_TURNS` turns, or an end is one of
     :data:`DEGREE_LIKE_ENDS` (±90, ±180, …); with the window in radians as a hint ("did you
     mean -pi/2 … pi/2?") where both ends are whole numbers. None where ``check_radians``
-    is false. A warning, not an error: such a window is valid, only unlikely.
-    (:attr:`Config.warnings` adds how to silence it.)"""
+    is false, or where the model's position axis is not an angle. A warning, not an error:
+    such a window is valid, only unlikely. (:attr:`Config.warnings` adds how to silence
+    it.)"""
+    if cfg.description.axes[0].units != "rad":
+        return None
     start, stop = cfg.grid.theta0.start, cfg.grid.theta0.stop
     turns = (stop - start) / (2 * math.pi)
     looks_like_degrees = any(abs(end) in DEGREE_LIKE_ENDS for end in (start, stop))

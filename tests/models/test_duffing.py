@@ -181,3 +181,18 @@ def test_a_file_of_a_model_atlas_does_not_know_is_one_line(duffing_atlas, tmp_pa
         assert main([command, str(copy)]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "'lorenz' is not one atlas knows" in err[0], err
+
+
+def test_the_pendulums_warning_about_degrees_is_not_the_second_models(tmp_path):
+    """A θ0 window of ±180 warns that θ0 is in radians; x0 of the Duffing oscillator is no
+    angle, so the same numbers say nothing."""
+    body = CONFIG.format(delta=0.3, output=tmp_path / "d.h5").replace(
+        "x0: {start: -2, stop: 2", "x0: {start: -180, stop: 180")
+    assert atlas.load_config(write_config(tmp_path / "d.yaml", body)).warnings == ()
+    pendulum = atlas.load_config(write_config(tmp_path / "p.yaml", """\
+grid:
+  theta0: {start: -180, stop: 180, num: 8}
+  theta_dot0: {start: -1, stop: 1, num: 8}
+separatrices: {enabled: false}
+"""))
+    assert "radians" in pendulum.warnings[0]
