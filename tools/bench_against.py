@@ -5,7 +5,7 @@ configs/swing_stability.yaml``), each run by the old commit and by this checkout
 (old, new, old, new, …), so that the machine's drift and load fall on both alike:
 
     python -m tools.bench_against 8fc1cfe            # 3 rounds each
-    python -m tools.bench_against 8fc1cfe --rounds 5
+    python -m tools.bench_against 8fc1cfe --rounds 5 --only torque
 
 The old commit is checked out into a temporary git worktree and run with this checkout's
 interpreter and libraries (``PYTHONPATH`` set to it); each side's Numba cache is warmed by
@@ -45,8 +45,10 @@ def _run(tree: Path, args: list[str], out: Path) -> float:
     return time.perf_counter() - start
 
 
-def compare(old: str, rounds: int = 3) -> dict[str, tuple[float, float]]:
-    """{job: (median seconds of the old commit, of this checkout)}."""
+def compare(old: str, rounds: int = 3, only: str = "") -> dict[str, tuple[float, float]]:
+    """{job: (median seconds of the old commit, of this checkout)} of the jobs whose name
+    holds ``only``."""
+    jobs = {name: args for name, args in JOBS.items() if only in name}
     with tempfile.TemporaryDirectory(prefix="atlas-old-") as tmp:
         tree, out = Path(tmp) / "old", Path(tmp) / "out"
         out.mkdir()
@@ -56,12 +58,12 @@ def compare(old: str, rounds: int = 3) -> dict[str, tuple[float, float]]:
             sides = {"old": tree, "new": REPO}
             for side in sides:
                 (out / side).mkdir()
-            times = {job: {side: [] for side in sides} for job in JOBS}
-            for args in JOBS.values():  # warm both Numba caches, untimed
+            times = {job: {side: [] for side in sides} for job in jobs}
+            for args in jobs.values():  # warm both Numba caches, untimed
                 for side, path in sides.items():
                     _run(path, args, out / side)
             for _ in range(rounds):
-                for job, args in JOBS.items():
+                for job, args in jobs.items():
                     for side, path in sides.items():
                         times[job][side].append(_run(path, args, out / side))
         finally:
@@ -75,8 +77,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("old", help="the commit to compare with (e.g. 8fc1cfe)")
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--only", default="", help="the jobs whose name holds this word")
     args = parser.parse_args(argv)
-    result = compare(args.old, args.rounds)
+    result = compare(args.old, args.rounds, args.only)
     print(f"{'job':<28}{'old [s]':>10}{'new [s]':>10}{'new/old':>10}")
     for job, (old, new) in result.items():
         print(f"{job:<28}{old:>10.2f}{new:>10.2f}{new / old:>10.3f}")

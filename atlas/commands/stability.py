@@ -74,11 +74,15 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
     """Load, check, compute and write the study of ``config``: (Dataset, output path,
     seconds in all). ``on_result`` as :func:`atlas.stability.study.compute_points`."""
     from atlas.kernels.threads import cores
+    from atlas.models.registry import DEFAULT
     from atlas.pipeline.config import load_config
     from atlas.stability.study import PHASES, StudySettings, compute_points
 
     start = time.perf_counter()
     cfg = load_config(config, output=output, study=True)
+    if cfg.model != DEFAULT:  # the study is the pendulum's physics
+        raise AtlasError(f"{config}: model {cfg.model}: atlas stability studies the "
+                         "pendulum's basins only")
     count = math.prod(len(cfg.pendulum.values(name)) for name in PARAMETERS)
     if count > MAX_POINTS and not force:
         raise AtlasError(f"{config}: the study has {count:,} parameter points, more "

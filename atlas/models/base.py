@@ -99,7 +99,8 @@ class Model:
     v0. ``section``: the config key of the parameters. ``statuses``: ``status`` code → the
     word of its CF ``flag_meanings``; ``in_file``: code → what it means in a file.
     ``labelled``: the status codes under which ``attractor`` holds a label k; ``running``:
-    those of an attractor without a k (the pendulum's running cycle; none for most models).
+    those of an attractor without a k (the pendulum's running cycle; none for most models);
+    ``positive``: the parameters > 0 at every point.
     ``map_variables``: the basin map's variables, in file order (``attractor`` and
     ``status`` among them); ``label_variables``: those every file of the model has.
     ``basin_variables`` / ``point_variables``: the summary per attractor index ``k`` / per
@@ -123,6 +124,8 @@ class Model:
     planner: str
     labelled: tuple[int, ...] = (0,)
     running: tuple[int, ...] = ()
+    #: The parameters that are > 0 at every point (a file with another value is refused).
+    positive: tuple[str, ...] = ()
     #: Summary variables absent from files of older formats: name → the first format with it.
     since: dict[str, int] = field(default_factory=dict)
 
@@ -154,15 +157,19 @@ class Model:
 class PointPlan(Protocol):
     """One parameter point, prepared: picklable, so that a Dask worker labels its tiles.
 
-    ``label(x0, v0, rows, backend, numba_threads)`` labels the orbits from the columns ``x0``
-    (1-D) × the rows ``v0`` (1-D) of the point's grid, ``rows`` the rows' slice of the whole
-    grid; ``certify(rows, labelled, numba_threads)`` turns its result into the tile's arrays
+    ``label(x0, v0, rows, backend, numba_threads, t_max)`` labels the orbits from the
+    initial states (``x0``, ``v0``), arrays that broadcast (a tile: the columns as a row
+    vector, its rows as a column vector; the pre-flight estimate: two 1-D samples), ``rows``
+    the tile's slice of the whole grid (None for a sample), ``t_max`` [s] where given instead
+    of the config's (the estimate times a call stopped at once);
+    ``certify(rows, labelled, numba_threads)`` turns its result into the tile's arrays
     ({map variable: array (rows, columns)}) and tally (a dict of counts the summary adds up).
     The two halves are separate so that the local scheduler certifies one tile while it
     labels the next."""
 
-    def label(self, x0: np.ndarray, v0: np.ndarray, rows: slice, backend: str,
-              numba_threads: int | None) -> Any: ...
+    def label(self, x0: np.ndarray, v0: np.ndarray, rows: slice | None = None,
+              backend: str = "cpu", numba_threads: int | None = None,
+              t_max: float | None = None) -> Any: ...
 
     def certify(self, rows: slice, labelled: Any, numba_threads: int | None
                 ) -> tuple[dict[str, np.ndarray], dict]: ...
@@ -171,11 +178,13 @@ class PointPlan(Protocol):
 class Plan(Protocol):
     """A config's parameter points, prepared (:meth:`Planner.plan`): ``points`` one
     :class:`PointPlan` each, in the layout's order; ``groups`` the per-point groups to store
-    (path → xarray Dataset); ``summary(tallies)`` the root summary variables (an xarray
-    Dataset with the parameter dims leading) from each point's list of tile tallies."""
+    (path → xarray Dataset); ``warnings`` the lines the sweep logs (on stderr, even when
+    quiet); ``summary(tallies)`` the root summary variables (an xarray Dataset with the
+    parameter dims leading) from each point's list of tile tallies."""
 
     points: list
     groups: dict
+    warnings: list
 
     def summary(self, tallies: list[list[dict]]) -> Any: ...
 
@@ -187,9 +196,13 @@ class Planner(Protocol):
       :mod:`atlas.pipeline.config_sections`) with ``values(name)`` (a parameter's values),
       ``swept`` (the parameters given as lists) and ``points`` (every parameter point);
     - ``check(cfg, study)``: the checks across the config's sections (ValueError "key:
-      problem"), so that a valid config never fails after work began;
+      problem", which loading the config turns into one line naming the file), so that a
+      valid config never fails after work began; every check that needs no computation
+      belongs here; the module that defines it should import little (every config is
+      validated by it);
     - ``begin(cfg, layout)``: what is prepared before anything is written (cheap; a bad
-      input raises :class:`~atlas.errors.AtlasError` here); a list, one per point, that
+      input only computation shows raises :class:`~atlas.errors.AtlasError` here); a list,
+      one per point, that
       ``sample(begun, p)`` turns into a :class:`PointPlan` good enough to label (the
       pre-flight estimate measures the rate with it);
     - ``plan(cfg, layout, begun, track)``: the :class:`Plan` (the slow part: ``track(items,

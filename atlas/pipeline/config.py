@@ -99,29 +99,36 @@ class Config(StrictModel):
     def _model_keys(cls, data):
         """A model other than the pendulum: its section and its grid's axis names taken to
         the places the config holds them (``model_section``; ``grid.theta0`` and
-        ``grid.theta_dot0``, the columns and rows). An unknown model is one line."""
-        if not isinstance(data, dict) or data.get("model", DEFAULT_MODEL) == DEFAULT_MODEL:
+        ``grid.theta_dot0``, the columns and rows). An unknown model is one line, and so is a
+        ``model_section`` key written by hand, for any model. Such a model has no default
+        window: its grid is given whole."""
+        if not isinstance(data, dict):
             return data
-        data = dict(data)
         if "model_section" in data:
             raise ValueError("model_section: unknown key")
+        if data.get("model", DEFAULT_MODEL) == DEFAULT_MODEL:
+            return data
+        data = dict(data)
         try:
             model = lookup(data["model"])
         except ValueError as exc:
             raise ValueError(f"model: {exc}") from None
+        section = data.pop(model.section, None)
         if "pendulum" in data:
             raise ValueError(f"pendulum: not a section of model {model.name} (its parameters "
                              f"are under {model.section})")
-        data["model_section"] = data.pop(model.section, None) or {}
+        data["model_section"] = section or {}
+        columns, rows = model.axes
         grid = data.get("grid")
-        if isinstance(grid, dict):
-            columns, rows = model.axes
-            known = {columns.name: "theta0", rows.name: "theta_dot0"}
-            for key in grid:
-                if key not in known:
-                    raise ValueError(f"grid.{key}: unknown key (the grid of model "
-                                     f"{model.name} is {columns.name} × {rows.name})")
-            data["grid"] = {known[key]: value for key, value in grid.items()}
+        if not isinstance(grid, dict) or not {columns.name, rows.name} <= set(grid):
+            raise ValueError(f"grid: model {model.name} has no default window; give "
+                             f"grid.{columns.name} and grid.{rows.name}")
+        known = {columns.name: "theta0", rows.name: "theta_dot0"}
+        for key in grid:
+            if key not in known:
+                raise ValueError(f"grid.{key}: unknown key (the grid of model "
+                                 f"{model.name} is {columns.name} × {rows.name})")
+        data["grid"] = {known[key]: value for key, value in grid.items()}
         return data
 
     @property
@@ -156,8 +163,8 @@ class Config(StrictModel):
             try:
                 section = model.Section.model_validate(self.model_section)
             except ValidationError as exc:
-                raise ValueError(f"{self.model}.{messages.first_error(exc, model.Section)}"
-                                 ) from None
+                raise ValueError(f"{self.description.section}."
+                                 f"{messages.first_error(exc, model.Section)}") from None
             self._section = section
         model.check(self, bool((info.context or {}).get("study")))
         return self
@@ -236,6 +243,19 @@ def first_error(exc: ValidationError) -> str:
     return messages.first_error(exc, Config)
 
 
+def _in_model_words(message: str, data: dict) -> str:
+    """An error about the grid of a model other than the pendulum, with the grid's keys as
+    its config writes them (the config holds them as ``grid.theta0`` and ``grid.theta_dot0``:
+    :meth:`Config._model_keys`)."""
+    try:
+        model = lookup(data.get("model", DEFAULT_MODEL))
+    except ValueError:
+        return message
+    columns, rows = model.axes
+    return (message.replace("grid.theta_dot0", f"grid.{rows.name}")
+            .replace("grid.theta0", f"grid.{columns.name}"))
+
+
 def load_config(path: str | Path, *, output: str | Path | None = None,
                 study: bool = False) -> Config:
     """Read and validate a YAML config; ``output`` overrides its ``output`` key; ``study``:
@@ -267,7 +287,7 @@ def load_config(path: str | Path, *, output: str | Path | None = None,
     try:
         cfg = Config.model_validate(data, context={"study": study})
     except ValidationError as exc:
-        raise ConfigError(f"{path}: {first_error(exc)}") from None
+        raise ConfigError(f"{path}: {_in_model_words(first_error(exc), data)}") from None
     for line in cfg.warnings:
         log.warning("warning: %s: %s", path, line)
     return cfg

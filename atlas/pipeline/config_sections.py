@@ -8,7 +8,7 @@ sections are its own.
 from __future__ import annotations
 
 import itertools
-from typing import Literal
+from typing import ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -18,8 +18,8 @@ from atlas.limits import MAX_RATE, MIN_RATE
 from atlas.models.pendulum.description import PARAMETERS
 from atlas.pipeline.config_numbers import Number, Numbers
 
-__all__ = ["StrictModel", "PendulumConfig", "Axis", "GridConfig", "IntegratorConfig",
-           "SeparatricesConfig", "ExecutionConfig", "StabilityConfig"]
+__all__ = ["StrictModel", "ParameterSection", "PendulumConfig", "Axis", "GridConfig",
+           "IntegratorConfig", "SeparatricesConfig", "ExecutionConfig", "StabilityConfig"]
 
 
 class StrictModel(BaseModel):
@@ -27,9 +27,35 @@ class StrictModel(BaseModel):
 
 
 
-class PendulumConfig(StrictModel):
+class ParameterSection(StrictModel):
+    """A model's parameters, each a field: a number, a list or a range (a list or a range
+    makes it a dim of a parameter atlas, the others stay scalar coordinates). ``NAMES``:
+    the parameters in the model's order (the dims' order)."""
+
+    NAMES: ClassVar[tuple[str, ...]] = ()
+
+    def values(self, name: str) -> list[float]:
+        """The values of parameter ``name`` (one unless it is swept)."""
+        value = getattr(self, name)
+        return value if isinstance(value, list) else [value]
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The parameters given as lists: the dims of a parameter atlas."""
+        return tuple(name for name in self.NAMES if isinstance(getattr(self, name), list))
+
+    @property
+    def points(self) -> list[dict[str, float]]:
+        """Every parameter point, in C order over the swept dims."""
+        return [dict(zip(self.NAMES, combo))
+                for combo in itertools.product(*(self.values(n) for n in self.NAMES))]
+
+
+class PendulumConfig(ParameterSection):
     """α [s⁻¹], ω0 [rad s⁻¹] and the constant torque τ [rad s⁻²]; a list for any of them
     makes it a dim of a parameter atlas (the others stay scalar coordinates)."""
+
+    NAMES: ClassVar[tuple[str, ...]] = tuple(PARAMETERS)
 
     alpha: Numbers = defaults.ALPHA
     omega0: Numbers = defaults.OMEGA0
@@ -99,16 +125,6 @@ class PendulumConfig(StrictModel):
                              "must be named by its values)")
         return value
 
-    def values(self, name: str) -> list[float]:
-        """The values of parameter ``name`` (one unless it is swept)."""
-        value = getattr(self, name)
-        return value if isinstance(value, list) else [value]
-
-    @property
-    def swept(self) -> tuple[str, ...]:
-        """The parameters given as lists: the dims of a parameter atlas."""
-        return tuple(name for name in PARAMETERS if isinstance(getattr(self, name), list))
-
     @property
     def alphas(self) -> list[float]:
         return self.values("alpha")
@@ -121,12 +137,6 @@ class PendulumConfig(StrictModel):
     def torques(self) -> list[float]:
         return self.values("torque")
 
-    @property
-    def points(self) -> list[dict[str, float]]:
-        """Every parameter point, in C order over the swept dims."""
-        names = list(PARAMETERS)
-        return [dict(zip(names, combo))
-                for combo in itertools.product(*(self.values(n) for n in names))]
 
 
 class Axis(StrictModel):

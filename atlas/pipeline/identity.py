@@ -15,6 +15,7 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.defaults import BACKEND_WORDS
 from atlas.labels.trap import CHECK_EVERY
+from atlas.models.registry import DEFAULT as DEFAULT_MODEL
 from atlas.pipeline.config import Config, config_hash, integrator_json
 from atlas.store.schema import FORMAT_VERSION
 
@@ -35,7 +36,8 @@ def run_identity(cfg: Config, backend: str) -> dict:
             cfg.description.section: cfg.section.model_dump(mode="json"),
             "integrator": integrator_json(cfg.integrator),
             "separatrices": (cfg.separatrices.model_dump(mode="json")
-                             if cfg.separatrices.enabled else {"enabled": False}),
+                             if cfg.separatrices.enabled and cfg.model == DEFAULT_MODEL
+                             else {"enabled": False}),  # the pendulum's section
             "check_every": int(CHECK_EVERY), "atlas_version": __version__,
             "kernels": BACKEND_WORDS[backend][0]}
 

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import functools
 import logging
-import math
 import os
 import re
 import time
@@ -58,9 +57,10 @@ from atlas.store.partial import (
 )
 from atlas.store.reader import open_atlas
 from atlas.store.schema import summary_tree
+from atlas.store.separatrices import inexact_points
 
-__all__ = ["run", "layout_of", "inexact_points", "inexact_line", "accuracy_exit",
-           "kept_after_interrupt", "finish_tiles", "Phases"]
+__all__ = ["run", "layout_of", "accuracy_exit", "kept_after_interrupt", "finish_tiles",
+           "Phases"]
 
 log = logging.getLogger(__name__)
 
@@ -190,7 +190,7 @@ def finish_tiles(tiles: TileStore, cfg: Config, backend: str, quiet: bool, start
     (:func:`atlas.store.schema.summary_tree`)."""
     track = functools.partial(progress.tracked, quiet=quiet)
     plan = planner(tiles.layout.model).plan(cfg, tiles.layout, begun, track)
-    phase.done("per-point plans (separatrices)")
+    phase.done("per-point plans")
     for line in plan.warnings:  # on stderr even with --quiet
         log.warning(line)
     groups = plan.groups
@@ -236,7 +236,7 @@ def run(cfg: Config, *, restart: bool = False, quiet: bool = False,
     line) and an answer other than True stops the run with an :class:`AtlasError`, nothing
     written. ``quiet`` silences the progress bars and the compiling line, never a warning:
     a traced separatrix farther from the DOP853 stable manifold than its bound is logged
-    (:func:`inexact_points`), and the file is written all the same.
+    (:func:`atlas.store.separatrices.inexact_points`), and the file is written all the same.
     """
     check_output_target(cfg.output, config_path, force=force)
     _say_what_is_replaced(cfg)
@@ -330,39 +330,11 @@ def _locked_run(cfg: Config, restart: bool, quiet: bool, backend: str, open_resu
     return written
 
 
-def _discrepancy(ds: xr.Dataset) -> tuple[float, float]:
-    """(the traced points' largest distance to the DOP853 stable manifold, its bound) of one
-    ``/separatrices`` node (NaN, NaN where it has none)."""
-    return (float(ds.attrs.get("discrepancy", math.nan)),
-            float(ds.attrs.get("discrepancy_bound", math.nan)))
-
-
-def inexact_line(where: str, separatrices: xr.Dataset) -> str | None:
-    """The warning for one ``/separatrices`` node whose check against the DOP853 stable
-    manifold exceeds its bound, naming it ``where``; None where it is within its bound."""
-    disc, bound = _discrepancy(separatrices)
-    if not disc > bound:
-        return None
-    return (f"{where}: check vs DOP853 stable manifold: max distance {disc:.1e} EXCEEDS bound "
-            f"{bound:.0e}: labels near the basin boundaries are less certain than the bound "
-            "assumes; lower separatrices.tol or integrator.dt")
-
-
-def inexact_points(tree: xr.DataTree) -> list[str]:
-    """The nodes of ``tree``'s ``/separatrices`` (a written atlas, or :func:`run`'s result)
-    whose check against the DOP853 stable manifold exceeds its bound: one line each, naming
-    the node (empty where every check is within its bound, or there are none)."""
-    if "separatrices" not in tree.children:
-        return []
-    return [line for node in tree["separatrices"].subtree
-            for line in [inexact_line(node.path, node)] if line]
-
-
 def accuracy_exit(tree: xr.DataTree, output: Path, accept_inexact: bool = False) -> int:
     """The exit status of ``atlas run`` whose result is ``tree``, written at ``output``: 0, or
     :data:`atlas.errors.EXIT_INEXACT` (4) where a check exceeds its bound
-    (:func:`inexact_points`, already warned of during the run), said in one line on stderr,
-    unless ``accept_inexact`` (``--accept-inexact``)."""
+    (:func:`atlas.store.separatrices.inexact_points`, already warned of during the run),
+    said in one line on stderr, unless ``accept_inexact`` (``--accept-inexact``)."""
     inexact = inexact_points(tree)
     if not inexact or accept_inexact:
         return 0

@@ -34,6 +34,7 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.layout import Layout
 from atlas.models.base import LABELS
+from atlas.models.registry import of_attrs
 from atlas.store.durable import fsync
 from atlas.store.format import Container, TileRun, reason
 from atlas.store.schema import (
@@ -524,7 +525,7 @@ class StoredRows:
         da = ds[name]
         source = da.encoding.get("source")
         if (not source or da.chunks is not None or getattr(da.variable, "_in_memory", True)
-                or da.dims[-2:] != ("theta_dot0", "theta0")
+                or da.dims[-2:] != tuple(a.name for a in reversed(of_attrs(ds.attrs).axes))
                 or any(key in da.encoding for key in ("scale_factor", "add_offset"))):
             return None
         try:

@@ -12,6 +12,7 @@ Conventions: CF-1.10, as the rest of the file (:mod:`atlas.store.schema`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 
 import numpy as np
@@ -19,7 +20,8 @@ import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 
-__all__ = ["BRANCHES", "node", "branches", "curves", "warnings", "max_discrepancy"]
+__all__ = ["BRANCHES", "node", "branches", "curves", "warnings", "max_discrepancy",
+           "inexact_line", "inexact_points"]
 
 #: Branch names, in the order of the ``branch`` flag values 0, 1.
 BRANCHES = ("left", "right")
@@ -138,3 +140,31 @@ def warnings(ds: xr.Dataset) -> list[str]:
 def max_discrepancy(ds: xr.Dataset) -> float:
     """The largest distance [rad-ish] of the traced points to the exact boundaries (DOP853)."""
     return float(ds.attrs["discrepancy"])
+
+
+def _discrepancy(ds: xr.Dataset) -> tuple[float, float]:
+    """(the traced points' largest distance to the DOP853 stable manifold, its bound) of one
+    ``/separatrices`` node (NaN, NaN where it has none)."""
+    return (float(ds.attrs.get("discrepancy", math.nan)),
+            float(ds.attrs.get("discrepancy_bound", math.nan)))
+
+
+def inexact_line(where: str, separatrices: xr.Dataset) -> str | None:
+    """The warning for one ``/separatrices`` node whose check against the DOP853 stable
+    manifold exceeds its bound, naming it ``where``; None where it is within its bound."""
+    disc, bound = _discrepancy(separatrices)
+    if not disc > bound:
+        return None
+    return (f"{where}: check vs DOP853 stable manifold: max distance {disc:.1e} EXCEEDS bound "
+            f"{bound:.0e}: labels near the basin boundaries are less certain than the bound "
+            "assumes; lower separatrices.tol or integrator.dt")
+
+
+def inexact_points(tree: xr.DataTree) -> list[str]:
+    """The nodes of ``tree``'s ``/separatrices`` (a written atlas, or :func:`run`'s result)
+    whose check against the DOP853 stable manifold exceeds its bound: one line each, naming
+    the node (empty where every check is within its bound, or there are none)."""
+    if "separatrices" not in tree.children:
+        return []
+    return [line for node in tree["separatrices"].subtree
+            for line in [inexact_line(node.path, node)] if line]

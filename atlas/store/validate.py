@@ -131,8 +131,9 @@ def _axis(ds, name: str, path, increasing: bool) -> None:
         _refuse(path, f"coordinate {name} is not strictly increasing")
 
 
-def _parameter(ds, name: str, path) -> None:
-    """A physical parameter: a finite float64 coordinate, scalar or its own 1-D dim."""
+def _parameter(ds, name: str, path, positive: bool) -> None:
+    """A physical parameter: a finite float64 coordinate, scalar or its own 1-D dim; > 0
+    where its model says so (``positive``)."""
     if name not in ds.coords:
         _refuse(path, f"no {name} coordinate")
     if name in ds.dims:
@@ -140,7 +141,7 @@ def _parameter(ds, name: str, path) -> None:
     elif ds.coords[name].dims != () or ds.coords[name].dtype != np.float64:
         _refuse(path, f"coordinate {name} is not a float64 scalar or a dim of its own")
     values = ds.coords[name].values
-    if not np.all(np.isfinite(values)) or (name != "torque" and not np.all(values > 0)):
+    if not np.all(np.isfinite(values)) or (positive and not np.all(values > 0)):
         _refuse(path, f"coordinate {name} is out of range")
 
 
@@ -150,7 +151,7 @@ def model_of(attrs: dict, path) -> Model:
     try:
         return of_attrs(attrs)
     except ValueError as exc:
-        _refuse(path, f"an atlas of a {exc}; it cannot be read here")
+        _refuse(path, f"an atlas whose {exc}, so it cannot be read here")
 
 
 def _flags(attrs: dict, path, model: Model) -> None:
@@ -180,7 +181,7 @@ def check_dataset(ds, path) -> int:
     for axis in (columns, rows):
         _axis(ds, axis.name, path, increasing=True)
     for name in model.parameters:
-        _parameter(ds, name, path)
+        _parameter(ds, name, path, positive=name in model.positive)
     for name, spec in model.map_variables.items():
         if name not in ds.data_vars:
             _refuse(path, f"no {name} variable")

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from atlas.layout import at_point, point_label, points
-from atlas.models.base import Model
+from atlas.models.base import Model, units_text
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -20,19 +20,13 @@ if TYPE_CHECKING:
 __all__ = ["grid_line", "described_lines"]
 
 
-def _units(ds: xr.Dataset, name: str) -> str:
-    """A coordinate's CF units as a text writes them ("s-1" → "1/s")."""
-    units = str(ds[name].attrs.get("units", "?"))
-    return units.replace("rad s-1", "rad/s").replace("s-1", "1/s").replace("s-2", "/s^2")
-
-
 def grid_line(ds: xr.Dataset, model: Model, n_points: int) -> str:
     """"grid 24 x 16 (theta0 x theta_dot0) = 384 orbits per parameter point, 1 parameter
     point (alpha [1/s], …)": the grid by the model's axes, the parameters with their units."""
     columns, rows = model.axes
     n = ds.sizes[columns.name] * ds.sizes[rows.name]
-    units = ", ".join(f"{name} [{_units(ds, name)}]" for name in model.parameters
-                      if name in ds.coords)
+    units = ", ".join(f"{name} [{units_text(units)}]"
+                      for name, (units, _) in model.parameters.items() if name in ds.coords)
     return (f"grid      {ds.sizes[columns.name]} x {ds.sizes[rows.name]} ({columns.name} x "
             f"{rows.name}) = {n:,} orbits per parameter point, {n_points} parameter point"
             f"{'s' if n_points != 1 else ''} ({units})")

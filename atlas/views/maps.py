@@ -23,6 +23,7 @@ processes (:mod:`atlas.views.plotting`). matplotlib is imported only where a fig
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -57,6 +58,8 @@ __all__ = ["basin_map", "trap_time_map", "boundary_distance_map", "MAP_FIGURES",
            "draw_limit_cycle", "basin_key", "draw_separatrices", "grid_image", "label_bands"]
 
 TWO_PI = 2.0 * np.pi
+#: The axes of a scene made by hand (a scene read from a file names its model's axes).
+PENDULUM_AXES = lookup(DEFAULT).axes
 
 
 def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
@@ -72,7 +75,7 @@ def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
     sep = point_group(tree, "separatrices", point_of(ds))
     columns, rows = of_attrs(ds.attrs).axes
     return ds, {"grid": (ds[columns.name].values, ds[rows.name].values),
-                "axes": (columns, rows),
+                "grid_axes": (columns, rows),
                 "image": (maps or read_maps(tree, name, **index))[name],
                 "separatrices": [] if sep is None else
                 [(theta, theta_dot) for _, _, theta, theta_dot in branches(sep)],
@@ -80,9 +83,9 @@ def _map_scene(tree: xr.DataTree, name: str, maps: dict | None, index: dict
 
 
 def grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray,
-               axes: tuple[Axis, Axis] = lookup(DEFAULT).axes, **kwargs):
-    """Draw a map over the grid (columns, rows: the model's ``axes``, by default the
-    pendulum's θ0 and θ̇0) as an image whose pixels are the grid's cells (centred on the grid
+               grid_axes: tuple[Axis, Axis] = PENDULUM_AXES, **kwargs):
+    """Draw a map over the grid (columns, rows: the model's ``grid_axes``; the pendulum's θ0 and
+    θ̇0) as an image whose pixels are the grid's cells (centred on the grid
     points); ``image``: the map already coarsened to the figure's resolution (its blocks then
     span the same extent). An axis in radians gets ticks at multiples of π."""
     th, v = grid
@@ -93,7 +96,7 @@ def grid_image(ax, grid: tuple[np.ndarray, np.ndarray], image: np.ndarray,
                       aspect="auto", interpolation="nearest", **kwargs)
     ax.set_xlim(th[0], th[-1])
     ax.set_ylim(v[0], v[-1])
-    columns, rows = axes
+    columns, rows = grid_axes
     window_ticks(ax, th[0], th[-1], "x", columns.symbol, columns.unit_text,
                  pi=columns.units == "rad")
     window_ticks(ax, v[0], v[-1], "y", rows.symbol, rows.unit_text)
@@ -230,13 +233,13 @@ def drawn_wells(image: np.ndarray, kmin: int, kmax: int) -> list[int]:
 
 
 def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str,
-                axes: tuple[Axis, Axis] = lookup(DEFAULT).axes):
+                grid_axes: tuple[Axis, Axis] = PENDULUM_AXES):
     """Draw :func:`_basin_scene` (as :func:`basin_map`)."""
     k, kmin, kmax, running = image
     wells = drawn_wells(k, kmin, kmax)
     unlabelled = bool(np.isnan(k).any())
     cmap, norm, ticks, names, _ = basin_key(wells, running, unlabelled)
-    mesh = grid_image(ax, grid, k, axes, cmap=cmap, norm=norm)
+    mesh = grid_image(ax, grid, k, grid_axes, cmap=cmap, norm=norm)
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
     cbar.ax.set_yticklabels(names, fontsize=8 if len(names) <= 24 else 6)
     cbar.set_label("attractor k: orbit settles at the rest state of well k"
@@ -267,7 +270,7 @@ def _trap_time_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> di
 
 
 def _draw_trap_time(ax, grid, image, separatrices, point: str,
-                    axes: tuple[Axis, Axis] = lookup(DEFAULT).axes):
+                    grid_axes: tuple[Axis, Axis] = PENDULUM_AXES):
     """Draw :func:`_trap_time_scene` (as :func:`trap_time_map`); ``point``: the parameter
     point's title line."""
     from matplotlib import colormaps
@@ -282,7 +285,7 @@ def _draw_trap_time(ax, grid, image, separatrices, point: str,
     # t_trap = 0 (certified at once: the orbit starts inside the trap) is the shortest time
     # there is: drawn below the scale in the scale's own dark end, not in a colour of its own
     cmap = cmap.with_extremes(under=cmap(0.0), bad=NO_LABEL_COLOR)
-    mesh = grid_image(ax, grid, np.where(t == 0, lo / 2, t), axes, cmap=cmap,
+    mesh = grid_image(ax, grid, np.where(t == 0, lo / 2, t), grid_axes, cmap=cmap,
                       norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
         "t_trap [s]: time at which the label was certified\n(trapped in a well, or running)")
@@ -303,11 +306,11 @@ def _boundary_distance_scene(tree: xr.DataTree, maps: dict | None = None, **inde
     """What :func:`boundary_distance_map` draws: :func:`_map_scene`'s and d_cert (rad and
     rad/s as one Euclidean unit, as ``boundary_distance``)."""
     ds, scene = _map_scene(tree, "boundary_distance", maps, index)
-    return scene | {"d_cert": float(ds["d_cert"])}
+    return scene | {"d_cert": float(ds["d_cert"]) if "d_cert" in ds else math.nan}
 
 
 def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point: str,
-                            axes: tuple[Axis, Axis] = lookup(DEFAULT).axes):
+                            grid_axes: tuple[Axis, Axis] = PENDULUM_AXES):
     """Draw :func:`_boundary_distance_scene` (as :func:`boundary_distance_map`); ``point``:
     the parameter point's title line."""
     from matplotlib import colormaps
@@ -317,7 +320,7 @@ def _draw_boundary_distance(ax, grid, image, separatrices, d_cert: float, point:
     measured = d_cert == d_cert
     lo, hi = _spread(d[np.isfinite(d) & (d > (d_cert if measured else 0.0))])
     cmap = colormaps[DISTANCE_CMAP].with_extremes(bad=NO_LABEL_COLOR)
-    mesh = grid_image(ax, grid, d, axes, cmap=cmap, norm=LogNorm(lo, hi))
+    mesh = grid_image(ax, grid, d, grid_axes, cmap=cmap, norm=LogNorm(lo, hi))
     ax.figure.colorbar(mesh, ax=ax, extend="both").set_label(
         "distance to the nearest basin boundary\n[rad (θ) and rad/s (θ̇) as one Euclidean "
         "unit];\ncolours span its 1st to 99th percentile")

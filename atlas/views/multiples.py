@@ -130,7 +130,7 @@ def draw_multiples(ax, panels: list[dict], wells: list[int], running: bool, titl
     for i, panel in enumerate(panels):
         ax = fig.add_subplot(grid[i // cols, i % cols], sharex=first, sharey=first)
         first = first or ax
-        mesh = grid_image(ax, panel["grid"], panel["image"], panel["axes"], cmap=cmap,
+        mesh = grid_image(ax, panel["grid"], panel["image"], panel["grid_axes"], cmap=cmap,
                           norm=norm)
         if len(panel["wells"]) > LABELLED_WELLS:  # named where a label fits in the panel
             step = max(1, -(-max(panel["image"].shape) // _LABEL_ROWS))

@@ -18,6 +18,8 @@ NumPy RK4, no Numba: the model is small, and the seam is what is tested.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 import xarray as xr
 
@@ -25,7 +27,7 @@ from atlas.layout import Layout
 from atlas.models.base import Axis, MapVariable, Model, status_flags
 from atlas.models.registry import register
 from atlas.pipeline.config_numbers import Numbers
-from atlas.pipeline.config_sections import StrictModel
+from atlas.pipeline.config_sections import ParameterSection
 from atlas.store.schema import summary_dataset
 
 #: An orbit is trapped in its well once its energy is below −TRAP_MARGIN.
@@ -62,26 +64,16 @@ DUFFING = Model(
         "long_name": "fraction of the grid without a label (unresolved or nonfinite)"}},
     attractor="the rest state (k, 0), k = -1 or +1",
     planner=__name__,
+    positive=("delta",),
 )
 register(DUFFING)
 
 
-class Section(StrictModel):
-    """The ``duffing:`` section: the damping δ [s⁻¹], a number or a list."""
+class Section(ParameterSection):
+    """The ``duffing:`` section: the damping δ [s⁻¹], a number, a list or a range."""
 
+    NAMES: ClassVar[tuple[str, ...]] = tuple(DUFFING.parameters)
     delta: Numbers = 0.3
-
-    def values(self, name: str) -> list[float]:
-        value = getattr(self, name)
-        return value if isinstance(value, list) else [value]
-
-    @property
-    def swept(self) -> tuple[str, ...]:
-        return tuple(name for name in DUFFING.parameters if isinstance(getattr(self, name), list))
-
-    @property
-    def points(self) -> list[dict[str, float]]:
-        return [{"delta": d} for d in self.values("delta")]
 
 
 def check(cfg, study: bool) -> None:
@@ -89,6 +81,8 @@ def check(cfg, study: bool) -> None:
         raise ValueError("stability: the duffing model has no study")
     if min(cfg.section.values("delta")) <= 0:
         raise ValueError("duffing.delta: must be > 0 (without damping no orbit settles)")
+    if cfg.integrator.t_max <= cfg.integrator.dt:
+        raise ValueError("integrator.t_max: must be larger than dt")
 
 
 def _energy(x, v):

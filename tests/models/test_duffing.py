@@ -196,3 +196,25 @@ grid:
 separatrices: {enabled: false}
 """))
     assert "radians" in pendulum.warnings[0]
+
+
+def test_the_config_of_another_model_is_checked_in_its_own_words(tmp_path, capsys):
+    """Errors name the keys the config of the model has (grid.x0, not the pendulum's
+    grid.theta0); its grid has no default; ``model_section`` is no key of any config."""
+    def error(body: str) -> str:
+        path = write_config(tmp_path / "c.yaml", body)
+        assert main(["run", str(path)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1, err
+        return err[0]
+
+    good = CONFIG.format(delta=0.3, output=tmp_path / "d.h5")
+    assert "grid.x0: start (2) must be less than stop (-2)" in error(
+        good.replace("x0: {start: -2, stop: 2", "x0: {start: 2, stop: -2"))
+    assert "grid.v0.nm: unknown key" in error(good.replace("num: 25", "nm: 25"))
+    assert "has no default window; give grid.x0 and grid.v0" in error(
+        "model: duffing\nduffing: {delta: 0.3}\n")
+    assert "pendulum: not a section of model duffing" in error(
+        good + "pendulum: {alpha: 0.1}\n")
+    assert "model_section: unknown key" in error("model_section: {alpha: 0.5}\n")
+    assert not list(tmp_path.glob("*.h5"))

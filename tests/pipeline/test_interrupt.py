@@ -179,7 +179,7 @@ def test_a_signal_inside_a_compiled_kernel_is_an_interruption(tmp_path, monkeypa
     line and exits 130 (143 for SIGTERM), as for any Ctrl-C; another SystemError stays one."""
     from atlas.cli import main
     from atlas.errors import Terminated
-    from atlas.models.pendulum import plan as points
+    from atlas.models.pendulum import points
 
     def from_a_kernel(signal_error):
         def running_certificates(*args, **kwargs):

@@ -121,5 +121,6 @@ PENDULUM = Model(
     planner="atlas.models.pendulum.plan",
     labelled=(TRAPPED, NEAR_BOUNDARY),
     running=(RUNNING, RUNNING_NEAR_BOUNDARY),
+    positive=("alpha", "omega0"),
     since={"trap_energy_cap": 4},
 )
