@@ -291,7 +291,7 @@ STUDY_BASE = {"name": "fuzz-study",
                            "torque": {"start": 0.0, "stop": 0.4, "num": 2}},
               "grid": {"theta0": {"start": "-pi", "stop": "pi", "num": 2},
                        "theta_dot0": {"start": -3, "stop": 3, "num": 2}},
-              "stability": {"sigma_theta": 0.3, "sigma_theta_dot": 0.5, "tipping": True}}
+              "stability": {"sigma_theta": 0.1, "sigma_theta_dot": 0.2, "tipping": True}}
 #: The keys a study reads: the config's, the ``stability`` section's, and each pendulum
 #: parameter's range keys.
 STUDY_KEYS = [*KEYS, ("stability",), ("stability", "sigma_theta"),
@@ -299,7 +299,7 @@ STUDY_KEYS = [*KEYS, ("stability",), ("stability", "sigma_theta"),
               *[("pendulum", name, key) for name in ("alpha", "omega0", "torque")
                 for key in ("start", "stop", "num")]]
 #: What a study's run may cost here: points, and wells its window and Gaussian box reach.
-STUDY_POINTS, STUDY_WELLS = 3, 4
+STUDY_POINTS, STUDY_WELLS = 3, 6
 
 
 def _cheap_study(text: str, folder: Path) -> bool:
@@ -347,6 +347,14 @@ def _run_study(text: str, good: Path) -> None:
         else:
             _one_line(code, err)
             assert _snapshot(folder) == before, err
+
+
+def test_the_valid_study_is_cheap_enough_to_run(tmp_path):
+    """The mutations start from a study the fuzzer runs (not one it skips as too dear), so
+    that the valid ones among them exercise the path that writes a study."""
+    assert _cheap_study(yaml.safe_dump(STUDY_BASE), tmp_path)
+    assert not _cheap_study(yaml.safe_dump({**STUDY_BASE, "stability": {
+        "sigma_theta": 0.3, "sigma_theta_dot": 0.5}}), tmp_path)  # the bound bites
 
 
 @pytest.fixture(scope="module")
