@@ -148,9 +148,25 @@ def _point_selectors(args) -> dict:
 
 
 def _cmd_info(args) -> int:
+    from atlas.store.readback import DamagedChunk, read_back
     from atlas.views.info import info_lines
 
-    for line in info_lines(args.file, _point_selectors(args)):
+    try:
+        lines = info_lines(args.file, _point_selectors(args))
+    except (AtlasError, OSError):
+        if args.check and Path(args.file).exists():
+            try:  # a read that failed on a damaged chunk: name it
+                read_back(args.file)
+            except DamagedChunk:
+                raise
+            except AtlasError:
+                pass
+        raise
+    if args.check:
+        done = read_back(args.file)
+        lines.append(f"  check     every stored chunk read back: {done.variables} variables "
+                     f"in {done.groups} groups, {done.nbytes:,} bytes")
+    for line in lines:
         print(line)
     return 0
 
@@ -388,6 +404,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "for an interrupted run, how far it got")
     _add_point_selectors(p, "print the detail of", "a parameter atlas's points as one "
                          "table")
+    p.add_argument("--check", action="store_true", help="also read back every stored chunk "
+                   "of every variable (a damaged one: named, exit status 2)")
     p.set_defaults(func=_cmd_info)
 
     p = sub.add_parser("plot", help="the figures of an atlas file (basin map, trapping "

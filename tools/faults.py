@@ -16,8 +16,12 @@ few minutes on two cores:
   assembled, while its summary and while its groups are written); the space is then freed;
 * hostile input: Hypothesis-generated configs (from the schema's keys, and mutations of a
   valid one) and byte-level damage to a valid atlas file, fed to ``atlas run``, ``info``,
-  ``plot`` and ``view`` (``tests/commands/test_fuzz.py`` with ``ATLAS_FUZZ_SCALE=10``: ten times the
-  examples of ``make test``);
+  ``plot`` and ``view``; the same for studies (``stability.*`` keys and parameter ranges)
+  and study files, fed to ``atlas stability``, ``info`` (``--check`` too) and ``plot``
+  (``tests/commands/test_fuzz.py`` with ``ATLAS_FUZZ_SCALE=10``: ten times the examples of
+  ``make test``);
+* one bit flipped in a stored chunk of a finished atlas: ``atlas info --check`` must name
+  its variable in one line, exit status 2, the file untouched;
 * racing takeovers of a lock whose holder was SIGKILLed (8 processes; no two may hold it
   at once, every one must get it);
 * two runs of different physics on one Dask scheduler at once;
@@ -271,6 +275,48 @@ class Soak:
         ran none: a harness row must not read as passed while it runs nothing."""
         self.rows.append(hostile_input_row(Path(_package_root()), scale))
 
+    def damaged_chunks(self, n: int) -> None:
+        """A finished atlas with one bit flipped in a random compressed chunk (one h5py cannot
+        read past: a few bits of a deflate stream change nothing read), ``n`` times:
+        ``atlas info --check`` must exit 2 with one line naming that variable (recovered)
+        and leave the file as it was (identical)."""
+        import h5py
+
+        cfg, out = self.config("chunks")
+        assert _run(["run", str(cfg), "--quiet"], self.err()) == 0, "a clean run failed"
+        chunks = []
+        with h5py.File(out, "r") as f:
+            for name, dset in f.items():
+                if isinstance(dset, h5py.Dataset) and dset.chunks and dset.compression:
+                    chunks += [(name, dset.id.get_chunk_info(i))
+                               for i in range(dset.id.get_num_chunks())]
+        clean = out.read_bytes()
+        named = untouched = 0
+        for _ in range(n):
+            name, chunk = self.rng.choice(chunks)
+            while True:  # a flip that h5py itself cannot read past
+                damaged = bytearray(clean)
+                damaged[chunk.byte_offset + self.rng.randrange(chunk.size)] ^= (
+                    1 << self.rng.randrange(8))
+                out.write_bytes(bytes(damaged))
+                try:
+                    with h5py.File(out, "r") as f:
+                        f[name][...]
+                except OSError:
+                    break
+            err = self.err()
+            code = _run(["info", "--check", str(out)], err)
+            lines = err.read_text().strip().splitlines()
+            ok = code == 2 and len(lines) == 1 and f"variable {name}:" in lines[0]
+            if not ok:
+                print(f"info --check: exit {code}, stderr {lines}", file=sys.stderr)
+            named += ok
+            untouched += out.read_bytes() == bytes(damaged)
+        out.unlink()
+        self.rows.append(("one bit flipped in a stored chunk (atlas info --check: exit 2, "
+                          "one line naming the variable; identical = file untouched)", n,
+                          named, untouched))
+
     def lock_races(self, n: int, racers: int = 8) -> None:
         out = self.work / "race.h5"
         recovered = clean = 0
@@ -480,9 +526,11 @@ def hostile_input_row(root: Path, scale: int) -> tuple[str, int, int, int]:
     ``ATLAS_FUZZ_SCALE=scale``: (what, injected, recovered, identical). Not found, failed
     or no test run (pytest's exit 5): recovered and identical 0."""
     tests = root / FUZZ_TESTS
-    n = 4 * 40 * scale  # four property tests of 40 examples each at scale 1
-    what = (f"hostile input: fuzzed configs and damaged atlas files (up to {n} examples; "
-            "recovered = exit 0 or one line, identical = nothing created or overwritten)")
+    # each property test (@FUZZ) draws 40 examples at scale 1
+    n = 40 * scale * max(1, tests.read_text().count("\n@FUZZ\n") if tests.exists() else 0)
+    what = (f"hostile input: fuzzed configs and studies, damaged atlas and study files (up "
+            f"to {n} examples; recovered = exit 0 or one line, identical = nothing created "
+            "or overwritten)")
     if not tests.exists():
         return (f"hostile input: FAILED, {FUZZ_TESTS} not found", n, 0, 0)
     proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
@@ -527,8 +575,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--quick", action="store_true", help="a few of each, for a smoke test")
     args = parser.parse_args(argv)
-    kills, zarr_kills, terms, races, pairs, dask_kills = (
-        (6, 2, 2, 1, 1, 1) if args.quick else (args.kills, 20, 10, 5, 2, 2))
+    kills, zarr_kills, terms, races, pairs, dask_kills, flips = (
+        (6, 2, 2, 1, 1, 1, 3) if args.quick else (args.kills, 20, 10, 5, 2, 2, 30))
     start = time.perf_counter()
     _warm_kernels()
     with tempfile.TemporaryDirectory(prefix="atlas-faults-") as tmp:
@@ -541,6 +589,7 @@ def main(argv: list[str] | None = None) -> int:
         soak.disk_full([16, 64, 128, 200] if not args.quick else [96])
         soak.disk_taken(list(PHASES) if not args.quick else ["assembly"])
         soak.hostile_input(1 if args.quick else 10)
+        soak.damaged_chunks(flips)
         soak.lock_races(races)
         soak.dask(pairs, dask_kills)
     print(_table(soak.rows))

@@ -9,9 +9,10 @@ probabilities (``tipping: true``, 1-D studies). Every parameter point is compute
 (:mod:`atlas.stability.study`), the bifurcations of the ranges located
 (:mod:`atlas.stability.bifurcations`), and the study written to the config's output (or
 ``-o``) as :mod:`atlas.store.study` lays it out. Bad input — a config that does not validate,
-a study of more than :data:`MAX_POINTS` points without ``--force``, an output that holds a
-file other than a study without ``--force`` — is refused before any work, with one line
-(exit status 2).
+a study of more than :data:`MAX_POINTS` points without ``--force``, a window or Gaussian box
+whose boundaries would run beyond the wells an atlas indexes, an output that holds a file
+other than a study without ``--force`` — is refused before any work, with one line (exit
+status 2).
 """
 
 from __future__ import annotations
@@ -69,6 +70,27 @@ def _check_output(path: Path, force: bool, config) -> None:
         raise OutputInTheWay(f"{path.parent}: no such folder for the output")
 
 
+def _check_reach(settings, alpha: float, config) -> None:
+    """Refuse, in one line naming the key, a study whose exact boundaries would run beyond the
+    wells an atlas indexes (:func:`atlas.limits.check_reach`, the grid run's bound at the
+    smallest ``alpha`` [1/s]): over its window, or over the Gaussian's box around a rest state
+    (|θ*| ≤ π/2). Their cost grows with the wells and speeds they span: such a study (a
+    window ±1e6 wide, σ = 1e6) ran for hours, or until the memory ran out."""
+    from atlas.errors import ConfigError
+    from atlas.limits import check_reach
+    from atlas.stability.study import gaussian_box
+
+    boxes = [("grid", settings.window)]
+    if settings.sigma is not None:
+        boxes.append(("stability.sigma_theta, sigma_theta_dot",
+                      gaussian_box(0.5 * math.pi, settings.sigma)))
+    for key, box in boxes:
+        try:
+            check_reach(*(max(abs(lo), abs(hi)) for lo, hi in box), alpha)
+        except ValueError as exc:
+            raise ConfigError(f"{config}: {key}: {exc}") from None
+
+
 def run_study(config, *, output=None, backend=None, force=False, verbose=False,
               on_result=None):
     """Load, check, compute and write the study of ``config``: (Dataset, output path,
@@ -88,8 +110,6 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
         raise AtlasError(f"{config}: the study has {count:,} parameter points, more "
                          f"than {MAX_POINTS:,}; --force computes it anyway")
     points = cfg.pendulum.points
-    path = Path(cfg.output)
-    _check_output(path, force, config)
     g = cfg.grid
     stab = cfg.stability
     settings = StudySettings(
@@ -97,6 +117,9 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
         sigma=(None if stab is None or stab.sigma_theta is None
                else (stab.sigma_theta, stab.sigma_theta_dot)),
         tipping=bool(stab is not None and stab.tipping))
+    _check_reach(settings, min(cfg.pendulum.alphas), config)
+    path = Path(cfg.output)
+    _check_output(path, force, config)
     backend = backend or ("dask" if cfg.execution.backend == "dask" else "cpu")
     triples = [(p["alpha"], p["omega0"], p["torque"]) for p in points]
     workers = cfg.execution.workers or (None if backend == "dask" else cores())

@@ -8,7 +8,7 @@ is part of the method. :func:`label_orbit_trigfree` is its scalar form (libm), f
 the lane kernel does not take.
 
 Accuracy: a different discretisation of the same order 4 (Hairer, Nørsett & Wanner, *Solving
-ODEs I*, §II.1); tests/kernels/test_trigfree.py fits the order against DOP853. Between
+ODEs I*, §II.1); tests/kernels/test_trigfree_order.py fits the order against DOP853. Between
 re-synchronisations c² + s² drifts by O(dt⁵) per step.
 Derivation: docs/design/kernels.md#trig-free-rk4.
 """

@@ -31,7 +31,7 @@ from atlas.stability.shocks import (
 )
 
 __all__ = ["StudySettings", "PointResult", "compute_point", "compute_points", "POINT_STATUS",
-           "PHASES"]
+           "PHASES", "gaussian_box"]
 
 #: The status of a parameter point (CF flag values of ``point_status``).
 POINT_STATUS = {"exact": 0, "saddle_node": 1, "failed": 2}
@@ -76,21 +76,29 @@ class PointResult:
     seconds: dict = field(default_factory=dict)
 
 
+def gaussian_box(rest_angle: float, sigma: tuple[float, float]):
+    """The window ((θmin, θmax) [rad], (θ̇min, θ̇max) [rad s⁻¹]) whose exact boundaries the
+    Gaussian stability of the rest state at ``rest_angle`` [rad] needs: ±REACH σθ around it,
+    and speeds to REACH σθ̇ and 0.5 rad s⁻¹ beyond (:mod:`atlas.stability.gaussian`)."""
+    from atlas.stability.gaussian import REACH
+
+    s_theta, s_dot = sigma
+    speed = REACH * s_dot + 0.5
+    return ((rest_angle - REACH * s_theta, rest_angle + REACH * s_theta), (-speed, speed))
+
+
 def _gaussian(boundaries, settings: StudySettings):
     """(P, error) of well 0's rest state; the boundaries are integrated again over the
     Gaussian's box where the window's do not reach it."""
     from atlas.boundaries.exact import exact_boundaries
-    from atlas.stability.gaussian import REACH, gaussian_stability
+    from atlas.stability.gaussian import gaussian_stability
     from atlas.stability.polygons import basin_shape
 
-    s_theta, s_dot = settings.sigma
-    speed = REACH * s_dot + 0.5
+    box = gaussian_box(boundaries.pendulum.rest_angle, settings.sigma)
+    speed = box[1][1]
     if speed > boundaries.outline_reach:  # beyond the band they were built for: build there
-        c = boundaries.pendulum.rest_angle
-        boundaries = exact_boundaries(boundaries.pendulum,
-                                      ((c - REACH * s_theta, c + REACH * s_theta),
-                                       (-speed, speed)))
-    return gaussian_stability(basin_shape(boundaries, speed), s_theta, s_dot)
+        boundaries = exact_boundaries(boundaries.pendulum, box)
+    return gaussian_stability(basin_shape(boundaries, speed), *settings.sigma)
 
 
 def compute_point(alpha: float, omega0: float, torque: float,

@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import gc
 import os
 import re
+import sys
 import zlib
 from pathlib import Path
 
@@ -110,8 +112,11 @@ class HDF5(Container):
         return root_attrs(path)[0]
 
     def open_dataset(self, path: Path) -> xr.Dataset:
-        with xr.open_dataset(path, engine="h5netcdf", mask_and_scale=False) as f:
-            return f.load()
+        def load():
+            with xr.open_dataset(path, engine="h5netcdf", mask_and_scale=False) as f:
+                return f.load()
+
+        return _without_close_noise(load)
 
     def write_dataset(self, ds: xr.Dataset, path: Path) -> None:
         tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
@@ -133,13 +138,43 @@ class HDF5(Container):
         return attrs
 
     def open(self, path: Path, chunks=None) -> xr.DataTree:
-        return xr.open_datatree(path, engine="h5netcdf", mask_and_scale=False, chunks=chunks)
+        return _without_close_noise(lambda: xr.open_datatree(
+            path, engine="h5netcdf", mask_and_scale=False, chunks=chunks))
 
     def stored_rows(self, ds: xr.Dataset, name: str, point: dict[str, int]):
         return StoredRows.of(ds, name, point)
 
 
 # ------------------------------------------------------------------- the chunk encoding
+
+def _without_close_noise(opener):
+    """``opener()``, whose error on a damaged file comes out alone: an h5netcdf File whose
+    constructor failed is closed by its ``__del__``, which raises AttributeError (no
+    ``_writable``) and prints "Exception ignored in" with a traceback on stderr, under the
+    one line atlas says. The error's tracebacks (which hold that File) are dropped here and
+    the File collected while that noise of a File that never opened is not printed."""
+    hook = sys.unraisablehook
+
+    def quiet(unraisable):
+        if not (isinstance(unraisable.exc_value, AttributeError)
+                and getattr(unraisable.object, "__module__", "").startswith("h5netcdf")):
+            hook(unraisable)
+
+    sys.unraisablehook = quiet
+    try:
+        try:
+            return opener()
+        except Exception as exc:
+            error = exc
+        seen = error
+        while seen is not None:  # the chain's tracebacks hold the half-built File
+            seen.__traceback__ = None
+            seen = seen.__context__
+        gc.collect()
+    finally:
+        sys.unraisablehook = hook
+    raise error
+
 
 def root_attrs(path: Path) -> tuple[dict, bool]:
     """(the root attributes of the HDF5 file at ``path``, whether it holds an atlas basin

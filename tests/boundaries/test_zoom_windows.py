@@ -1,5 +1,5 @@
 """Zooms without torque into the k = 0 | 1 boundary and into the saddle (π, 0): widths 1 down
-to 1e-8 (the checks: tests/boundaries/zoom_cases.py), and the refusal of narrower windows."""
+to 1e-9 (the checks: tests/boundaries/zoom_cases.py), and the refusal of narrower windows."""
 
 from __future__ import annotations
 

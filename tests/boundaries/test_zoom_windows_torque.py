@@ -1,5 +1,5 @@
 """Zooms with torque τ = 0.3 into a boundary of the tilted wells and into the tilted saddle:
-widths 1 down to 1e-8 (the checks: tests/boundaries/zoom_cases.py). A file of its own so
+widths 1 down to 1e-9 (the checks: tests/boundaries/zoom_cases.py). A file of its own so
 that the test workers share the zooms out."""
 
 from __future__ import annotations

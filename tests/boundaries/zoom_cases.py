@@ -1,9 +1,11 @@
 """Shared by the zoom tests (test_zoom_windows.py, test_zoom_windows_torque.py): zooms
 into a basin boundary and into a saddle, with and without torque (issue 26).
 
-Windows 1 down to 1e-8 wide around a boundary point and a saddle each finish (a hang would
-time the suite out), trace the boundary inside themselves and measure there the shift that
-d_cert is built on; every certified label of the grid points closest to the boundary is an
+Windows 1 down to 1e-9 wide (the narrowest the default tol allows) around a boundary point
+and a saddle each finish (a hang would time the suite out), trace the boundary inside
+themselves and measure there the shift that d_cert is built on; the certified labels of the
+grid points closest to the boundary (the CLOSEST nearest that are certified: some at every
+width, unless nothing is certified, which is then asserted with its reason) are an
 independent DOP853 integration's (rtol = atol = 1e-13); and the boundary count and shift
 reported agree with the labels of the window: where both sides' labels occur, a boundary is
 traced and a shift measured, or nothing is certified. Windows narrower than 1000 tol are
@@ -30,7 +32,7 @@ CENTRES = {"boundary": (0.0, 0.0, 2.4149382176), "saddle": (0.0, math.pi, 0.0),
            "tilted saddle": (0.3, math.pi - math.asin(0.3), 0.0)}
 ALPHA, OMEGA0 = 0.1, 1.0
 FAST = {("boundary", 1e-4), ("saddle", 1e-8)}
-WIDTHS = (1.0, 1e-2, 1e-4, 1e-6, 1e-8)
+WIDTHS = (1.0, 1e-2, 1e-4, 1e-6, 1e-8, 1e-9)
 CLOSEST = 6  # grid points nearest the boundary checked against DOP853
 
 
@@ -85,11 +87,18 @@ output: {tmp_path / 'zoom.h5'}
     return ds, sep
 
 
+#: Zooms that cannot be made: the tilted boundary's centre is known to its chord error
+#: (1e-8) and the RK4 map's boundary lies ≈ 1e-9 from the exact one, so a window 1e-9 wide
+#: around it need not hold the boundary at all.
+UNRESOLVED = {("tilted boundary", 1e-9)}
+
+
 def cases(names):
-    """The zooms of ``names`` at every width, the FAST ones unmarked, the others slow."""
+    """The zooms of ``names`` at every width (but :data:`UNRESOLVED`), the FAST ones
+    unmarked, the others slow."""
     return [pytest.param(name, width, id=f"{name}-{width:g}",
                          marks=() if (name, width) in FAST else pytest.mark.slow)
-            for name in names for width in WIDTHS]
+            for name in names for width in WIDTHS if (name, width) not in UNRESOLVED]
 
 
 def check_zoom(tmp_path, name: str, width: float) -> None:
@@ -121,11 +130,13 @@ def check_zoom(tmp_path, name: str, width: float) -> None:
     else:
         assert not math.isfinite(d_cert) or not (dist > d_cert).any()
 
-    # the certified labels nearest the boundary are the exact equation's
-    order = np.argsort(dist, axis=None)[:CLOSEST]
+    # the certified labels nearest the boundary are the exact equation's: at every width
+    # some are compared, unless none can be (nothing certified: asserted above, with why)
+    order = np.array([i for i in np.argsort(dist, axis=None) if certified.flat[i]][:CLOSEST],
+                     np.intp)
+    assert len(order) == min(CLOSEST, int(certified.sum()))
+    assert order.size or not certified.any()
     for row, col in zip(*np.unravel_index(order, dist.shape)):
-        if not certified[row, col]:
-            continue
         want = _reference(float(theta0[col]), float(theta_dot0[row]), torque)
         got = "running" if status[row, col] == RUNNING else int(attractor[row, col])
         assert want == got, (theta0[col], theta_dot0[row], want, got, dist[row, col])

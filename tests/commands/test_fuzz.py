@@ -1,6 +1,8 @@
 """Property-based hostile input (Hypothesis, seeded): random configs built from the schema's
-keys with random types and values, random mutations of a valid config (values and raw
-text), and random byte-level damage to a valid atlas file, fed to the real CLI.
+keys with random types and values (ranges ``{start, stop, num}`` among them), random mutations
+of a valid config (values and raw text), random byte-level damage to a valid atlas file, and
+the same for ``atlas stability``: random study configs (with the ``stability.*`` keys and
+parameter ranges), mutations of a valid one and damaged study files, fed to the real CLI.
 
 Invariant: exit 0 with a sound file, or exit 2 with one ``atlas: error:`` line and nothing
 created or overwritten; never a traceback, never a signal. The CLI runs in-process
@@ -12,6 +14,7 @@ created or overwritten; never a traceback, never a signal. The CLI runs in-proce
 
 from __future__ import annotations
 
+import gc
 import io
 import math
 import os
@@ -63,8 +66,14 @@ scalars = st.one_of(
     st.sampled_from(["3pi", "-pi/2", "2*pi", "pi/0", "1e309", "nan", "-inf", "3pie", "~",
                      "</script>", "cpu", "cuda", "dask", "tpu", "/", "..", "\x00", "rk4",
                      "rk4-trigfree", "rk5"]))
+#: A parameter range ``{start, stop, num}``: whole with random values, or keys missing or
+#: unknown.
+ranges = (st.fixed_dictionaries({"start": scalars, "stop": scalars, "num": scalars})
+          | st.dictionaries(st.sampled_from(["start", "stop", "num", "step"]), scalars,
+                            max_size=4))
 values = st.recursive(scalars, lambda inner: st.lists(inner, max_size=3)
-                      | st.dictionaries(st.text(max_size=6), inner, max_size=3), max_leaves=6)
+                      | st.dictionaries(st.text(max_size=6), inner, max_size=3), max_leaves=6
+                      ) | ranges
 #: Text that YAML or the loader must refuse, spliced into a config.
 YAML_SNIPPETS = ["&a [1, 2]\nx: *a", "!!python/object/apply:os.system ['true']", "{", "]",
                  "name: a\nname: b", "\t- x", "? [1]\n: 2", "%TAG !x! y", "--- \n---", "\ufeff",
@@ -72,10 +81,19 @@ YAML_SNIPPETS = ["&a [1, 2]\nx: *a", "!!python/object/apply:os.system ['true']",
 
 
 def cli(*args) -> tuple[int, str]:
-    """``atlas ARGS`` in-process: (exit status, stderr). Any exception escapes (a bug)."""
+    """``atlas ARGS`` in-process: (exit status, stderr). Any exception escapes (a bug); one
+    raised where Python cannot raise it (a ``__del__``) is on stderr as in a process of its
+    own: "Exception ignored in …" and its traceback."""
     err = io.StringIO()
-    with redirect_stdout(io.StringIO()), redirect_stderr(err):
-        code = main([str(a) for a in args])
+    hook = sys.unraisablehook
+    sys.unraisablehook = lambda u: err.write(f"Exception ignored in: {u.object!r}\n"
+                                             f"Traceback: {u.exc_value!r}\n")
+    try:
+        with redirect_stdout(io.StringIO()), redirect_stderr(err):
+            code = main([str(a) for a in args])
+            gc.collect()
+    finally:
+        sys.unraisablehook = hook
     return code, err.getvalue()
 
 
@@ -264,3 +282,128 @@ def test_damaged_files_and_configs_in_a_subprocess(good, tmp_path):
         assert "Traceback" not in proc.stderr
         if proc.returncode == 2:
             assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+# ------------------------------------------------------------------ atlas stability (studies)
+
+STUDY_BASE = {"name": "fuzz-study",
+              "pendulum": {"alpha": 0.2, "omega0": 1.0,
+                           "torque": {"start": 0.0, "stop": 0.4, "num": 2}},
+              "grid": {"theta0": {"start": "-pi", "stop": "pi", "num": 2},
+                       "theta_dot0": {"start": -3, "stop": 3, "num": 2}},
+              "stability": {"sigma_theta": 0.1, "sigma_theta_dot": 0.2, "tipping": True}}
+#: The keys a study reads: the config's, the ``stability`` section's, and each pendulum
+#: parameter's range keys.
+STUDY_KEYS = [*KEYS, ("stability",), ("stability", "sigma_theta"),
+              ("stability", "sigma_theta_dot"), ("stability", "tipping"),
+              *[("pendulum", name, key) for name in ("alpha", "omega0", "torque")
+                for key in ("start", "stop", "num")]]
+#: What a study's run may cost here: points, and wells its window and Gaussian box reach.
+STUDY_POINTS, STUDY_WELLS = 3, 6
+
+
+def _cheap_study(text: str, folder: Path) -> bool:
+    """Run only a small study (a refused config always runs: refusing is quick): at most
+    STUDY_POINTS points, whose window and Gaussian box stay within STUDY_WELLS wells of
+    travel (:func:`atlas.limits.reach`), on this machine."""
+    from atlas.limits import reach
+    from atlas.stability.gaussian import REACH
+
+    cfg_path = folder / "probe.yaml"
+    cfg_path.write_text(text, encoding="utf-8", errors="surrogateescape")
+    try:
+        cfg = atlas.load_config(cfg_path, output=folder / "probe.h5", study=True)
+    except atlas.AtlasError:
+        return True
+    finally:
+        cfg_path.unlink()
+    g, stab, alpha = cfg.grid, cfg.stability, min(cfg.pendulum.alphas)
+    boxes = [(max(abs(g.theta0.start), abs(g.theta0.stop)),
+              max(abs(g.theta_dot0.start), abs(g.theta_dot0.stop)))]
+    if stab is not None and stab.sigma_theta is not None:
+        boxes.append((math.pi + REACH * stab.sigma_theta, REACH * stab.sigma_theta_dot + 0.5))
+    return (len(cfg.pendulum.points) <= STUDY_POINTS and cfg.execution.backend == "cpu"
+            and all(reach(t, v, alpha) <= 2 * math.pi * STUDY_WELLS for t, v in boxes))
+
+
+def _run_study(text: str, good: Path) -> None:
+    """``atlas stability`` on ``text`` over an earlier study file; the invariant of
+    :func:`_run_config`."""
+    from atlas.store.study import open_study
+
+    with tempfile.TemporaryDirectory(prefix="atlas-fuzz-") as tmp:
+        folder = Path(tmp)
+        if not _cheap_study(text, folder):
+            return
+        cfg = folder / "c.yaml"
+        cfg.write_text(text, encoding="utf-8", errors="surrogateescape")
+        out = folder / "out.h5"
+        shutil.copyfile(good, out)
+        before = _snapshot(folder)
+        code, err = cli("stability", cfg, "-o", out)
+        if code == 0:
+            open_study(out)
+            assert set(_snapshot(folder)) <= set(before), err
+        else:
+            _one_line(code, err)
+            assert _snapshot(folder) == before, err
+
+
+def test_the_valid_study_is_cheap_enough_to_run(tmp_path):
+    """The mutations start from a study the fuzzer runs (not one it skips as too dear), so
+    that the valid ones among them exercise the path that writes a study."""
+    assert _cheap_study(yaml.safe_dump(STUDY_BASE), tmp_path)
+    assert not _cheap_study(yaml.safe_dump({**STUDY_BASE, "stability": {
+        "sigma_theta": 0.3, "sigma_theta_dot": 0.5}}), tmp_path)  # the bound bites
+
+
+@pytest.fixture(scope="module")
+def good_study(tmp_path_factory) -> Path:
+    """A valid study file (2 points, the Gaussian and the tipping probabilities: every
+    variable a study stores is there to be damaged)."""
+    tmp = tmp_path_factory.mktemp("fuzz-study")
+    (tmp / "good.yaml").write_text(yaml.safe_dump({**STUDY_BASE,
+                                                   "output": str(tmp / "good.h5")}))
+    code, err = cli("stability", tmp / "good.yaml")
+    assert code == 0, err
+    return tmp / "good.h5"
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.dictionaries(st.sampled_from(STUDY_KEYS), values, max_size=6))
+def test_random_study_configs_from_the_schema(good_study, entries):
+    config: dict = {}
+    for path, value in entries.items():
+        _set(config, path, value, delete=False)
+    _run_study(yaml.safe_dump(config, allow_unicode=True), good_study)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.lists(st.tuples(st.sampled_from(STUDY_KEYS), values, st.booleans()), min_size=1,
+                max_size=3))
+def test_mutated_valid_study_configs(good_study, mutations):
+    config = yaml.safe_load(yaml.safe_dump(STUDY_BASE))
+    for path, value, delete in mutations:
+        _set(config, path, value, delete)
+    _run_study(yaml.safe_dump(config, allow_unicode=True), good_study)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.lists(st.tuples(st.integers(0, 2), st.integers(0, 2**31), st.integers(0, 255)),
+                min_size=1, max_size=12),
+       st.one_of(st.none(), st.floats(0.0, 1.0, exclude_max=True)))
+def test_damaged_study_files(good_study, edits, truncate):
+    """``atlas info``, ``atlas info --check`` and ``atlas plot`` of a damaged study file."""
+    with tempfile.TemporaryDirectory(prefix="atlas-fuzz-") as tmp:
+        bad = Path(tmp) / "bad.h5"
+        bad.write_bytes(_damage(good_study.read_bytes(), edits, truncate))
+        for args in (["info", bad], ["info", "--check", bad],
+                     ["plot", bad, "--outdir", Path(tmp) / "figures"]):
+            before = _snapshot(Path(tmp))
+            code, err = cli(*args)
+            if code != 0:
+                _one_line(code, err)
+                assert _snapshot(Path(tmp)) == before, (args, err)

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers import needs_fma
+
 NOTEBOOK = Path(__file__).resolve().parents[2] / "docs" / "tutorial.ipynb"
 #: The stored notebook's size limit [bytes]: its PNGs are embedded.
 MAX_BYTES = 1_500_000
@@ -97,18 +99,57 @@ def test_the_point_theta0_0_is_on_the_grid():
     assert "θ0 = 0.0 rad, θ̇0 = 2.5 rad/s: k = " in text
 
 
-@pytest.mark.slow
-def test_tutorial_runs_and_gives_the_stored_kinds_of_output():
+@pytest.fixture(scope="module")
+def rerun():
+    """The stored notebook run again from top to bottom in a fresh kernel (once for the
+    module's tests); raises CellExecutionError with the cell on any error."""
     pytest.importorskip("nbclient")
+    return run_notebook(_stored())
+
+
+@pytest.mark.slow
+def test_tutorial_runs_and_gives_the_stored_kinds_of_output(rerun):
     stored = _stored()
-    nb = run_notebook(_stored())  # raises CellExecutionError with the cell on any error
-    code = [c for c in nb.cells if c.cell_type == "code"]
+    code = [c for c in rerun.cells if c.cell_type == "code"]
     kinds = ("image", "stdout", "stderr", "error")
     assert [[len(_outputs(c, k)) for k in kinds] for c in code] == [
         [len(_outputs(c, k)) for k in kinds] for c in stored.cells if c.cell_type == "code"]
     text = "".join(o.text for c in code for o in _outputs(c, "stdout"))
     assert "wells in the window: [0, 1]" in text and "boundary distance" in text
     assert "rest states θ = " in text and "k = [-1, 0, 1]" in text
+
+
+def _seen(output) -> list:
+    """What a reader sees of one output: its printed text, its text/plain and the pixels of
+    its PNG (decoded: the PNG's bytes also hold matplotlib's version)."""
+    import base64
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    data = output.get("data", {})
+    seen = [output.output_type, output.get("name"), output.get("text"), data.get("text/plain")]
+    if "image/png" in data:
+        image = Image.open(io.BytesIO(base64.b64decode(data["image/png"])))
+        seen.append(np.asarray(image).tobytes() + repr(image.size).encode())
+    return seen
+
+
+@pytest.mark.slow
+@needs_fma
+def test_the_stored_outputs_are_what_the_current_library_gives(rerun):
+    """Every stored output is the current library's, not only the stored code's: the
+    printed numbers, the tables and every figure's pixels of a fresh run equal the stored
+    ones exactly (a change of atlas that moves a number or a pixel fails here, until `make
+    notebook` stores the new outputs). Exact, so on a host like the one that stored them
+    (fused multiply-add: a·b + c rounded once; elsewhere last digits may differ)."""
+    stored = [c for c in _stored().cells if c.cell_type == "code"]
+    fresh = [c for c in rerun.cells if c.cell_type == "code"]
+    differ = [c.source.splitlines()[0] for c, d in zip(stored, fresh)
+              if [_seen(o) for o in c.outputs] != [_seen(o) for o in d.outputs]]
+    assert not differ, ("docs/tutorial.ipynb: outputs differ from the current library's "
+                        f"in the cells starting {differ}; `make notebook`")
 
 
 def main() -> int:

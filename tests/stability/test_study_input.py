@@ -100,6 +100,33 @@ def test_a_grid_run_over_a_range_has_a_point_per_value(tmp_path):
     assert running[0] == 0.0 and 0.0 < running[1] < running[2] < 1.0
 
 
+@pytest.mark.parametrize("grid, extra, key", [
+    ("{start: -1.0e+6, stop: 1.0e+6, num: 2}", "check_radians: false\n", "grid:"),
+    ("{start: -pi, stop: pi, num: 2}\n  theta_dot0: {start: -1.0e+6, stop: 1.0e+6, num: 2}",
+     "", "grid:"),
+    ("{start: -pi, stop: pi, num: 2}", "stability: {sigma_theta: 1.0e+6, sigma_theta_dot: 1}\n",
+     "stability.sigma_theta, sigma_theta_dot:"),
+    ("{start: -pi, stop: pi, num: 2}", "stability: {sigma_theta: 1, sigma_theta_dot: 1.0e+6}\n",
+     "stability.sigma_theta, sigma_theta_dot:"),
+])
+def test_a_window_or_gaussian_beyond_the_indexed_wells_is_refused(tmp_path, grid, extra, key):
+    """Windows and Gaussian boxes whose boundaries run beyond the wells an atlas indexes
+    (found by the fuzzer: they ran for hours, or until the memory ran out) are refused at
+    once in one line naming the key (exit 2, nothing written)."""
+    from tests.helpers import run_cli
+
+    out = tmp_path / "w.h5"
+    body = BODY.format(torque="[0.0, 0.3]", output=out).replace(
+        "{start: -pi, stop: pi, num: 2}\n  theta_dot0: {start: -3, stop: 3, num: 2}",
+        grid if "theta_dot0" in grid else grid + "\n  theta_dot0: {start: -3, stop: 3, num: 2}")
+    cfg = write_config(tmp_path / "w.yaml", body + extra)
+    proc = run_cli("stability", cfg, timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"w.yaml: {key} orbits from this window" in lines[0], lines
+    assert "beyond the wells" in lines[0] and not out.exists()
+
+
 def test_a_window_too_narrow_for_exact_fractions_is_refused(tmp_path, capsys):
     """A study's fractions are exact areas of curves good to about 1e-12: a window 1e-11 wide
     is refused in one line naming the axis (exit 2, nothing written); 1e-3 wide is computed."""
