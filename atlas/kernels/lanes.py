@@ -77,7 +77,7 @@ def n_chunks(n: int) -> int:
     """Chunks of a labelling call over ``n`` orbits: ``CHUNKS_PER_THREAD`` per Numba thread
     (``numba.get_num_threads()`` now), fewer on small batches so that each chunk has at least
     two tiles (the separatrix bisection labels a few hundred orbits at a time). A single chunk
-    runs on the calling thread (:func:`_serial_twin`). Results never depend on it. (Computed
+    runs on the calling thread (:func:`serial_twin`). Results never depend on it. (Computed
     outside the jitted kernels: a kernel that asks Numba for its thread count cannot be
     cached.)"""
     return max(1, min(CHUNKS_PER_THREAD * nb.get_num_threads(), n // (2 * TILE)))
@@ -369,7 +369,7 @@ def _label_lanes(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, e
 
 # The four parallel kernels are written out, not made by a factory: Numba's on-disk cache
 # misses a closure over dispatchers in every new process (its key pickles them). Their serial
-# twins (_serial_twin, below) are compiled from the same code, which has no closure.
+# twins (serial_twin, below) are compiled from the same code, which has no closure.
 @cached_njit(parallel=True, nogil=True, fastmath=SIN_FASTMATH)
 def _label_lanes_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
                         energy_cap, model, attractor, status, n_trap, n_chunks):
@@ -407,7 +407,7 @@ def _label_trigfree_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, chec
     return counts
 
 
-def _serial_twin(kernel):
+def serial_twin(kernel):
     """``kernel`` (one of the four parallel labelling kernels) compiled without ``parallel``:
     ``nb.prange`` then runs as ``range`` on the calling thread, the same chunk calls in the
     same order, so the labels are bit-identical (chunks share no state). A call of a single
@@ -424,14 +424,14 @@ def _serial_twin(kernel):
     twin = types.FunctionType(func.__code__, func.__globals__, func.__name__ + "_serial",
                               func.__defaults__, func.__closure__)
     twin.__qualname__ = func.__qualname__ + "_serial"
-    twin.__doc__ = f"{func.__name__} on the calling thread (:func:`_serial_twin`)."
+    twin.__doc__ = f"{func.__name__} on the calling thread (:func:`serial_twin`)."
     return cached_njit(nogil=True, fastmath=SIN_FASTMATH)(twin)
 
 
-_label_lanes_serial = _serial_twin(_label_lanes)
-_label_lanes_torque_serial = _serial_twin(_label_lanes_torque)
-_label_trigfree_serial = _serial_twin(_label_trigfree)
-_label_trigfree_torque_serial = _serial_twin(_label_trigfree_torque)
+_label_lanes_serial = serial_twin(_label_lanes)
+_label_lanes_torque_serial = serial_twin(_label_lanes_torque)
+_label_trigfree_serial = serial_twin(_label_trigfree)
+_label_trigfree_torque_serial = serial_twin(_label_trigfree_torque)
 
 
 def _run_chunks(kernel, serial, theta0, *args):
