@@ -129,22 +129,27 @@ def _cmd_run(args) -> int:
 
 
 def _add_point_selectors(p: argparse.ArgumentParser, what: str, default: str) -> None:
-    """``--point I``, ``--alpha A``, ``--omega0 W``, ``--torque T`` (each repeatable): the
-    parameter points of an atlas whose ``what`` is shown (:mod:`atlas.views.selectors`)."""
+    """``--point I``, ``--alpha A``, ``--omega0 W``, ``--torque T``, and of a driven
+    pendulum's atlas ``--amplitude``, ``--frequency`` (each repeatable): the parameter points
+    of an atlas whose ``what`` is shown (:mod:`atlas.views.selectors`)."""
     p.add_argument("--point", type=int, action="append", metavar="I",
                    help=f"{what} parameter point I (0 the first, -1 the last); repeatable; "
                    f"default: {default}")
-    for name, unit, letter in (("alpha", "1/s", "A"), ("omega0", "rad/s", "W"),
-                               ("torque", "rad/s^2", "T")):
+    for name, unit, letter in _SELECTORS:
         p.add_argument(f"--{name}", type=float, action="append", metavar=letter,
                        help=f"{what} the point(s) of the nearest {name} [{unit}] (outside "
                        "the atlas's range: refused); repeatable")
 
 
+#: The parameters a point may be chosen by: name, unit, metavar.
+_SELECTORS = (("alpha", "1/s", "A"), ("omega0", "rad/s", "W"), ("torque", "rad/s^2", "T"),
+              ("amplitude", "rad/s^2", "F"), ("frequency", "rad/s", "OMEGA"))
+
+
 def _point_selectors(args) -> dict:
     """The point selectors of ``atlas info`` and ``atlas plot``, as
     :func:`atlas.views.selectors.choose_points` takes them."""
-    return {name: getattr(args, name) for name in ("point", "alpha", "omega0", "torque")}
+    return {name: getattr(args, name) for name in ("point", *(s[0] for s in _SELECTORS))}
 
 
 def _cmd_info(args) -> int:

@@ -34,7 +34,7 @@ from atlas.models.registry import DEFAULT as DEFAULT_MODEL
 from atlas.models.registry import lookup, of_attrs
 
 __all__ = ["Layout", "points", "at_point", "point_of", "first_point", "parameter_names",
-           "point_group", "point_nodes", "point_label", "node_name"]
+           "point_group", "point_nodes", "point_label", "node_name", "per_point"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,6 +191,20 @@ def node_name(layout: Layout, p: int) -> str:
     the swept dims with the point's indices, e.g. ``alpha2_omega0_0``; "" (the group itself)
     for an atlas of one point."""
     return "_".join(f"{name}{i}" for name, i in zip(layout.swept, layout.point_index(p)))
+
+
+def per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
+              ) -> dict[str, xr.Dataset]:
+    """The nodes of a per-point group to write (path → dataset): one per parameter point
+    (None: the point has none), each with the point's parameters as attributes, named by
+    :func:`node_name` (the group itself for an atlas of one point)."""
+    out = {}
+    for p, ds in enumerate(datasets):
+        if ds is None:
+            continue
+        path = "/".join(filter(None, (group, node_name(layout, p))))
+        out[path] = ds.assign_attrs(layout.point(p))
+    return out
 
 
 def point_nodes(tree: xr.DataTree, group: str) -> list[xr.DataTree]:

@@ -102,8 +102,8 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
 
     start = time.perf_counter()
     cfg = load_config(config, output=output, study=True)
-    if cfg.model != DEFAULT:  # the study is the pendulum's physics
-        raise AtlasError(f"{config}: model {cfg.model}: atlas stability studies the "
+    if cfg.description.name != DEFAULT:  # the study is the pendulum's physics
+        raise AtlasError(f"{config}: model {cfg.description.name}: atlas stability studies the "
                          "pendulum's basins only")
     count = math.prod(len(cfg.pendulum.values(name)) for name in PARAMETERS)
     if count > MAX_POINTS and not force:

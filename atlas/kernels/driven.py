@@ -210,18 +210,18 @@ def _visit_sample(i, p, th, v, memo, lane, args):
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
 def _nearest_attractor(th, v, targets, target_attractor, radius):
-    """The attractor of the nearest target within ``radius`` of (θ wrapped, θ̇) (θ
-    difference wrapped to [−π, π), Euclidean in (θ, θ̇); the first on a tie), else
+    """The attractor of the nearest target k within its own ``radius[k]`` of (θ wrapped,
+    θ̇) (θ difference wrapped to [−π, π), Euclidean in (θ, θ̇); the first on a tie), else
     ATTRACTOR_FILL."""
     wrapped = th - TWO_PI * math.floor((th + math.pi) * INV_TWO_PI)
-    best = radius * radius
+    best = math.inf
     hit = ATTRACTOR_FILL
     for k in range(targets.shape[0]):
         d = wrapped - targets[k, 0]
         d -= TWO_PI * math.floor((d + math.pi) * INV_TWO_PI)
         e = v - targets[k, 1]
         dist2 = d * d + e * e
-        if dist2 <= best and (hit == ATTRACTOR_FILL or dist2 < best):
+        if dist2 <= radius[k] * radius[k] and dist2 < best:
             best = dist2
             hit = target_attractor[k]
     return hit
@@ -363,7 +363,8 @@ def label_driven(theta0, theta_dot0, alpha, omega0, torque, table, dt, targets,
     After each period p = 1 … ``max_periods`` the state (θ wrapped to [−π, π), θ̇) is compared
     with the ``targets`` (float64 (K, 2), θ in [−π, π) [rad], θ̇ [rad s⁻¹]): the distance is
     Euclidean in (θ, θ̇) with the θ difference wrapped to [−π, π); the nearest target within
-    ``radius`` is a hit of attractor ``target_attractor[k]`` (int16, length K). An orbit that
+    ``radius`` (one for all, or one per target: float64 length K) is a hit of attractor
+    ``target_attractor[k]`` (int16, length K). An orbit that
     hits one attractor at ``confirm`` consecutive returns (any of its targets) is labelled
     with it at that period and stops. Parameters of the map as in :func:`advance`.
 
@@ -378,6 +379,8 @@ def label_driven(theta0, theta_dot0, alpha, omega0, torque, table, dt, targets,
         raise ValueError("target_attractor must give one attractor per target")
     if np.any(target_attractor == ATTRACTOR_FILL):
         raise ValueError("the fill value is not an attractor")
+    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64),
+                                                  (targets.shape[0],)))
     if confirm < 1 or max_periods < 0:
         raise ValueError("confirm must be ≥ 1 and max_periods ≥ 0")
     n = theta0.size
@@ -385,6 +388,6 @@ def label_driven(theta0, theta_dot0, alpha, omega0, torque, table, dt, targets,
     periods = np.zeros(n, np.int32)
     status = np.zeros(n, np.int8)
     _run(_label, _label_serial, theta0, theta_dot0, alpha, omega0, torque, table, dt,
-         (targets, target_attractor, float(radius), np.int64(confirm), np.int64(max_periods),
+         (targets, target_attractor, radius, np.int64(confirm), np.int64(max_periods),
           attractor, periods, status))
     return attractor, periods, status

@@ -3,7 +3,8 @@
 
 The pendulum (:mod:`atlas.models.pendulum`) is registered here and is the default: a config
 without ``model`` and a file without the attribute (every file written before models had
-names) are the pendulum's. Another model registers itself with :func:`register` (a test's
+names) are the pendulum's; a pendulum config with a ``drive`` is the driven pendulum's
+(:mod:`atlas.models.driven`). Another model registers itself with :func:`register` (a test's
 model does, from the test's own folder); nothing else in atlas changes for it.
 """
 
@@ -13,14 +14,17 @@ import importlib
 from collections.abc import Mapping
 
 from atlas.models.base import Model
+from atlas.models.driven.description import DRIVEN_PENDULUM
 from atlas.models.pendulum.description import PENDULUM
 
-__all__ = ["DEFAULT", "register", "lookup", "known", "of_attrs", "planner"]
+__all__ = ["DEFAULT", "DRIVEN", "register", "lookup", "known", "of_attrs", "planner"]
 
 #: The model of a config without a ``model`` key and of a file without the attribute.
 DEFAULT = PENDULUM.name
+#: The model of a pendulum config with a ``drive``: the periodically driven pendulum.
+DRIVEN = DRIVEN_PENDULUM.name
 
-_MODELS: dict[str, Model] = {PENDULUM.name: PENDULUM}
+_MODELS: dict[str, Model] = {PENDULUM.name: PENDULUM, DRIVEN_PENDULUM.name: DRIVEN_PENDULUM}
 
 
 def register(model: Model) -> Model:

@@ -33,6 +33,7 @@ from atlas.defaults import BACKEND_WORDS
 from atlas.errors import ConfigError
 from atlas.models.base import Model
 from atlas.models.registry import DEFAULT as DEFAULT_MODEL
+from atlas.models.registry import DRIVEN as DRIVEN_MODEL
 from atlas.models.registry import lookup, planner
 from atlas.pipeline import config_messages as messages
 from atlas.pipeline.config_numbers import parse_pi_expression
@@ -85,7 +86,10 @@ class Config(StrictModel):
 
     @property
     def description(self) -> Model:
-        """The config's model (:class:`atlas.models.base.Model`)."""
+        """The config's model (:class:`atlas.models.base.Model`): the one ``model`` names,
+        and for the pendulum with a ``drive`` the driven pendulum."""
+        if self.model == DEFAULT_MODEL and self.pendulum.drive is not None:
+            return lookup(DRIVEN_MODEL)
         return lookup(self.model)
 
     @property

@@ -10,7 +10,14 @@ from __future__ import annotations
 import itertools
 from typing import ClassVar, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
 from atlas import defaults
 from atlas.defaults import BACKEND_WORDS, METHODS
@@ -18,7 +25,8 @@ from atlas.limits import MAX_RATE, MIN_RATE
 from atlas.models.pendulum.description import PARAMETERS
 from atlas.pipeline.config_numbers import Number, Numbers
 
-__all__ = ["StrictModel", "ParameterSection", "PendulumConfig", "Axis", "GridConfig",
+__all__ = ["StrictModel", "ParameterSection", "DriveConfig", "PendulumConfig", "Axis",
+           "GridConfig",
            "IntegratorConfig", "SeparatricesConfig", "ExecutionConfig", "StabilityConfig"]
 
 
@@ -51,11 +59,38 @@ class ParameterSection(StrictModel):
                 for combo in itertools.product(*(self.values(n) for n in self.NAMES))]
 
 
+class DriveConfig(StrictModel):
+    """The periodic torque A cos(Ω t + φ) of the driven pendulum: ``amplitude`` A [rad s⁻²]
+    and ``frequency`` Ω [rad s⁻¹] (each a number, a list or a range: dims of a parameter
+    atlas), ``phase`` φ [rad] (one number)."""
+
+    amplitude: Numbers
+    frequency: Numbers
+    phase: Number = 0.0
+
+    @field_validator("amplitude", "frequency")
+    @classmethod
+    def _drive(cls, value, info):
+        def check(x):
+            if info.field_name == "frequency" and not MIN_RATE <= x <= MAX_RATE:
+                raise ValueError(f"must be between {MIN_RATE:g} and {MAX_RATE:g} rad/s, "
+                                 f"got {x:g}")
+            if info.field_name == "amplitude" and not 0 <= x <= MAX_RATE**2:
+                raise ValueError(f"must be between 0 and {MAX_RATE**2:g} rad/s^2, got {x:g}")
+
+        PendulumConfig._each(value, check)
+        return PendulumConfig._nonempty(value)
+
+
 class PendulumConfig(ParameterSection):
     """α [s⁻¹], ω0 [rad s⁻¹] and the constant torque τ [rad s⁻²]; a list for any of them
-    makes it a dim of a parameter atlas (the others stay scalar coordinates)."""
+    makes it a dim of a parameter atlas (the others stay scalar coordinates). With ``drive``
+    (:class:`DriveConfig`) it is the driven pendulum, whose parameters go on with A, Ω
+    (dims ``amplitude``, ``frequency``, after α, ω0, τ) and φ."""
 
     NAMES: ClassVar[tuple[str, ...]] = tuple(PARAMETERS)
+    #: The driven pendulum's parameters after the pendulum's, read from ``drive``.
+    DRIVE_NAMES: ClassVar[tuple[str, ...]] = ("amplitude", "frequency", "phase")
 
     alpha: Numbers = defaults.ALPHA
     omega0: Numbers = defaults.OMEGA0
@@ -124,6 +159,44 @@ class PendulumConfig(ParameterSection):
             raise ValueError(f"the value {twice:g} is listed twice (each parameter point "
                              "must be named by its values)")
         return value
+
+    drive: DriveConfig | None = None
+
+    @model_serializer(mode="wrap")
+    def _no_drive_no_key(self, handler):
+        """Without a drive the section dumps as it did before the key existed (the stored
+        config, its hash and the run identity of every undriven config stay the same)."""
+        data = handler(self)
+        if isinstance(data, dict) and data.get("drive") is None:
+            data.pop("drive", None)
+        return data
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The parameters of this section's model, in its order (with a drive: the driven
+        pendulum's)."""
+        return self.NAMES + (self.DRIVE_NAMES if self.drive is not None else ())
+
+    def values(self, name: str) -> list[float]:
+        """The values of parameter ``name`` (one unless it is swept; A, Ω, φ from the
+        drive)."""
+        if name in self.DRIVE_NAMES:
+            value = getattr(self.drive, name)
+            return value if isinstance(value, list) else [value]
+        return super().values(name)
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The parameters given as lists (the drive's included): the dims of a parameter
+        atlas."""
+        return tuple(name for name in self.names if isinstance(
+            getattr(self.drive if name in self.DRIVE_NAMES else self, name), list))
+
+    @property
+    def points(self) -> list[dict[str, float]]:
+        """Every parameter point, in C order over the swept dims."""
+        return [dict(zip(self.names, combo))
+                for combo in itertools.product(*(self.values(n) for n in self.names))]
 
     @property
     def alphas(self) -> list[float]:

@@ -36,7 +36,7 @@ def run_identity(cfg: Config, backend: str) -> dict:
             cfg.description.section: cfg.section.model_dump(mode="json"),
             "integrator": integrator_json(cfg.integrator),
             "separatrices": (cfg.separatrices.model_dump(mode="json")
-                             if cfg.separatrices.enabled and cfg.model == DEFAULT_MODEL
+                             if cfg.separatrices.enabled and cfg.description.name == DEFAULT_MODEL
                              else {"enabled": False}),  # the pendulum's section
             "check_every": int(CHECK_EVERY), "atlas_version": __version__,
             "kernels": BACKEND_WORDS[backend][0]}
@@ -62,7 +62,7 @@ def library_versions() -> dict:
 def file_attrs(cfg: Config, identity: dict) -> dict:
     attrs = {
         "title": f"atlas basin map: {cfg.name}",
-        "model": cfg.model,
+        "model": cfg.description.name,
         "Conventions": "CF-1.10",
         "format_version": np.int64(FORMAT_VERSION),
         "method": cfg.integrator.method,

@@ -11,9 +11,10 @@ import xarray as xr
 from atlas import lazy_dask  # noqa: F401 (lazy_dask installs itself)
 from atlas.errors import AtlasError
 from atlas.layout import at_point, point_group, point_label, points
-from atlas.models.registry import DEFAULT, of_attrs
+from atlas.models.registry import DEFAULT, DRIVEN, of_attrs
 from atlas.store import reader as store
 from atlas.views.described import described_lines, grid_line
+from atlas.views.info_driven import driven_lines
 from atlas.views.info_table import table_lines
 from atlas.views.selectors import choose_points
 
@@ -38,9 +39,10 @@ def summary_lines(tree: xr.DataTree, chosen: list[dict] | None = None,
     columns, rows = model.axes
     n_orbits = ds.sizes[columns.name] * ds.sizes[rows.name]
     every = points(ds)
+    if model.name == DRIVEN:
+        return driven_lines(tree, model, chosen) + _closing_lines(ds, n_orbits)
     if model.name != DEFAULT:
-        lines = described_lines(tree, model, chosen)
-        return lines + _closing_lines(ds, n_orbits)
+        return described_lines(tree, model, chosen) + _closing_lines(ds, n_orbits)
     lines = [grid_line(ds, model, len(every))]
     detail = chosen if chosen is not None else every if len(every) == 1 else []
     if not detail:

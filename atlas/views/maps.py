@@ -33,6 +33,7 @@ from atlas.models.base import Axis
 from atlas.models.registry import DEFAULT, lookup, of_attrs
 from atlas.views.coarsen import read_maps
 from atlas.views.style import (
+    ATTRACTOR_MARKER,
     CYCLE_COLOR,
     DISTANCE_CMAP,
     LABELLED_WELLS,
@@ -132,17 +133,53 @@ def draw_limit_cycle(ax, lo: float, hi: float, theta: np.ndarray, theta_dot: np.
 def _basin_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
     """What :func:`basin_map` draws: :func:`_map_scene`'s, the critical points (θ [rad],
     saddle or not, tilted or not) and the running limit cycle (θ [rad], θ̇ [rad/s], period
-    [s]) where stored, and the title."""
+    [s]) where stored, the attractors of a driven pendulum (:func:`_attractors_scene`) and
+    the title."""
     ds, scene = _map_scene(tree, "basin", maps, index)
     point = point_of(ds)
     cp = point_group(tree, "critical_points", point)
     cycle = point_group(tree, "limit_cycle", point)
     return {name: value for name, value in scene.items() if name != "point"} | {
+        "attractors": _attractors_scene(point_group(tree, "attractors", point)),
         "critical": None if cp is None else  # odd n: saddles
         (cp["theta"].values, cp["n"].values % 2 != 0, bool(float(ds["torque"]))),
         "cycle": None if cycle is None else
         (cycle["theta"].values, cycle["theta_dot"].values, float(cycle.attrs["period"])),
         "title": f"Basins of attraction, {scene['point']}"}
+
+
+def _attractors_scene(group: xr.Dataset | None) -> dict | None:
+    """A driven pendulum's attractors as the basin map draws them (from ``/attractors``):
+    each attractor's name by its index k (:func:`atlas.views.info_driven.attractor_name`)
+    and its points on the stroboscopic map (θ [rad] wrapped, θ̇ [rad/s]; a chaotic one's
+    cloud); None where the point has no such group."""
+    from atlas.views.info_driven import attractor_name
+
+    if group is None:
+        return None
+    names, marks = {}, []
+    for i in range(group.sizes.get("attractor", 0)):
+        kind = str(group["kind"].values[i])
+        names[i] = f"#{i} " + attractor_name(kind, int(group["period"].values[i]),
+                                             int(group["winding"].values[i]))
+        theta, theta_dot = group["theta"].values[i], group["theta_dot"].values[i]
+        keep = np.isfinite(theta)
+        marks.append((theta[keep], theta_dot[keep], kind))
+    return {"names": names, "marks": marks}
+
+
+def draw_attractors(ax, marks: list) -> None:
+    """The attractors' points on the stroboscopic map: a periodic orbit's points as the
+    attractor marker (:data:`atlas.views.style.ATTRACTOR_MARKER`), a chaotic attractor's
+    cloud as small black dots."""
+    for i, (theta, theta_dot, kind) in enumerate(marks):
+        first = i == 0 or all(m[2] != kind for m in marks[:i])
+        if kind == "chaotic":
+            ax.plot(theta, theta_dot, ls="none", marker=".", ms=1.0, color="black", zorder=5,
+                    label="chaotic attractor (its points on the map)" if first else None)
+        else:
+            ax.plot(theta, theta_dot, **ATTRACTOR_MARKER, zorder=5, clip_on=True,
+                    label="periodic attractors (their points on the map)" if first else None)
 
 
 def _run_depth(mask: np.ndarray) -> np.ndarray:
@@ -233,18 +270,24 @@ def drawn_wells(image: np.ndarray, kmin: int, kmax: int) -> list[int]:
 
 
 def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str,
-                grid_axes: tuple[Axis, Axis] = PENDULUM_AXES):
+                grid_axes: tuple[Axis, Axis] = PENDULUM_AXES, attractors: dict | None = None):
     """Draw :func:`_basin_scene` (as :func:`basin_map`)."""
     k, kmin, kmax, running = image
     wells = drawn_wells(k, kmin, kmax)
     unlabelled = bool(np.isnan(k).any())
     cmap, norm, ticks, names, _ = basin_key(wells, running, unlabelled)
+    if attractors is not None:  # a driven pendulum's: each named by period and winding
+        names = [attractors["names"].get(w, str(w)) for w in wells] + names[len(wells):]
     mesh = grid_image(ax, grid, k, grid_axes, cmap=cmap, norm=norm)
     cbar = ax.figure.colorbar(mesh, ax=ax, ticks=ticks)
     cbar.ax.set_yticklabels(names, fontsize=8 if len(names) <= 24 else 6)
-    cbar.set_label("attractor k: orbit settles at the rest state of well k"
+    meaning = ("attractor k: orbit settles at the rest state of well k" if attractors is None
+               else "attractor of the stroboscopic map reached")
+    cbar.set_label(meaning
                    + (";\nrunning: orbit rotates (the running limit cycle)" if running else "")
                    + (";\nno label: unresolved by t_max, or not finite" if unlabelled else ""))
+    if attractors is not None:
+        draw_attractors(ax, attractors["marks"])
     if len(wells) > LABELLED_WELLS:
         label_bands(ax, grid, k, wells)
     draw_separatrices(ax, separatrices)

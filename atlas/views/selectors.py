@@ -25,9 +25,11 @@ __all__ = ["SYMBOLS", "UNITS", "choose_points", "point_index", "point_suffix", "
            "value_text"]
 
 #: Each parameter's symbol and unit in figures: name → (symbol, unit).
-SYMBOLS = {"alpha": ("α", "s⁻¹"), "omega0": ("ω0", "rad/s"), "torque": ("τ", "rad/s²")}
+SYMBOLS = {"alpha": ("α", "s⁻¹"), "omega0": ("ω0", "rad/s"), "torque": ("τ", "rad/s²"),
+           "amplitude": ("A", "rad/s²"), "frequency": ("Ω", "rad/s"), "phase": ("φ", "rad")}
 #: Each parameter's unit in plain text (``atlas info``, messages): name → unit.
-UNITS = {"alpha": "1/s", "omega0": "rad/s", "torque": "rad/s^2"}
+UNITS = {"alpha": "1/s", "omega0": "rad/s", "torque": "rad/s^2", "amplitude": "rad/s^2",
+         "frequency": "rad/s", "phase": "rad"}
 #: A value this close to the end of a range (relative to the range's scale) is inside it:
 #: a value typed as printed (``%g``) is never refused for its last digit.
 _RANGE_TOLERANCE = 1e-9

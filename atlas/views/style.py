@@ -264,13 +264,18 @@ def window_ticks(ax, lo: float, hi: float, axis: str, name: str, unit: str,
 
 
 def point_title(point: dict[str, float]) -> str:
-    """"α = 0.1 s⁻¹, ω0 = 1 rad/s" (and τ where the pendulum has a torque); another model's
-    point as "name = value" of each parameter."""
+    """"α = 0.1 s⁻¹, ω0 = 1 rad/s" (and τ where the pendulum has a torque; A, Ω and a
+    nonzero φ where it is driven); another model's point as "name = value" of each
+    parameter."""
     if not {"alpha", "omega0"} <= set(point):
         return ", ".join(f"{name} = {value:g}" for name, value in point.items())
     text = f"α = {point['alpha']:g} s⁻¹, ω0 = {point['omega0']:g} rad/s"
     torque = point.get("torque", 0.0)
-    return text + (f", τ = {torque:g} rad/s²" if torque else "")
+    text += f", τ = {torque:g} rad/s²" if torque else ""
+    if "amplitude" in point:  # the driven pendulum: its drive A cos(Ω t + φ)
+        text += f", A = {point['amplitude']:g} rad/s², Ω = {point['frequency']:g} rad/s"
+        text += f", φ = {point['phase']:g} rad" if point.get("phase") else ""
+    return text
 
 
 #: The one look of a saddle in every figure and on the page (maps, ``atlas orbit``'s figure,

@@ -85,7 +85,7 @@ def test_a_worker_killed_by_its_tile_loses_no_finished_tile(tmp_path, cluster):
     cfg = write_config(tmp_path / "k.yaml", GRID.format(scheduler=c.scheduler_address,
                                                         output=tmp_path / "k.h5"))
     _kill_once_in(c, "atlas.pipeline.schedule", "compute_tile", str(marker),
-                  lambda certifier, barrier, rows, *rest: rows.start == KILL_TILE)
+                  lambda point, x0, v0, rows, *rest: rows.start == KILL_TILE)
     pids = _worker_pids(c)
     proc = subprocess.run([sys.executable, "-m", "atlas.cli", "run", "-vv", str(cfg),
                            "--quiet"], cwd=REPO, capture_output=True, text=True, timeout=300)

@@ -27,7 +27,7 @@ from atlas.boundaries.certificate import Certifier, add_tallies, certifier_for
 from atlas.errors import AtlasError
 from atlas.kernels.threads import concurrent_points, use_threads
 from atlas.labels.trap import energy_cap, trap_margin
-from atlas.layout import Layout, node_name, point_label
+from atlas.layout import Layout, per_point, point_label
 from atlas.physics import running
 from atlas.physics.barrier import RunningBarrier
 from atlas.physics.pendulum import Pendulum, critical_points
@@ -40,7 +40,7 @@ log = logging.getLogger(__name__)
 
 __all__ = ["begin", "plan", "PendulumLabeller", "PendulumPoint", "PendulumPlan", "pendulums",
            "window", "running_certificates", "exact_boundaries", "trace_separatrices",
-           "certifiers", "groups", "per_point", "critical_points_dataset",
+           "certifiers", "groups", "critical_points_dataset",
            "limit_cycle_dataset"]
 
 
@@ -124,20 +124,6 @@ def trace_separatrices(cfg: Config, pendulums: list[Pendulum], boundaries: list,
     return list(track(each_in_background(one, zip(pendulums, boundaries, barriers),
                                          concurrent_points(len(pendulums))),
                       len(pendulums), "separatrices"))
-
-
-def per_point(layout: Layout, group: str, datasets: list[xr.Dataset | None]
-               ) -> dict[str, xr.Dataset]:
-    """The nodes of a per-point group: one per parameter point, each with the point's
-    parameters as attributes (the group itself for an atlas of one point; see
-    :mod:`atlas.layout`)."""
-    out = {}
-    for p, ds in enumerate(datasets):
-        if ds is None:
-            continue
-        path = "/".join(filter(None, (group, node_name(layout, p))))
-        out[path] = ds.assign_attrs(layout.point(p))
-    return out
 
 
 def certifiers(layout: Layout, pendulums: list[Pendulum], traced: list, boundaries: list,

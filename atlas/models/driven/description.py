@@ -1,0 +1,104 @@
+"""The driven pendulum's description: θ̈ + 2αθ̇ + ω0² sin θ = τ + A cos(Ω t + φ), its
+parameters (α, ω0, τ, then the drive's A, Ω, φ), its grid (θ0, θ̇0 at t = 0, as the
+pendulum's), the codes of ``status`` and the variables it stores.
+
+Labels are attractors of the stroboscopic map P (one drive period T = 2π/Ω of RK4 with
+dt = T/N): ``attractor`` = i indexes the ``/attractors`` group of the point (its period p in
+drive periods, winding, kind, points on P, Floquet multipliers). What each status claims is
+what its test shows, no more: see :data:`IN_FILE`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from atlas.models.base import MapVariable, Model, status_flags
+from atlas.models.pendulum.description import AXES
+from atlas.models.pendulum.description import PARAMETERS as PENDULUM_PARAMETERS
+
+__all__ = ["PARAMETERS", "CONVERGED", "UNRESOLVED", "NONFINITE", "NEAR", "CHAOTIC",
+           "STATUSES", "IN_FILE", "ATTRACTOR_FILL", "DRIVEN_PENDULUM"]
+
+#: The parameters: the pendulum's, then the drive's (dims in this order).
+PARAMETERS = {
+    **PENDULUM_PARAMETERS,
+    "amplitude": ("rad s-2", "amplitude A of the periodic torque A cos(frequency t + phase)"),
+    "frequency": ("rad s-1", "angular frequency of the periodic torque"),
+    "phase": ("rad", "phase of the periodic torque at t = 0"),
+}
+
+#: The orbit's returns to P came within the capture radius of a stable periodic orbit of P,
+#: one whose capture ball was seen to map into itself (every sampled state of its circle
+#: mapped inside by P^(p·m), some m ≤ 8), for ``confirm`` returns in a row.
+CONVERGED = 0
+#: No label by t_max.
+UNRESOLVED = 1
+#: A NaN or inf state was met.
+NONFINITE = 2
+#: Within the capture radius of a periodic orbit of P for ``confirm`` returns in a row, where
+#: no contraction was seen (the radius is the orbit's spacing only).
+NEAR = 3
+#: On a chaotic attractor: its returns stayed inside the attractor's recorded cloud of
+#: points on P for ``confirm`` returns in a row.
+CHAOTIC = 4
+
+STATUSES = {CONVERGED: "converged", UNRESOLVED: "unresolved", NONFINITE: "nonfinite",
+            NEAR: "near", CHAOTIC: "chaotic"}
+IN_FILE = {
+    CONVERGED: "within the capture radius of a stable periodic orbit of the RK4 stroboscopic "
+               "map for confirm returns in a row, whose capture ball was seen to map into "
+               "itself under P^(p m), m <= 8, on sampled states of its circle (shown for "
+               "the RK4 map by sampling, not proven; not certified for the exact equation)",
+    UNRESOLVED: "no label decided before t_max",
+    NONFINITE: "a NaN or inf state was met",
+    NEAR: "within the capture radius of a periodic orbit of the RK4 stroboscopic map for "
+          "confirm returns in a row, whose capture ball was not seen to map into itself",
+    CHAOTIC: "on a chaotic attractor of the RK4 stroboscopic map: within its recorded cloud "
+             "of points for confirm returns in a row (a recurrent, non-periodic attractor)",
+}
+
+#: ``attractor`` where no label applies (int16; also the file's _FillValue).
+ATTRACTOR_FILL = int(np.iinfo(np.int16).min)
+
+DRIVEN_PENDULUM = Model(
+    name="driven_pendulum",
+    title="periodically driven damped pendulum",
+    parameters=PARAMETERS,
+    axes=AXES,
+    section="pendulum",
+    statuses=STATUSES,
+    in_file=IN_FILE,
+    map_variables={
+        "attractor": MapVariable(np.int16, ATTRACTOR_FILL, ATTRACTOR_FILL, {
+            "long_name": "index of the attractor of the stroboscopic map reached (the "
+                         "attractor dim of /attractors)", "units": "1",
+            "comment": "fill value where no label applies (status unresolved or "
+                       "nonfinite)"}),
+        "status": MapVariable(np.int8, None, np.int8(0), {
+            "long_name": "labelling status", "units": "1",
+            **status_flags(STATUSES, IN_FILE)}),
+        "t_trap": MapVariable(np.float32, np.float32(np.nan), np.float32(np.nan), {
+            "long_name": "time at which the orbit's label was decided", "units": "s",
+            "comment": "whole drive periods; NaN where no label"}),
+    },
+    label_variables=("attractor", "status", "t_trap"),
+    basin_variables={
+        "basin_fraction": {"long_name": "fraction of the grid points labelled k (a count, "
+                                        "not an area)"},
+        "basin_fraction_error": {
+            "long_name": "standard error of basin_fraction as an estimate of the basin's "
+                         "share of the window",
+            "comment": "binomial, sqrt(f (1 - f) / N) over the grid's N points, taken as a "
+                       "sample of the window; a fractal boundary's grid bias is not in it"},
+    },
+    point_variables={
+        "unresolved_fraction": {"long_name": "fraction of the grid without a label "
+                                             "(unresolved or nonfinite)"},
+        "attractor_count": {"long_name": "number of attractors of the stroboscopic map "
+                                         "found in the window"},
+    },
+    attractor="the attractor of the stroboscopic map with this index in /attractors",
+    planner="atlas.models.driven.plan",
+    labelled=(CONVERGED, NEAR, CHAOTIC),
+    positive=("alpha", "omega0", "frequency"),
+)

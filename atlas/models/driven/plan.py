@@ -1,0 +1,67 @@
+"""The driven pendulum's planner (:class:`atlas.models.base.Planner`): its config section
+(``pendulum:`` with ``drive``), its checks, and the entry points that prepare its parameter
+points (:mod:`atlas.models.driven.points`, imported when a run needs it).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from atlas.pipeline.config_sections import PendulumConfig
+
+if TYPE_CHECKING:
+    from atlas.pipeline.config import Config
+
+__all__ = ["Section", "check", "begin", "sample", "plan", "MIN_STEPS", "MIN_PERIODS"]
+
+#: The config section of its parameters: the pendulum's, with ``drive``.
+Section = PendulumConfig
+#: The fewest RK4 steps per drive period (dt = T/N is the config's dt or finer).
+MIN_STEPS = 16
+#: The fewest drive periods t_max must hold (a label needs the orbit's returns to settle).
+MIN_PERIODS = 50
+
+
+def check(cfg: Config, study: bool) -> None:
+    """The driven pendulum's checks across the config's sections (ValueError "key:
+    problem")."""
+    if study:
+        raise ValueError("stability: atlas stability studies the undriven pendulum only; "
+                         "map the driven one with atlas run")
+    if cfg.execution.backend == "cuda":
+        raise ValueError("execution.backend: the driven pendulum runs on cpu or dask")
+    if cfg.integrator.method != "rk4":
+        raise ValueError("integrator.method: the driven pendulum is integrated by rk4")
+    for point in cfg.pendulum.points:
+        period = 2 * math.pi / point["frequency"]
+        if cfg.integrator.dt > period / MIN_STEPS:
+            raise ValueError(f"integrator.dt: {cfg.integrator.dt:g} s is more than a "
+                             f"{MIN_STEPS}th of the drive period {period:.4g} s")
+        if cfg.integrator.t_max < MIN_PERIODS * period:
+            raise ValueError(f"integrator.t_max: {cfg.integrator.t_max:g} s holds fewer than "
+                             f"{MIN_PERIODS} drive periods of {period:.4g} s")
+
+
+def begin(cfg, layout) -> list:
+    """Every point's drive and its steps per period
+    (:func:`atlas.models.driven.points.begin`)."""
+    from atlas.models.driven import points
+
+    return points.begin(cfg, layout)
+
+
+def sample(cfg, begun: list, p: int):
+    """The ``p``-th point's map, to label sample orbits with (the pre-flight estimate): its
+    drive with no attractor to reach (every sample runs to its t_max)."""
+    from atlas.models.driven import points
+
+    return points.DrivenPoint.searching(begun[p], cfg.integrator.t_max)
+
+
+def plan(cfg, layout, begun: list, track=None):
+    """Every point prepared (:func:`atlas.models.driven.points.plan`): its attractors found,
+    their capture radius and contraction tested."""
+    from atlas.models.driven import points
+
+    return points.plan(cfg, layout, begun, track)

@@ -1,0 +1,220 @@
+"""The driven pendulum's parameter points, prepared (what its planner,
+:mod:`atlas.models.driven.plan`, hands the sweep): per point the stroboscopic map's
+attractors (:mod:`atlas.models.driven.attractors`), their capture radius and contraction,
+the ``/attractors`` group, and one picklable :class:`DrivenPoint` that labels a tile
+(:func:`atlas.kernels.driven.label_driven`: each orbit stops as soon as its label is
+decided) and counts its labels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from atlas import lazy_dask  # noqa: F401 (installs itself)
+from atlas.kernels import driven as kernels
+from atlas.kernels.threads import use_threads
+from atlas.layout import Layout, per_point, point_label
+from atlas.models.driven.attractors import (
+    Attractor,
+    Drive,
+    capture,
+    capture_radius,
+    find_attractors,
+)
+from atlas.models.driven.description import (
+    ATTRACTOR_FILL,
+    CHAOTIC,
+    CONVERGED,
+    NEAR,
+    NONFINITE,
+    UNRESOLVED,
+)
+from atlas.store.schema import summary_dataset
+
+__all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
+           "attractors_dataset"]
+
+#: Returns of P in a row within an attractor's capture radius that decide a label.
+CONFIRM = 8
+#: Points of a chaotic attractor's cloud stored in ``/attractors`` (and used as targets).
+CLOUD_POINTS = 2000
+
+
+def drives(cfg, layout: Layout) -> list[Drive]:
+    """The drive of every parameter point with its N: the fewest steps per period that make
+    dt = T/N no longer than ``integrator.dt``."""
+    out = []
+    for p in range(layout.n_params):
+        point = layout.point(p)
+        period = 2.0 * math.pi / point["frequency"]
+        out.append(Drive(point["alpha"], point["omega0"], point["torque"], point["amplitude"],
+                         point["frequency"], point["phase"],
+                         int(math.ceil(period / cfg.integrator.dt - 1e-9))))
+    return out
+
+
+@dataclass(frozen=True)
+class DrivenPoint:
+    """One parameter point, prepared (:class:`atlas.models.base.PointPlan`): the drive, the
+    targets (every attractor's points on P, θ wrapped) with the index of their attractor
+    and their capture radius, the status each attractor's labels get and the most periods
+    (t_max / T)."""
+
+    drive: Drive
+    targets: np.ndarray
+    target_attractor: np.ndarray
+    attractor_status: np.ndarray
+    radius: np.ndarray
+    max_periods: int
+
+    @classmethod
+    def searching(cls, drive: Drive, t_max: float) -> DrivenPoint:
+        """The point with no attractor to reach: every orbit runs to ``t_max`` [s] (what a
+        label costs at most: the pre-flight estimate's sample)."""
+        return cls(drive, np.zeros((0, 2)), np.zeros(0, np.int16), np.zeros(0, np.int8),
+                   np.zeros(0), max(1, int(t_max / drive.period)))
+
+    def label(self, x0, v0, rows=None, backend: str = "cpu", numba_threads=None,
+              t_max: float | None = None):
+        """The labels of the orbits from θ0 = ``x0`` [rad], θ̇0 = ``v0`` [rad s⁻¹] (arrays
+        that broadcast): (attractor, status, t_trap [s]) shaped as their broadcast."""
+        use_threads(numba_threads)
+        theta, theta_dot = (np.ascontiguousarray(a, np.float64).ravel()
+                            for a in np.broadcast_arrays(x0, v0))
+        shape = np.broadcast_shapes(np.shape(x0), np.shape(v0))
+        periods_max = self.max_periods if t_max is None else \
+            max(1, int(t_max / self.drive.period))
+        d = self.drive
+        attractor, periods, status = kernels.label_driven(
+            theta, theta_dot, d.alpha, d.omega0, d.torque, d.table, d.dt, self.targets,
+            self.target_attractor, self.radius, CONFIRM, periods_max)
+        decided = status == 0
+        status = status.astype(np.int8)
+        status[decided] = self.attractor_status[attractor[decided]]
+        t_trap = np.where(decided, periods * d.period, np.nan).astype(np.float32)
+        attractor = np.where(decided, attractor, ATTRACTOR_FILL).astype(np.int16)
+        return attractor.reshape(shape), status.reshape(shape), t_trap.reshape(shape)
+
+    def certify(self, rows, labelled, numba_threads=None) -> tuple[dict, dict]:
+        """The tile's arrays as labelled (a label of P is not certified for the exact
+        equation: the statuses say what it is) and its tally: the count of each attractor
+        and of unlabelled orbits."""
+        attractor, status, t_trap = labelled
+        counts = np.bincount(attractor[attractor >= 0].ravel(),
+                             minlength=len(self.attractor_status)).astype(np.int64)
+        unlabelled = np.int64(np.isin(status, (UNRESOLVED, NONFINITE)).sum())
+        return ({"attractor": attractor, "status": status, "t_trap": t_trap},
+                {"count": counts, "unlabelled": unlabelled})
+
+
+def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.ndarray,
+                       radii: np.ndarray) -> xr.Dataset:
+    """One parameter point's node of ``/attractors``: per attractor its kind, period,
+    winding, status its labels get, capture radius, Floquet multipliers' moduli and its
+    points on P (θ wrapped to [−π, π), θ̇; NaN past its own count), with the discretisation
+    as attributes."""
+    n = max([len(a.points) for a in attractors] + [1])
+    theta = np.full((len(attractors), n), np.nan)
+    theta_dot = np.full((len(attractors), n), np.nan)
+    for i, a in enumerate(attractors):
+        theta[i, :len(a.points)], theta_dot[i, :len(a.points)] = a.points.T
+    moduli = np.array([np.abs(a.multipliers) for a in attractors]).reshape(-1, 2)
+    return xr.Dataset(
+        {"kind": ("attractor", np.array([a.kind for a in attractors], dtype=str),
+                  {"long_name": "periodic or chaotic"}),
+         "period": ("attractor", np.array([a.period for a in attractors], np.int32),
+                    {"units": "1", "long_name": "period in drive periods (0: chaotic)"}),
+         "winding": ("attractor", np.array([a.winding for a in attractors], np.int32),
+                     {"units": "1", "long_name": "net turns of the orbit over its period"}),
+         "status": ("attractor", statuses.astype(np.int8),
+                    {"units": "1", "long_name": "the status of this attractor's labels"}),
+         "floquet_modulus": (("attractor", "multiplier"), moduli,
+                             {"units": "1", "long_name": "moduli of the Floquet multipliers "
+                                                         "(NaN: chaotic)"}),
+         "capture_radius": ("attractor", np.asarray(radii, np.float64),
+                            {"long_name": "radius around each of its points on P within "
+                                          "which returns count as reaching it",
+                             "comment": "rad (theta) and rad s-1 (theta_dot) as one "
+                                        "Euclidean unit"}),
+         "residual": ("attractor", np.array([a.residual for a in attractors]),
+                      {"long_name": "|P^p(x) - x - (2 pi winding, 0)| after Newton's "
+                                    "refinement (NaN: chaotic)"}),
+         "theta": (("attractor", "sample"), theta,
+                   {"units": "rad", "long_name": "angle of the orbit's points on the "
+                                                 "stroboscopic map, wrapped to [-pi, pi)"}),
+         "theta_dot": (("attractor", "sample"), theta_dot,
+                       {"units": "rad s-1", "long_name": "angular velocity of the orbit's "
+                                                         "points on the stroboscopic map"})},
+        coords={"attractor": ("attractor", np.arange(len(attractors), dtype=np.int16))},
+        attrs={"description": "attractors of the stroboscopic map (one drive period of RK4 "
+                              "with dt = period / steps_per_period), found from seeds "
+                              "spread over the window",
+               "steps_per_period": np.int64(drive.steps_per_period),
+               "drive_period": drive.period, "drive_period_units": "s",
+               "confirm": np.int64(CONFIRM)})
+
+
+@dataclass
+class DrivenPlan:
+    """Every parameter point of a driven config, prepared (:class:`atlas.models.base.Plan`)."""
+
+    layout: Layout
+    points: list[DrivenPoint]
+    groups: dict[str, xr.Dataset]
+    warnings: list[str]
+
+    def summary(self, tallies: list[list[dict]]) -> xr.Dataset:
+        """Per point: each attractor's share of the grid with its binomial standard error,
+        the unlabelled share and the number of attractors."""
+        n = self.layout.x0.size * self.layout.v0.size
+        out = []
+        for tally in tallies:
+            counts = np.sum([t["count"] for t in tally], axis=0)
+            f = counts / n
+            out.append({"k": list(range(len(counts))), "basin_fraction": f,
+                        "basin_fraction_error": np.sqrt(f * (1 - f) / n),
+                        "unresolved_fraction": sum(int(t["unlabelled"]) for t in tally) / n,
+                        "attractor_count": float(len(counts))})
+        return summary_dataset(self.layout, out)
+
+
+def begin(cfg, layout: Layout) -> list[Drive]:
+    """Every point's drive (nothing to refuse here: the config's checks hold)."""
+    return drives(cfg, layout)
+
+
+def _prepared(cfg, drive: Drive) -> tuple[DrivenPoint, xr.Dataset, str | None]:
+    g = cfg.grid
+    window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
+    found = find_attractors(drive, window)
+    largest = capture_radius(found)
+    captures = [capture(drive, a, largest) for a in found]
+    statuses = np.array([CHAOTIC if a.kind == "chaotic" else CONVERGED if contracting
+                         else NEAR for a, (_, contracting) in zip(found, captures)], np.int8)
+    radii = np.array([radius for radius, _ in captures])
+    clouds = [a.points if a.kind == "periodic" else a.points[-CLOUD_POINTS:] for a in found]
+    targets = np.concatenate(clouds) if clouds else np.zeros((0, 2))
+    owner = np.concatenate([np.full(len(c), i, np.int16) for i, c in enumerate(clouds)]) \
+        if clouds else np.zeros(0, np.int16)
+    point = DrivenPoint(drive, np.ascontiguousarray(targets), owner, statuses,
+                        radii[owner] if len(owner) else np.zeros(0),
+                        max(1, int(cfg.integrator.t_max / drive.period)))
+    warning = None if found else "no attractor found in the window"
+    return point, attractors_dataset(drive, found, statuses, radii), warning
+
+
+def plan(cfg, layout: Layout, begun: list[Drive], track=None) -> DrivenPlan:
+    """Every point prepared: its attractors found (the slow part), their targets and radius."""
+    items = begun if track is None else track(begun, len(begun), "attractors")
+    points, datasets, warnings = [], [], []
+    for p, drive in enumerate(items):
+        point, ds, warning = _prepared(cfg, drive)
+        points.append(point)
+        datasets.append(ds)
+        if warning:
+            warnings.append(f"{point_label(layout.point(p))}: {warning}")
+    return DrivenPlan(layout, points, per_point(layout, "attractors", datasets), warnings)

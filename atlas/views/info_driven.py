@@ -1,0 +1,66 @@
+"""``atlas info`` of a driven pendulum's atlas: per parameter point the attractors of the
+stroboscopic map (``/attractors``: kind, period, winding, Floquet multipliers), each with its
+share of the grid and that share's standard error, and how its labels were decided."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from atlas.layout import at_point, point_group, point_label, points
+from atlas.models.base import Model
+from atlas.views.described import grid_line
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+__all__ = ["driven_lines", "attractor_name"]
+
+
+def attractor_name(kind: str, period: int, winding: int) -> str:
+    """"period 3, winding 0" or "chaotic": an attractor as keys and texts name it."""
+    return "chaotic" if kind == "chaotic" else f"period {period}, winding {winding:+d}"
+
+
+def _attractor_lines(ds: xr.Dataset, group: xr.Dataset | None, model: Model) -> list[str]:
+    if group is None or group.sizes.get("attractor", 0) == 0:
+        return ["attractors none found in the window"]
+    share = dict(zip(ds["k"].values.tolist(), ds["basin_fraction"].values.tolist()))
+    error = dict(zip(ds["k"].values.tolist(), ds["basin_fraction_error"].values.tolist()))
+    lines = [f"attractors of the stroboscopic map: {group.sizes['attractor']} (drive period "
+             f"{float(group.attrs['drive_period']):.6g} s, "
+             f"{int(group.attrs['steps_per_period'])} RK4 steps per period)"]
+    for i in range(group.sizes["attractor"]):
+        kind = str(group["kind"].values[i])
+        name = attractor_name(kind, int(group["period"].values[i]),
+                              int(group["winding"].values[i]))
+        moduli = group["floquet_modulus"].values[i]
+        floquet = ("" if kind == "chaotic" else
+                   f", |Floquet multipliers| {moduli[0]:.3g}, {moduli[1]:.3g}")
+        status = model.statuses.get(int(group["status"].values[i]), "?")
+        lines.append(f"  #{i} {name}{floquet}; basin {share.get(i, 0.0):.4f} ± "
+                     f"{error.get(i, 0.0):.4f} of the grid (labels {status}, capture radius "
+                     f"{float(group['capture_radius'].values[i]):.3g})")
+    lines.append("  ± : binomial standard error of the grid count; a fractal boundary's "
+                 "grid bias is not in it")
+    return lines
+
+
+def driven_lines(tree: xr.DataTree, model: Model, chosen: list[dict] | None = None
+                 ) -> list[str]:
+    """The summary of a driven pendulum's atlas: the grid, then every parameter point
+    (those ``chosen``, where given) with its attractors and their shares."""
+    ds = tree.to_dataset(inherit=False)
+    every = points(ds)
+    lines = [grid_line(ds, model, len(every)), f"model     {model.name}: {model.title}"]
+    for point in chosen if chosen is not None else every:
+        lines.append(f"pendulum  {point_label(point)}")
+        group = point_group(tree, "attractors", point)
+        lines += ["  " + line for line in _attractor_lines(at_point(ds, point), group, model)]
+        if "status" in ds:  # the file (atlas run's summary holds no map)
+            status = at_point(ds, point)["status"].values
+            counts = {name: int(np.sum(status == code)) for code, name in model.statuses.items()}
+            lines.append("  labels    " + ", ".join(f"{name} {n:,}" for name, n in counts.items()
+                                                     if n))
+    return lines

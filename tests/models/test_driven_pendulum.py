@@ -1,0 +1,158 @@
+"""The driven pendulum θ̈ + 2αθ̇ + ω0² sin θ = τ + A cos(Ω t + φ) behind the model seam: its
+attractors found and refined, its grid labelled, its file read by atlas info, plot and view.
+
+The case: b = 0.2, F = 1.66, Ω = 1 of Wagemakers, Daza & Sanjuán, "How to detect Wada
+basins", DCDS-B 26 (2021), Fig. 2(a) (atlas: α = b/2 = 0.1, ω0 = 1, A = F): three
+attractors whose basins have the Wada property, on the window [−π, π] × [−2, 4]."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import atlas
+from atlas.cli import main
+from atlas.models.driven.attractors import Drive, find_attractors, wrap
+from atlas.models.driven.description import CHAOTIC, CONVERGED, NEAR
+from tests.helpers import write_config
+
+WADA = Drive(alpha=0.1, omega0=1.0, torque=0.0, amplitude=1.66, frequency=1.0, phase=0.0,
+             steps_per_period=200)
+WINDOW = ((-math.pi, math.pi), (-2.0, 4.0))
+
+CONFIG = """\
+name: wada
+pendulum:
+  alpha: 0.1
+  omega0: 1.0
+  drive: {{amplitude: {amplitude}, frequency: 1.0}}
+grid:
+  theta0: {{start: -pi, stop: pi, num: 20}}
+  theta_dot0: {{start: -2, stop: 4, num: 16}}
+integrator: {{dt: 0.0314159, t_max: 600}}
+execution: {{tile_orbits: 100}}
+output: {output}
+"""
+
+
+def _exact_map(state, periods: int, drive: Drive = WADA) -> np.ndarray:
+    """P^periods by DOP853 at rtol 1e-12 (an independent integrator)."""
+    def field(t, y):
+        return (y[1], drive.torque + drive.amplitude * math.cos(drive.frequency * t
+                                                                 + drive.phase)
+                - drive.omega0 ** 2 * math.sin(y[0]) - 2 * drive.alpha * y[1])
+
+    sol = solve_ivp(field, (0.0, periods * drive.period), state, method="DOP853",
+                    rtol=1e-12, atol=1e-12)
+    return sol.y[:, -1]
+
+
+@pytest.fixture(scope="module")
+def wada_attractors():
+    return find_attractors(WADA, WINDOW)
+
+
+def test_the_three_attractors_of_the_wada_case_are_found(wada_attractors):
+    """Three attractors (the published count), each a stable periodic orbit refined by
+    Newton to 1e-12 on the RK4 map, whose points are periodic points of the exact equation
+    too: P^p by DOP853 returns to them within the RK4 map's own error (dt = T/200)."""
+    found = wada_attractors
+    assert len(found) == 3, [(a.kind, a.period, a.winding) for a in found]
+    for a in found:
+        assert a.kind == "periodic" and a.residual <= 1e-12
+        assert np.all(np.abs(a.multipliers) < 1.0)
+        x = a.points[0]
+        image = _exact_map(x, a.period)
+        miss = np.hypot(wrap(image[0] - x[0]), image[1] - x[1])
+        assert miss < 1e-4, (a.period, a.winding, miss)
+    # mirror twins are kept apart by their points, not merged by (period, winding)
+    keys = [(a.period, a.winding) for a in found]
+    firsts = np.array([a.points[0] for a in found])
+    assert len({tuple(np.round(f, 6)) for f in firsts}) == len(keys)
+
+
+def test_a_chaotic_attractor_is_named_chaotic_not_periodic():
+    """θ̈ + θ̇/q + sin θ = g cos(ω_D t) with q = 2, g = 1.5, ω_D = 2/3 is chaotic (Baker &
+    Gollub, *Chaotic Dynamics: An Introduction*, 2nd ed., CUP 1996, ch. 3; atlas: α =
+    1/(2q) = 0.25, A = g, Ω = ω_D): the finder reports a chaotic attractor, with no
+    period."""
+    drive = Drive(0.25, 1.0, 0.0, 1.5, 2.0 / 3.0, 0.0, 200)
+    found = find_attractors(drive, WINDOW, seeds=4)
+    assert any(a.kind == "chaotic" and a.period == 0 for a in found), \
+        [(a.kind, a.period) for a in found]
+
+
+@pytest.fixture(scope="module")
+def wada_atlas(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("wada")
+    cfg = atlas.load_config(write_config(tmp / "wada.yaml",
+                                         CONFIG.format(amplitude=1.66, output=tmp / "w.h5")))
+    atlas.run(cfg, quiet=True)
+    return tmp / "w.h5"
+
+
+def test_the_file_names_its_model_and_stores_its_attractors(wada_atlas):
+    tree = atlas.open(wada_atlas)
+    ds = tree.to_dataset(inherit=False)
+    assert ds.attrs["model"] == "driven_pendulum"
+    assert float(ds["amplitude"]) == 1.66 and float(ds["frequency"]) == 1.0
+    group = tree["attractors"].to_dataset()
+    assert group.sizes["attractor"] == 3
+    assert json.loads(ds.attrs["config"])["pendulum"]["drive"]["amplitude"] == 1.66
+    labelled = np.isin(ds["status"].values, (CONVERGED, NEAR, CHAOTIC))
+    assert set(np.unique(ds["attractor"].values[labelled])) <= {0, 1, 2}
+    # the summary is the map's own count
+    for k in range(3):
+        assert float(ds["basin_fraction"].sel(k=k)) == pytest.approx(
+            np.mean(ds["attractor"].values == k), abs=1e-12)
+
+
+def test_each_label_is_the_attractor_its_orbit_reaches(wada_atlas, wada_attractors):
+    """Every labelled orbit, iterated further by the RK4 map (the kernel's own P, 200 more
+    periods), ends within the capture radius of the attractor it is labelled with."""
+    from atlas.kernels import driven as kernels
+
+    tree = atlas.open(wada_atlas)
+    ds = tree.to_dataset(inherit=False)
+    group = tree["attractors"].to_dataset()
+    n = int(group.attrs["steps_per_period"])
+    drive = Drive(0.1, 1.0, 0.0, 1.66, 1.0, 0.0, n)
+    theta0, theta_dot0 = np.meshgrid(ds["theta0"].values, ds["theta_dot0"].values)
+    labelled = np.isin(ds["status"].values, (CONVERGED, NEAR))
+    theta, theta_dot = theta0[labelled].copy(), theta_dot0[labelled].copy()
+    kernels.advance(theta, theta_dot, drive.alpha, drive.omega0, drive.torque, drive.table,
+                    drive.dt, 600)
+    for th, v, k in zip(theta, theta_dot, ds["attractor"].values[labelled]):
+        pts = np.column_stack([group["theta"].values[k], group["theta_dot"].values[k]])
+        pts = pts[np.isfinite(pts[:, 0])]
+        d = np.hypot(wrap(th - pts[:, 0]), v - pts[:, 1]).min()
+        assert d < float(group["capture_radius"].values[k]), (th, v, k, d)
+
+
+def test_info_plot_and_view_read_it(wada_atlas, capsys):
+    assert main(["info", str(wada_atlas)]) == 0
+    out = capsys.readouterr().out
+    assert "attractors of the stroboscopic map: 3" in out
+    assert out.count("#") >= 3 and "period" in out
+    assert main(["plot", str(wada_atlas)]) == 0
+    assert wada_atlas.with_suffix(".png").exists()
+    assert main(["view", str(wada_atlas)]) == 0
+    assert "driven_pendulum" in wada_atlas.with_suffix(".html").read_text()
+
+
+def test_its_bad_input_is_one_line(tmp_path, capsys):
+    body = CONFIG.format(amplitude=1.66, output=tmp_path / "b.h5")
+    for bad, word in ((body.replace("dt: 0.0314159", "dt: 1.0"), "integrator.dt"),
+                      (body.replace("t_max: 600", "t_max: 20"), "integrator.t_max"),
+                      (body.replace("amplitude: 1.66", "amplitude: -1"), "amplitude"),
+                      (body.replace("execution: {tile_orbits: 100}",
+                                    "execution: {backend: cuda}"), "execution")):
+        path = write_config(tmp_path / "bad.yaml", bad)
+        assert main(["run", str(path)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and word in err[0], err
+    assert not list(tmp_path.glob("*.h5"))
