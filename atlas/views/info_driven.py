@@ -42,8 +42,10 @@ def _attractor_lines(ds: xr.Dataset, group: xr.Dataset | None, model: Model) -> 
         lines.append(f"  #{i} {name}{floquet}; basin {share.get(i, 0.0):.4f} ± "
                      f"{error.get(i, 0.0):.4f} of the grid (labels {status}, capture radius "
                      f"{float(group['capture_radius'].values[i]):.3g})")
-    lines.append("  ± : binomial standard error of the grid count; a fractal boundary's "
-                 "grid bias is not in it")
+    changed = float(ds["changed_at_half_dt_fraction"])
+    lines.append(f"  ± : the grid count's binomial standard error plus its change at dt/2 "
+                 f"({changed:.2%} of the labels change when dt is halved); a fractal "
+                 "boundary's grid bias is not in it")
     return lines
 
 

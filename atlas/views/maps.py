@@ -308,12 +308,17 @@ def basin_map(tree: xr.DataTree, ax=None, maps: dict | None = None, **index):
 
 
 def _trap_time_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
-    """What :func:`trap_time_map` draws (:func:`_map_scene`'s)."""
-    return _map_scene(tree, "t_trap", maps, index)[1]
+    """What :func:`trap_time_map` draws (:func:`_map_scene`'s), and for a model other than
+    the pendulum what its ``t_trap`` is (its long name: a label "decided", not
+    "certified")."""
+    ds, scene = _map_scene(tree, "t_trap", maps, index)
+    model = of_attrs(ds.attrs)
+    return scene | ({} if model.name == DEFAULT else
+                    {"meaning": str(ds["t_trap"].attrs.get("long_name", "time to a label"))})
 
 
 def _draw_trap_time(ax, grid, image, separatrices, point: str,
-                    grid_axes: tuple[Axis, Axis] = PENDULUM_AXES):
+                    grid_axes: tuple[Axis, Axis] = PENDULUM_AXES, meaning: str | None = None):
     """Draw :func:`_trap_time_scene` (as :func:`trap_time_map`); ``point``: the parameter
     point's title line."""
     from matplotlib import colormaps
@@ -330,12 +335,17 @@ def _draw_trap_time(ax, grid, image, separatrices, point: str,
     cmap = cmap.with_extremes(under=cmap(0.0), bad=NO_LABEL_COLOR)
     mesh = grid_image(ax, grid, np.where(t == 0, lo / 2, t), grid_axes, cmap=cmap,
                       norm=LogNorm(lo, hi))
-    ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
-        "t_trap [s]: time at which the label was certified\n(trapped in a well, or running)")
+    if meaning is None:  # the pendulum's
+        ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(
+            "t_trap [s]: time at which the label was certified\n(trapped in a well, or "
+            "running)")
+        ax.set_title(f"Time to a certified label, {point}\n(darkest: certified at t = 0; "
+                     "white: no label certified by t_max"
+                     + (";\nfaint lines: the separatrices)" if separatrices else ")"))
+    else:
+        ax.figure.colorbar(mesh, ax=ax, extend="min").set_label(f"t_trap [s]: {meaning}")
+        ax.set_title(f"Time to a label, {point}\n(white: no label by t_max)")
     draw_separatrices(ax, separatrices, faint=True)
-    ax.set_title(f"Time to a certified label, {point}\n(darkest: certified at t = 0; white: "
-                 "no label certified by t_max"
-                 + (";\nfaint lines: the separatrices)" if separatrices else ")"))
     return ax
 
 

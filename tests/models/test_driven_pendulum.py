@@ -33,7 +33,7 @@ pendulum:
 grid:
   theta0: {{start: -pi, stop: pi, num: 20}}
   theta_dot0: {{start: -2, stop: 4, num: 16}}
-integrator: {{dt: 0.0314159, t_max: 600}}
+integrator: {{dt: pi/100, t_max: 600}}
 execution: {{tile_orbits: 100}}
 output: {output}
 """
@@ -146,7 +146,7 @@ def test_info_plot_and_view_read_it(wada_atlas, capsys):
 
 def test_its_bad_input_is_one_line(tmp_path, capsys):
     body = CONFIG.format(amplitude=1.66, output=tmp_path / "b.h5")
-    for bad, word in ((body.replace("dt: 0.0314159", "dt: 1.0"), "integrator.dt"),
+    for bad, word in ((body.replace("dt: pi/100", "dt: 1.0"), "integrator.dt"),
                       (body.replace("t_max: 600", "t_max: 20"), "integrator.t_max"),
                       (body.replace("amplitude: 1.66", "amplitude: -1"), "amplitude"),
                       (body.replace("execution: {tile_orbits: 100}",
@@ -156,3 +156,27 @@ def test_its_bad_input_is_one_line(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and word in err[0], err
     assert not list(tmp_path.glob("*.h5"))
+
+
+def test_labels_that_change_with_dt_are_flagged_and_fewer_as_dt_shrinks(tmp_path):
+    """Each label is computed again with dt/2: ``changes_at_half_dt`` is 1 exactly where
+    the label at dt/2 (the same config at half the step, computed on its own) differs, and
+    the share of such labels falls as dt → 0 (the fractions converge)."""
+    def run(steps: int):
+        body = CONFIG.format(amplitude=1.66, output=tmp_path / "c.h5").replace(
+            "dt: pi/100", f"dt: {2 * math.pi / steps!r}")
+        cfg = atlas.load_config(write_config(tmp_path / f"c{steps}.yaml", body))
+        return atlas.run(cfg, output=None, quiet=True).to_dataset(inherit=False)
+
+    shares = {}
+    for steps in (50, 100, 200, 400):
+        ds = run(steps)
+        shares[steps] = float(ds["changed_at_half_dt_fraction"])
+        assert shares[steps] == pytest.approx(float(ds["changes_at_half_dt"].mean()))
+        if steps == 100:
+            halved = run(200)  # its own run at dt/2 (its own attractors: the same ones here)
+            np.testing.assert_array_equal(
+                ds["changes_at_half_dt"].values == 1,
+                ds["attractor"].values != halved["attractor"].values)
+    assert shares[50] > shares[400], shares
+    assert shares[400] <= shares[100], shares

@@ -80,20 +80,29 @@ DRIVEN_PENDULUM = Model(
         "t_trap": MapVariable(np.float32, np.float32(np.nan), np.float32(np.nan), {
             "long_name": "time at which the orbit's label was decided", "units": "s",
             "comment": "whole drive periods; NaN where no label"}),
+        "changes_at_half_dt": MapVariable(np.int8, None, np.int8(0), {
+            "long_name": "1 where the orbit labelled again with dt/2 reaches another "
+                         "attractor (or none): a label that depends on the integrator",
+            "units": "1", "flag_values": np.array([0, 1], np.int8),
+            "flag_meanings": "same changed"}),
     },
     label_variables=("attractor", "status", "t_trap"),
     basin_variables={
         "basin_fraction": {"long_name": "fraction of the grid points labelled k (a count, "
                                         "not an area)"},
         "basin_fraction_error": {
-            "long_name": "standard error of basin_fraction as an estimate of the basin's "
-                         "share of the window",
-            "comment": "binomial, sqrt(f (1 - f) / N) over the grid's N points, taken as a "
-                       "sample of the window; a fractal boundary's grid bias is not in it"},
+            "long_name": "uncertainty of basin_fraction as an estimate of the basin's share "
+                         "of the window",
+            "comment": "the binomial standard error sqrt(f (1 - f) / N) over the grid's N "
+                       "points, taken as a sample of the window, plus |f - f(dt/2)|, the "
+                       "change of the share when every point is labelled again with half "
+                       "the step; a fractal boundary's grid bias is not in it"},
     },
     point_variables={
         "unresolved_fraction": {"long_name": "fraction of the grid without a label "
                                              "(unresolved or nonfinite)"},
+        "changed_at_half_dt_fraction": {"long_name": "fraction of the grid whose label "
+                                                     "changes when dt is halved"},
         "attractor_count": {"long_name": "number of attractors of the stroboscopic map "
                                          "found in the window"},
     },

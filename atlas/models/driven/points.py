@@ -9,7 +9,7 @@ decided) and counts its labels.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import xarray as xr
@@ -61,8 +61,9 @@ def drives(cfg, layout: Layout) -> list[Drive]:
 class DrivenPoint:
     """One parameter point, prepared (:class:`atlas.models.base.PointPlan`): the drive, the
     targets (every attractor's points on P, θ wrapped) with the index of their attractor
-    and their capture radius, the status each attractor's labels get and the most periods
-    (t_max / T)."""
+    and their capture radius, the status each attractor's labels get, the most periods
+    (t_max / T), and the grid (θ0 columns, θ̇0 rows) whose tiles :meth:`certify` labels
+    again at dt/2 (None: not checked)."""
 
     drive: Drive
     targets: np.ndarray
@@ -70,6 +71,7 @@ class DrivenPoint:
     attractor_status: np.ndarray
     radius: np.ndarray
     max_periods: int
+    grid: tuple[np.ndarray, np.ndarray] | None = None
 
     @classmethod
     def searching(cls, drive: Drive, t_max: float) -> DrivenPoint:
@@ -99,16 +101,36 @@ class DrivenPoint:
         attractor = np.where(decided, attractor, ATTRACTOR_FILL).astype(np.int16)
         return attractor.reshape(shape), status.reshape(shape), t_trap.reshape(shape)
 
+    def halved(self) -> DrivenPoint:
+        """The same point on the RK4 map with half the step (2N steps per period), the same
+        targets (the attractors move by RK4's error, far less than a capture radius)."""
+        drive = replace(self.drive, steps_per_period=2 * self.drive.steps_per_period)
+        return replace(self, drive=drive, grid=None)
+
     def certify(self, rows, labelled, numba_threads=None) -> tuple[dict, dict]:
         """The tile's arrays as labelled (a label of P is not certified for the exact
-        equation: the statuses say what it is) and its tally: the count of each attractor
-        and of unlabelled orbits."""
+        equation: the statuses say what it is), with ``changes_at_half_dt``: 1 where the
+        tile's orbit, labelled again with dt/2, reaches another attractor (or none); and its
+        tally: the count of each attractor at dt and at dt/2, of changed labels and of
+        unlabelled orbits."""
         attractor, status, t_trap = labelled
-        counts = np.bincount(attractor[attractor >= 0].ravel(),
-                             minlength=len(self.attractor_status)).astype(np.int64)
+        if self.grid is not None and rows is not None:
+            x0, v0 = self.grid
+            again = self.halved().label(x0[None, :], v0[rows][:, None],
+                                        numba_threads=numba_threads)[0]
+        else:
+            again = attractor
+        changed = (again != attractor).astype(np.int8)
+
+        def count(labels):
+            return np.bincount(labels[labels >= 0].ravel(),
+                               minlength=len(self.attractor_status)).astype(np.int64)
+
         unlabelled = np.int64(np.isin(status, (UNRESOLVED, NONFINITE)).sum())
-        return ({"attractor": attractor, "status": status, "t_trap": t_trap},
-                {"count": counts, "unlabelled": unlabelled})
+        return ({"attractor": attractor, "status": status, "t_trap": t_trap,
+                 "changes_at_half_dt": changed},
+                {"count": count(attractor), "count_half_dt": count(again),
+                 "changed": np.int64(changed.sum()), "unlabelled": unlabelled})
 
 
 def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.ndarray,
@@ -168,17 +190,20 @@ class DrivenPlan:
     warnings: list[str]
 
     def summary(self, tallies: list[list[dict]]) -> xr.Dataset:
-        """Per point: each attractor's share of the grid with its binomial standard error,
-        the unlabelled share and the number of attractors."""
+        """Per point: each attractor's share of the grid, its uncertainty (the binomial
+        standard error plus the share's change when dt is halved), the share of labels that
+        change at dt/2, the unlabelled share and the number of attractors."""
         n = self.layout.x0.size * self.layout.v0.size
         out = []
         for tally in tallies:
-            counts = np.sum([t["count"] for t in tally], axis=0)
-            f = counts / n
-            out.append({"k": list(range(len(counts))), "basin_fraction": f,
-                        "basin_fraction_error": np.sqrt(f * (1 - f) / n),
+            f = np.sum([t["count"] for t in tally], axis=0) / n
+            f_half = np.sum([t["count_half_dt"] for t in tally], axis=0) / n
+            out.append({"k": list(range(len(f))), "basin_fraction": f,
+                        "basin_fraction_error": np.sqrt(f * (1 - f) / n) + np.abs(f - f_half),
                         "unresolved_fraction": sum(int(t["unlabelled"]) for t in tally) / n,
-                        "attractor_count": float(len(counts))})
+                        "changed_at_half_dt_fraction":
+                            sum(int(t["changed"]) for t in tally) / n,
+                        "attractor_count": float(len(f))})
         return summary_dataset(self.layout, out)
 
 
@@ -187,7 +212,8 @@ def begin(cfg, layout: Layout) -> list[Drive]:
     return drives(cfg, layout)
 
 
-def _prepared(cfg, drive: Drive) -> tuple[DrivenPoint, xr.Dataset, str | None]:
+def _prepared(cfg, layout: Layout, drive: Drive
+              ) -> tuple[DrivenPoint, xr.Dataset, str | None]:
     g = cfg.grid
     window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
     found = find_attractors(drive, window)
@@ -202,7 +228,8 @@ def _prepared(cfg, drive: Drive) -> tuple[DrivenPoint, xr.Dataset, str | None]:
         if clouds else np.zeros(0, np.int16)
     point = DrivenPoint(drive, np.ascontiguousarray(targets), owner, statuses,
                         radii[owner] if len(owner) else np.zeros(0),
-                        max(1, int(cfg.integrator.t_max / drive.period)))
+                        max(1, int(cfg.integrator.t_max / drive.period)),
+                        grid=(layout.x0, layout.v0))
     warning = None if found else "no attractor found in the window"
     return point, attractors_dataset(drive, found, statuses, radii), warning
 
@@ -212,7 +239,7 @@ def plan(cfg, layout: Layout, begun: list[Drive], track=None) -> DrivenPlan:
     items = begun if track is None else track(begun, len(begun), "attractors")
     points, datasets, warnings = [], [], []
     for p, drive in enumerate(items):
-        point, ds, warning = _prepared(cfg, drive)
+        point, ds, warning = _prepared(cfg, layout, drive)
         points.append(point)
         datasets.append(ds)
         if warning:
