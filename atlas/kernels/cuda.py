@@ -44,7 +44,7 @@ WRAP_EVERY = 16
 #: 1.5·2⁵²: (x + R) − R rounds x to the nearest integer in float arithmetic for |x| < 2⁵¹,
 #: with no float→int conversion (NaN stays NaN; a NaN→int conversion would raise in the
 #: simulator and is undefined in LLVM).
-_ROUND_MAGIC = 6755399441055744.0
+ROUND_MAGIC = 6755399441055744.0
 _INSTALL_HINT = "install pendulum-atlas[cuda] on a machine with an NVIDIA GPU"
 
 #: numba.cuda once imported by import_cuda(). The kernels refer to it as a module global
@@ -68,7 +68,7 @@ def import_cuda():
 
 
 @contextlib.contextmanager
-def _row_stack_alias():
+def row_stack_alias():
     """numba-cuda 0.30 still calls ``numpy.row_stack``, removed in numpy 2.5; without it
     compiling a kernel fails with "module 'numpy' has no attribute 'row_stack'". The alias
     (``numpy.vstack``) exists only while kernels compile here, and is removed afterwards:
@@ -124,7 +124,7 @@ class Kernels(NamedTuple):
     propagate_block: int
 
 
-def _device(cuda, jitted):
+def device_function(cuda, jitted):
     """``jitted`` (a factory's CPU dispatcher, or a plain function) compiled as a CUDA device
     function from its Python source (``py_func``), with CUDA's own floating-point options
     (called directly, numba would retarget it with the CPU fast-math set, which the CUDA
@@ -146,15 +146,15 @@ def _device_sin(cuda, variant: str):
             return math.sin(x)
 
     else:
-        poly = _device(cuda, sin_poly)
+        poly = device_function(cuda, sin_poly)
 
         # Cody–Waite by π as in fastsin.reduce_pi, restated because numba-cuda has no device
-        # lowering of np.floor (reduce_pi's): q is rounded with _ROUND_MAGIC instead.
+        # lowering of np.floor (reduce_pi's): q is rounded with ROUND_MAGIC instead.
         @cuda.jit(device=True)
         def sin(x):
-            q = (x * INV_PI + _ROUND_MAGIC) - _ROUND_MAGIC
+            q = (x * INV_PI + ROUND_MAGIC) - ROUND_MAGIC
             r = ((x - q * PI_1) - q * PI_2) - q * PI_3
-            parity = math.fabs(q - 2.0 * ((0.5 * q + _ROUND_MAGIC) - _ROUND_MAGIC))
+            parity = math.fabs(q - 2.0 * ((0.5 * q + ROUND_MAGIC) - ROUND_MAGIC))
             return (1.0 - 2.0 * parity) * poly(r)
 
     @cuda.jit(device=True)
@@ -172,8 +172,8 @@ def _device_functions(cuda, variant: str):
     """The variant's (step, well_energy) as CUDA device functions built by the rk4 factories
     (:func:`_device`, :func:`_device_sin`)."""
     sin, sin_near, identity = _device_sin(cuda, variant)
-    return (_device(cuda, make_rk4_step(sin_near, reduce=identity)),
-            _device(cuda, make_well_energy(sin)))
+    return (device_function(cuda, make_rk4_step(sin_near, reduce=identity)),
+            device_function(cuda, make_well_energy(sin)))
 
 
 def _device_functions_torque(cuda, variant: str):
@@ -185,11 +185,12 @@ def _device_functions_torque(cuda, variant: str):
     def floor(x):  # a float floor (numba-cuda lowers math.floor, not np.floor)
         return float(math.floor(x))
 
-    return (_device(cuda, make_rk4_step_torque(sin_near, reduce=identity)),
-            _device(cuda, make_well_energy_torque(sin)), _device(cuda, make_running_test(floor)))
+    return (device_function(cuda, make_rk4_step_torque(sin_near, reduce=identity)),
+            device_function(cuda, make_well_energy_torque(sin)),
+            device_function(cuda, make_running_test(floor)))
 
 
-def _block_size(cuda, kernel) -> int:
+def block_size(cuda, kernel) -> int:
     """Threads per block maximising resident threads per SM given the kernel's registers
     (CUDA occupancy rules: registers allocated per warp in units of 256); ties go to the
     smaller block, which balances the uneven work of early exits better. 128 when the
@@ -221,7 +222,7 @@ def kernels(variant: str = "fast") -> Kernels:
     if variant not in VARIANTS:
         raise ValueError(f"CUDA variant must be one of {VARIANTS}, got {variant!r}")
     require_cuda()  # binds the global `cuda` the kernels below refer to
-    with _row_stack_alias():
+    with row_stack_alias():
         return _compile(variant)
 
 
@@ -273,7 +274,7 @@ def _compile(variant: str) -> Kernels:
         for s in range(n_steps):
             th, v = step(th, v, alpha, omega0, dt)
             if wrap and s % WRAP_EVERY == WRAP_EVERY - 1:
-                k = (th * INV_TWO_PI + _ROUND_MAGIC) - _ROUND_MAGIC
+                k = (th * INV_TWO_PI + ROUND_MAGIC) - ROUND_MAGIC
                 th = ((th - k * (2.0 * PI_1)) - k * (2.0 * PI_2)) - k * (2.0 * PI_3)
                 winding += k
         if wrap:
@@ -281,7 +282,7 @@ def _compile(variant: str) -> Kernels:
         theta[i] = th
         theta_dot[i] = v
 
-    return Kernels(label, propagate, _block_size(cuda, label), _block_size(cuda, propagate))
+    return Kernels(label, propagate, block_size(cuda, label), block_size(cuda, propagate))
 
 
 class TorqueKernel(NamedTuple):
@@ -301,7 +302,7 @@ def torque_kernels(variant: str = "fast") -> TorqueKernel:
     if variant not in VARIANTS:
         raise ValueError(f"CUDA variant must be one of {VARIANTS}, got {variant!r}")
     require_cuda()
-    with _row_stack_alias():
+    with row_stack_alias():
         return _compile_torque(variant)
 
 
@@ -349,4 +350,4 @@ def _compile_torque(variant: str) -> TorqueKernel:
             for _ in range(check_every):
                 theta, theta_dot = step(theta, theta_dot, alpha, omega0, dt, torque)
 
-    return TorqueKernel(label, _block_size(cuda, label))
+    return TorqueKernel(label, block_size(cuda, label))

@@ -136,7 +136,7 @@ def _chunk_size(cuda, bytes_per_item: int, block: int, cap: int | None) -> int:
                         bytes_per_item, block, cap)
 
 
-def _run_chunked(cuda, kernel, block, args, modes, chunk):
+def run_chunked(cuda, kernel, block, args, modes, chunk):
     """Launch ``kernel(*args)`` over length-n host arrays in chunks, double-buffered.
 
     ``modes[i]`` is "in", "out", "inout" for array arguments and None for scalars. Each of the
@@ -213,7 +213,7 @@ def label_cuda(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every, ene
             int(check_every), float(energy_cap), attractor, status, n_trap)
     # attractor is "inout": the contract leaves it untouched where nothing is trapped.
     modes = ("in", "in", None, None, None, None, None, None, "inout", "out", "out")
-    _run_chunked(import_cuda(), k.label, k.label_block, args, modes, chunk)
+    run_chunked(import_cuda(), k.label, k.label_block, args, modes, chunk)
 
 
 def _label_cuda_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_every,
@@ -232,7 +232,7 @@ def _label_cuda_torque(theta0, theta_dot0, alpha, omega0, dt, n_checks, check_ev
             int(check_every), float(energy_cap), tq, shift, vers, sign, r_theta0, g_dev, r_top,
             attractor, status, n_trap)
     modes = ("in", "in") + (None,) * 13 + ("inout", "out", "out")
-    _run_chunked(cuda, k.label, k.label_block, args, modes, chunk)
+    run_chunked(cuda, k.label, k.label_block, args, modes, chunk)
 
 
 def propagate_cuda(theta, theta_dot, alpha, omega0, dt, n_steps, *, variant: str = "fast",
@@ -245,4 +245,4 @@ def propagate_cuda(theta, theta_dot, alpha, omega0, dt, n_steps, *, variant: str
         return
     args = (theta, theta_dot, float(alpha), float(omega0), float(dt), int(n_steps))
     modes = ("inout", "inout", None, None, None, None)
-    _run_chunked(import_cuda(), k.propagate, k.propagate_block, args, modes, chunk)
+    run_chunked(import_cuda(), k.propagate, k.propagate_block, args, modes, chunk)

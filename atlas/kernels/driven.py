@@ -29,6 +29,7 @@ Results are bit-identical for any thread count, chunking and array length.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -108,7 +109,7 @@ _full_step = make_driven_step(_sin_sum, _unreduced)
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _path(theta, theta_dot, alpha, dt, accel):
+def orbit_path(theta, theta_dot, alpha, dt, accel):
     """SHARED or FULL for an orbit from (θ, θ̇), ``accel`` = ω0² + max|τ + A cos| bounding
     |θ̈ + 2αθ̇|. With α > 0 the speed stays in the band |θ̇| ≤ B = max(|θ̇0|, accel/2α) (above
     it θ̈ points back into it), so a stage offset is at most dt·(B(1 + 2α dt) + dt·accel), as
@@ -125,7 +126,7 @@ def _path(theta, theta_dot, alpha, dt, accel):
 def make_period_chunk(step, path, visit):
     """Return ``chunk(first, stride, theta0, theta_dot0, alpha, omega0, dt, forcing, accel,
     args)``: advance, in one lane block of ``step`` with refill, the orbits of tiles first,
-    first + stride, … whose :func:`_path` is ``path``, period by period (``forcing`` = τ + the
+    first + stride, … whose :func:`orbit_path` is ``path``, period by period (``forcing`` = τ + the
     table of :func:`forcing_table`). After loading an orbit and after each period p of it,
     ``visit(i, p, θ, θ̇, memo, lane, args) -> done`` looks at orbit i (``memo[lane]``: two
     int64 of the orbit's own, set to (ATTRACTOR_FILL, 0) at loading); the lane takes the next
@@ -168,7 +169,7 @@ def make_period_chunk(step, path, visit):
                     nxt += 1
                     if nxt % TILE == 0:  # end of a tile: jump to this chunk's next tile
                         nxt += (stride - 1) * TILE
-                    if _path(theta0[i], theta_dot0[i], alpha, dt, accel) != path:
+                    if orbit_path(theta0[i], theta_dot0[i], alpha, dt, accel) != path:
                         continue
                     orbit[lane] = i
                     period[lane] = 0
@@ -187,7 +188,7 @@ def make_period_chunk(step, path, visit):
 
 # ------------------------------------------------------------------------- the visitors
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _visit_advance(i, p, th, v, memo, lane, args):
+def visit_advance(i, p, th, v, memo, lane, args):
     """args = (periods, θ out, θ̇ out): write the state after ``periods`` periods."""
     periods, theta, theta_dot = args
     if p < periods:
@@ -209,7 +210,7 @@ def _visit_sample(i, p, th, v, memo, lane, args):
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _nearest_attractor(th, v, targets, target_attractor, radius):
+def nearest_attractor(th, v, targets, target_attractor, radius):
     """The attractor of the nearest target k within its own ``radius[k]`` of (θ wrapped,
     θ̇) (θ difference wrapped to [−π, π), Euclidean in (θ, θ̇); the first on a tie), else
     ATTRACTOR_FILL."""
@@ -227,38 +228,48 @@ def _nearest_attractor(th, v, targets, target_attractor, radius):
     return hit
 
 
-@nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def _visit_label(i, p, th, v, memo, lane, args):
-    """args = (targets, target_attractor, radius, confirm, max_periods, attractor, periods,
-    status); memo[lane] = (attractor of the current run of hits, its length)."""
-    targets, target_attractor, radius, confirm, max_periods, attractor, periods, status = args
-    if not (math.isfinite(th) and math.isfinite(v)):
-        status[i] = NONFINITE
-        periods[i] = p
-        return True
-    if p > 0:
-        hit = _nearest_attractor(th, v, targets, target_attractor, radius)
-        if hit == ATTRACTOR_FILL:
-            memo[lane, 1] = 0
-        elif hit == memo[lane, 0]:
-            memo[lane, 1] += 1
-        else:
-            memo[lane, 1] = 1
-        memo[lane, 0] = hit
-        if memo[lane, 1] >= confirm:
-            attractor[i] = hit
-            status[i] = DECIDED
+def make_visit_label(nearest):
+    """Return the labelling visitor ``visit(i, p, θ, θ̇, memo, lane, args) -> done``:
+    args = (targets, target_attractor, radius, confirm, max_periods, attractor, periods,
+    status); memo[lane] = (attractor of the current run of hits, its length); ``nearest`` is
+    :func:`nearest_attractor` (a parameter so that :mod:`atlas.kernels.driven_cuda` compiles
+    this one decision rule for the device around its own device function)."""
+
+    @nb.njit(inline="always", fastmath=SIN_FASTMATH)
+    def visit(i, p, th, v, memo, lane, args):
+        targets, target_attractor, radius, confirm, max_periods, attractor, periods, status = args
+        if not (math.isfinite(th) and math.isfinite(v)):
+            status[i] = NONFINITE
             periods[i] = p
             return True
-    if p >= max_periods:
-        status[i] = UNRESOLVED
-        periods[i] = p
-        return True
-    return False
+        if p > 0:
+            hit = nearest(th, v, targets, target_attractor, radius)
+            if hit == ATTRACTOR_FILL:
+                memo[lane, 1] = 0
+            elif hit == memo[lane, 0]:
+                memo[lane, 1] += 1
+            else:
+                memo[lane, 1] = 1
+            memo[lane, 0] = hit
+            if memo[lane, 1] >= confirm:
+                attractor[i] = hit
+                status[i] = DECIDED
+                periods[i] = p
+                return True
+        if p >= max_periods:
+            status[i] = UNRESOLVED
+            periods[i] = p
+            return True
+        return False
+
+    return visit
 
 
-_advance_shared = make_period_chunk(_shared_step, SHARED, _visit_advance)
-_advance_full = make_period_chunk(_full_step, FULL, _visit_advance)
+_visit_label = make_visit_label(nearest_attractor)
+
+
+_advance_shared = make_period_chunk(_shared_step, SHARED, visit_advance)
+_advance_full = make_period_chunk(_full_step, FULL, visit_advance)
 _sample_shared = make_period_chunk(_shared_step, SHARED, _visit_sample)
 _sample_full = make_period_chunk(_full_step, FULL, _visit_sample)
 _label_shared = make_period_chunk(_shared_step, SHARED, _visit_label)
@@ -308,19 +319,34 @@ def _states(theta, theta_dot):
     return theta, theta_dot
 
 
-def _run(kernel, serial, theta0, theta_dot0, alpha, omega0, torque, table, dt, args):
-    """Call ``kernel`` (or its ``serial`` twin for a single chunk) with the drive τ + table
-    and its bound ω0² + max|τ + table| (for :func:`_path`)."""
+def drive(omega0, torque, table, dt):
+    """(forcing, accel): the drive τ + table (checked) and its bound ω0² + max|τ + table|
+    (for :func:`orbit_path`), as every kernel of a call (CPU or CUDA) takes them."""
     table = np.ascontiguousarray(table, dtype=np.float64)
     if table.ndim != 1 or table.size < 3 or table.size % 2 == 0:
         raise ValueError("table must be forcing_table's 2N + 1 values")
     if not dt > 0.0:
         raise ValueError("dt must be > 0")
     forcing = float(torque) + table
-    accel = float(omega0) ** 2 + float(np.max(np.abs(forcing)))
+    return forcing, float(omega0) ** 2 + float(np.max(np.abs(forcing)))
+
+
+def _run(kernel, serial, theta0, theta_dot0, alpha, omega0, torque, table, dt, args):
+    """Call ``kernel`` (or its ``serial`` twin for a single chunk) with :func:`drive`."""
+    forcing, accel = drive(omega0, torque, table, dt)
     chunks = n_chunks(theta0.size)
     (serial if chunks == 1 else kernel)(theta0, theta_dot0, float(alpha), float(omega0),
                                         float(dt), forcing, accel, args, chunks)
+
+
+def check_in_place(theta, theta_dot, periods) -> None:
+    """Check :func:`advance`'s arguments (also those of the CUDA twin)."""
+    if theta.dtype != np.float64 or theta_dot.dtype != np.float64 or not (
+            theta.flags.c_contiguous and theta_dot.flags.c_contiguous):
+        raise ValueError("advance works in place on contiguous float64 arrays")
+    _states(theta, theta_dot)
+    if periods < 0:
+        raise ValueError("periods must be ≥ 0")
 
 
 def advance(theta, theta_dot, alpha, omega0, torque, table, dt, periods) -> None:
@@ -330,12 +356,7 @@ def advance(theta, theta_dot, alpha, omega0, torque, table, dt, periods) -> None
     and ``dt`` = :func:`step_size` of the same N. Classical RK4 (module docstring: method,
     accuracy, reference). k calls of one period give the same bits as one call of k, for every
     orbit that starts in the SHARED path's band (all, at the usual parameters)."""
-    if theta.dtype != np.float64 or theta_dot.dtype != np.float64 or not (
-            theta.flags.c_contiguous and theta_dot.flags.c_contiguous):
-        raise ValueError("advance works in place on contiguous float64 arrays")
-    _states(theta, theta_dot)
-    if periods < 0:
-        raise ValueError("periods must be ≥ 0")
+    check_in_place(theta, theta_dot, periods)
     # the kernel reads each orbit's initial state for its path in two passes: read a copy
     _run(_advance, _advance_serial, theta.copy(), theta_dot.copy(), alpha, omega0, torque,
          table, dt, (np.int64(periods), theta, theta_dot))
@@ -356,6 +377,41 @@ def sample(theta0, theta_dot0, alpha, omega0, torque, table, dt, transient, coun
     return out
 
 
+class LabelArrays(NamedTuple):
+    """The arrays of a :func:`label_driven` call as every backend's kernel takes them."""
+
+    theta0: np.ndarray  # float64 n [rad]
+    theta_dot0: np.ndarray  # float64 n [rad s⁻¹]
+    targets: np.ndarray  # float64 (K, 2)
+    target_attractor: np.ndarray  # int16 K
+    radius: np.ndarray  # float64 K
+    attractor: np.ndarray  # int16 n, ATTRACTOR_FILL
+    periods: np.ndarray  # int32 n
+    status: np.ndarray  # int8 n
+
+
+def label_arrays(theta0, theta_dot0, targets, target_attractor, radius, confirm,
+                 max_periods) -> LabelArrays:
+    """:func:`label_driven`'s arguments checked and converted (with ``confirm`` and
+    ``max_periods``), and its outputs allocated: for the CPU kernel and its CUDA twin
+    (:mod:`atlas.kernels.driven_cuda`)."""
+    theta0, theta_dot0 = _states(theta0, theta_dot0)
+    targets = np.ascontiguousarray(targets, dtype=np.float64).reshape(-1, 2)
+    target_attractor = np.ascontiguousarray(target_attractor, dtype=np.int16)
+    if target_attractor.shape != (targets.shape[0],):
+        raise ValueError("target_attractor must give one attractor per target")
+    if np.any(target_attractor == ATTRACTOR_FILL):
+        raise ValueError("the fill value is not an attractor")
+    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64),
+                                                  (targets.shape[0],)))
+    if confirm < 1 or max_periods < 0:
+        raise ValueError("confirm must be ≥ 1 and max_periods ≥ 0")
+    n = theta0.size
+    return LabelArrays(theta0, theta_dot0, targets, target_attractor, radius,
+                       np.full(n, ATTRACTOR_FILL, np.int16), np.zeros(n, np.int32),
+                       np.zeros(n, np.int8))
+
+
 def label_driven(theta0, theta_dot0, alpha, omega0, torque, table, dt, targets,
                  target_attractor, radius, confirm, max_periods):
     """Label each orbit by the attractor it settles on, by proximity of P's returns.
@@ -372,22 +428,9 @@ def label_driven(theta0, theta_dot0, alpha, omega0, torque, table, dt, targets,
     attractor and the deciding period; ``UNRESOLVED`` (1) after ``max_periods`` undecided;
     ``NONFINITE`` (2) at the period a NaN/inf state is met (0 for non-finite input). The
     attractor is ATTRACTOR_FILL (the int16 minimum) unless decided."""
-    theta0, theta_dot0 = _states(theta0, theta_dot0)
-    targets = np.ascontiguousarray(targets, dtype=np.float64).reshape(-1, 2)
-    target_attractor = np.ascontiguousarray(target_attractor, dtype=np.int16)
-    if target_attractor.shape != (targets.shape[0],):
-        raise ValueError("target_attractor must give one attractor per target")
-    if np.any(target_attractor == ATTRACTOR_FILL):
-        raise ValueError("the fill value is not an attractor")
-    radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64),
-                                                  (targets.shape[0],)))
-    if confirm < 1 or max_periods < 0:
-        raise ValueError("confirm must be ≥ 1 and max_periods ≥ 0")
-    n = theta0.size
-    attractor = np.full(n, ATTRACTOR_FILL, np.int16)
-    periods = np.zeros(n, np.int32)
-    status = np.zeros(n, np.int8)
-    _run(_label, _label_serial, theta0, theta_dot0, alpha, omega0, torque, table, dt,
-         (targets, target_attractor, radius, np.int64(confirm), np.int64(max_periods),
-          attractor, periods, status))
-    return attractor, periods, status
+    a = label_arrays(theta0, theta_dot0, targets, target_attractor, radius, confirm,
+                     max_periods)
+    _run(_label, _label_serial, a.theta0, a.theta_dot0, alpha, omega0, torque, table, dt,
+         (a.targets, a.target_attractor, a.radius, np.int64(confirm), np.int64(max_periods),
+          a.attractor, a.periods, a.status))
+    return a.attractor, a.periods, a.status
