@@ -148,9 +148,7 @@ def test_its_bad_input_is_one_line(tmp_path, capsys):
     body = CONFIG.format(amplitude=1.66, output=tmp_path / "b.h5")
     for bad, word in ((body.replace("dt: pi/100", "dt: 1.0"), "integrator.dt"),
                       (body.replace("t_max: 600", "t_max: 20"), "integrator.t_max"),
-                      (body.replace("amplitude: 1.66", "amplitude: -1"), "amplitude"),
-                      (body.replace("execution: {tile_orbits: 100}",
-                                    "execution: {backend: cuda}"), "execution")):
+                      (body.replace("amplitude: 1.66", "amplitude: -1"), "amplitude")):
         path = write_config(tmp_path / "bad.yaml", bad)
         assert main(["run", str(path)]) == 2
         err = capsys.readouterr().err.strip().splitlines()
@@ -180,3 +178,49 @@ def test_labels_that_change_with_dt_are_flagged_and_fewer_as_dt_shrinks(tmp_path
                 ds["attractor"].values != halved["attractor"].values)
     assert shares[50] > shares[400], shares
     assert shares[400] <= shares[100], shares
+
+
+DRIVEN_CUDA = r"""
+import json
+import numpy as np
+import atlas
+from atlas.kernels.cuda import cuda_status
+assert cuda_status() == (True, "CUDA simulator"), cuda_status()
+cfg = atlas.load_config({config!r})
+gpu = atlas.run(cfg, output=None, backend="cuda", quiet=True).to_dataset(inherit=False)
+cpu = atlas.run(cfg, output=None, backend="cpu", quiet=True).to_dataset(inherit=False)
+print(json.dumps({{name: bool(np.array_equal(gpu[name].values, cpu[name].values,
+                                            equal_nan=True))
+                  for name in ("attractor", "status", "t_trap", "changes_at_half_dt")}}))
+"""
+
+
+@pytest.mark.slow
+def test_the_cuda_backend_labels_as_the_cpu(tmp_path):
+    """``backend: cuda`` (numba's simulator, in a process of its own) labels a driven atlas,
+    its check at dt/2 included, as the CPU kernels do."""
+    from tests.kernels.test_cuda import _child
+
+    cfg = write_config(tmp_path / "gpu.yaml", CONFIG.format(
+        amplitude=1.66, output=tmp_path / "gpu.h5").replace("num: 20", "num: 4").replace(
+        "num: 16", "num: 3").replace("dt: pi/100, t_max: 600", "dt: pi/16, t_max: 320"))
+    assert _child(DRIVEN_CUDA.format(config=str(cfg)), simulator=True) == {
+        "attractor": True, "status": True, "t_trap": True, "changes_at_half_dt": True}
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_labels_as_this_process(tmp_path):
+    """The driven pendulum's tiles on a local Dask cluster (2 worker processes, each point's
+    plan pickled to them) give this process's arrays."""
+    distributed = pytest.importorskip("distributed")
+    body = CONFIG.format(amplitude=1.66, output=tmp_path / "d.h5")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster:
+        dask = atlas.load_config(write_config(tmp_path / "d.yaml", body.replace(
+            "execution: {tile_orbits: 100}",
+            f'execution: {{tile_orbits: 100, backend: dask, scheduler: '
+            f'"{cluster.scheduler_address}"}}')))
+        there = atlas.run(dask, quiet=True).to_dataset(inherit=False)
+    here = atlas.run(dask, output=None, backend="cpu", quiet=True).to_dataset(inherit=False)
+    for name in ("attractor", "status", "t_trap", "changes_at_half_dt"):
+        np.testing.assert_array_equal(there[name].values, here[name].values, err_msg=name)

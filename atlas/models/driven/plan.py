@@ -29,8 +29,6 @@ def check(cfg: Config, study: bool) -> None:
     if study:
         raise ValueError("stability: atlas stability studies the undriven pendulum only; "
                          "map the driven one with atlas run")
-    if cfg.execution.backend == "cuda":
-        raise ValueError("execution.backend: the driven pendulum runs on cpu or dask")
     if cfg.integrator.method != "rk4":
         raise ValueError("integrator.method: the driven pendulum is integrated by rk4")
     for point in cfg.pendulum.points:

@@ -83,7 +83,9 @@ class DrivenPoint:
     def label(self, x0, v0, rows=None, backend: str = "cpu", numba_threads=None,
               t_max: float | None = None):
         """The labels of the orbits from θ0 = ``x0`` [rad], θ̇0 = ``v0`` [rad s⁻¹] (arrays
-        that broadcast): (attractor, status, t_trap [s]) shaped as their broadcast."""
+        that broadcast): (attractor, status, t_trap [s]) shaped as their broadcast, by the
+        CPU kernel or (``backend`` "cuda") the GPU's, one thread per orbit, same rule; and
+        the backend, for :meth:`certify`'s labels at dt/2."""
         use_threads(numba_threads)
         theta, theta_dot = (np.ascontiguousarray(a, np.float64).ravel()
                             for a in np.broadcast_arrays(x0, v0))
@@ -91,7 +93,11 @@ class DrivenPoint:
         periods_max = self.max_periods if t_max is None else \
             max(1, int(t_max / self.drive.period))
         d = self.drive
-        attractor, periods, status = kernels.label_driven(
+        if backend == "cuda":
+            from atlas.kernels.driven_cuda import label_driven_cuda as labelling
+        else:
+            labelling = kernels.label_driven
+        attractor, periods, status = labelling(
             theta, theta_dot, d.alpha, d.omega0, d.torque, d.table, d.dt, self.targets,
             self.target_attractor, self.radius, CONFIRM, periods_max)
         decided = status == 0
@@ -99,7 +105,8 @@ class DrivenPoint:
         status[decided] = self.attractor_status[attractor[decided]]
         t_trap = np.where(decided, periods * d.period, np.nan).astype(np.float32)
         attractor = np.where(decided, attractor, ATTRACTOR_FILL).astype(np.int16)
-        return attractor.reshape(shape), status.reshape(shape), t_trap.reshape(shape)
+        return (attractor.reshape(shape), status.reshape(shape), t_trap.reshape(shape),
+                backend)
 
     def halved(self) -> DrivenPoint:
         """The same point on the RK4 map with half the step (2N steps per period), the same
@@ -113,10 +120,10 @@ class DrivenPoint:
         tile's orbit, labelled again with dt/2, reaches another attractor (or none); and its
         tally: the count of each attractor at dt and at dt/2, of changed labels and of
         unlabelled orbits."""
-        attractor, status, t_trap = labelled
+        attractor, status, t_trap, backend = labelled
         if self.grid is not None and rows is not None:
             x0, v0 = self.grid
-            again = self.halved().label(x0[None, :], v0[rows][:, None],
+            again = self.halved().label(x0[None, :], v0[rows][:, None], backend=backend,
                                         numba_threads=numba_threads)[0]
         else:
             again = attractor
