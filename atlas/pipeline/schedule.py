@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Callable, Iterable, Iterator
+from concurrent import futures
 from concurrent.futures import Future
 from typing import NamedTuple
 
@@ -32,7 +33,7 @@ from atlas.store.partial import TileStore
 
 __all__ = ["Scheduler", "SCHEDULERS", "resolve", "compute_tile", "label_tile", "certify_tile",
            "point_results",
-           "tile_args", "local_results", "each_in_background",
+           "tile_args", "local_results", "each_in_background", "waited",
            "compute_tile_into_store", "dask_tile_results"]
 
 
@@ -75,6 +76,23 @@ def tile_args(cfg: Config, layout: Layout, points: list, index: int) -> tuple:
 #: certification overlaps the next tile's labelling only under a thread-safe layer
 #: (:func:`local_results`).
 _AHEAD = threading.Lock()
+
+
+#: Seconds between the looks of a waiting thread at its signals (:func:`waited`).
+WAKE_S = 0.1
+
+
+def waited(future: Future):
+    """``future.result()``, waited for in slices of :data:`WAKE_S`: a blocked wait wakes for
+    a signal only where the kernel delivers it to this thread, and a process-directed SIGINT
+    may go to any thread that does not block it (a worker's, Numba's); between the slices
+    the interpreter runs the handler that another thread's delivery only flagged, so that
+    Ctrl-C and SIGTERM take effect whichever thread received them."""
+    while True:
+        try:
+            return future.result(timeout=WAKE_S)
+        except futures.TimeoutError:  # the builtin from Python 3.11, its own class before
+            continue
 
 
 def _in_background(fn, *args, lock=_AHEAD, **kwargs) -> Future:
@@ -126,7 +144,7 @@ def each_in_background(fn: Callable, items: Iterable, workers: int) -> Iterator:
         threading.Thread(target=work, name="atlas-background", daemon=True).start()
     try:
         for _, future in jobs:
-            yield future.result()
+            yield waited(future)
     finally:
         stop.set()
 
@@ -162,13 +180,13 @@ def local_results(cfg, tiles: TileStore, points, todo, device: str
 
     ahead = start(todo[0]) if len(todo) else None
     for position, index in enumerate(todo):
-        result = ahead.result()
+        result = waited(ahead)
         if position + 1 < len(todo):
             ahead = start(todo[position + 1])
         if staged:
             point, _, _, rows = tile_args(cfg, layout, points, index)
-            result = _in_background(certify_tile, point, rows, result, lock=None,
-                                    numba_threads=threads).result()
+            result = waited(_in_background(certify_tile, point, rows, result, lock=None,
+                                           numba_threads=threads))
         yield index, result
 
 

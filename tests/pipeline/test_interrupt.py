@@ -204,3 +204,36 @@ def test_a_signal_inside_a_compiled_kernel_is_an_interruption(tmp_path, monkeypa
     monkeypatch.setattr(points, "running_certificates", plain)
     with pytest.raises(SystemError, match="a real one"):
         main(["run", str(cfg), "--quiet"])
+
+
+CTRL_C_TO_ANOTHER_THREAD = r"""
+import os, signal, sys, threading, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
+from atlas.pipeline.schedule import each_in_background
+
+go = threading.Event()
+
+def killer():  # started before the main thread blocks SIGINT: the one thread that takes it
+    go.wait()
+    time.sleep(0.3)
+    os.kill(os.getpid(), signal.SIGINT)
+
+threading.Thread(target=killer, daemon=True).start()
+signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})  # workers inherit the block
+go.set()
+try:
+    list(each_in_background(lambda item: threading.Event().wait(), [1, 2], 2))
+except KeyboardInterrupt:
+    print("interrupted")
+    sys.exit(0)
+"""
+
+
+def test_ctrl_c_delivered_to_another_thread_still_interrupts_the_wait():
+    """A process-directed SIGINT may be delivered to any thread not blocking it (under load,
+    a worker's or Numba's); the main thread, blocked waiting for a point that never finishes,
+    must still see it (it waits in slices: atlas.pipeline.schedule.waited). Before, it waited
+    forever (the suite's Ctrl-C test hung under load)."""
+    proc = subprocess.run([sys.executable, "-c", CTRL_C_TO_ANOTHER_THREAD],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and proc.stdout.strip() == "interrupted", proc.stderr
