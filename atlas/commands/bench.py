@@ -61,7 +61,8 @@ QUICK_TORQUE = 128
 QUICK_MAP_N = 128
 #: Rows from other modules (module docstring): JSON key → (module, function).
 MORE_ROWS = {"torque_sweep": ("atlas.commands.bench_torque", "torque_rows"),
-             "stability": ("atlas.commands.bench_stability", "stability_rows")}
+             "stability": ("atlas.commands.bench_stability", "stability_rows"),
+             "driven": ("atlas.commands.bench_driven", "driven_rows")}
 #: Targets on the 2-core development machine.
 TARGETS = {"map_speedup": 8.0, "bulk_msteps_s": 350.0, "bulk_speedup": 10.0,
            "bulk_vs_lanes": 1.5, "jit_cold_s": 5.0, "jit_warm_s": 1.0}

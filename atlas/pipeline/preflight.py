@@ -93,8 +93,8 @@ class Estimate:
             time_text = f"time not estimated (the {self.backend} backend)"
         else:
             time_text = (f"labelling about {_duration(self.seconds)} on this machine "
-                         f"(measured on {self.sample} of its orbits; separatrices and "
-                         "certificates extra)")
+                         f"(measured on {self.sample} of its orbits; the per-point "
+                         "preparation extra)")
         return (f"atlas: {_count(self.orbits)} orbits{where}, {time_text}, up to "
                 f"{human_size(self.disk_bytes)} on disk")
 

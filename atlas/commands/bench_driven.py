@@ -1,0 +1,116 @@
+"""``atlas bench``, the driven pendulum's rows: the stroboscopic map's kernel against a
+NumPy RK4 of the same map, and the Wada atlas (``configs/wada.yaml``'s problem) end to end.
+
+The kernel row applies P (one drive period, N = 200 RK4 steps; α = 0.1 s⁻¹, ω0 = 1 rad s⁻¹,
+A = 1.66 rad s⁻², Ω = 1 rad s⁻¹) to orbits spread over the Wada window with
+:func:`atlas.kernels.driven.advance`, and the reference applies the same map with a NumPy
+RK4 vectorised over the orbits (the drive evaluated once per stage, as the kernel's table);
+both in this process, one after the other, so that their ratio compares like with like on
+a loaded machine. The reference's states must agree with the kernel's to 1e-9 (said in the
+row's note), so that the two compute the same thing. The end-to-end row is one ``atlas run``
+of the Wada atlas in a fresh interpreter, after a small warm-up run. Quick: fewer orbits
+and a 100² atlas.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from atlas.commands.bench_e2e import run_python
+
+__all__ = ["driven_rows", "TITLE", "numpy_periods"]
+
+TITLE = "driven pendulum: the stroboscopic map's kernel against NumPy, the Wada atlas"
+
+_ALPHA, _OMEGA0, _AMPLITUDE, _FREQUENCY, _STEPS = 0.1, 1.0, 1.66, 1.0, 200
+
+
+def numpy_periods(theta: np.ndarray, theta_dot: np.ndarray, periods: int) -> None:
+    """The reference: P applied ``periods`` times in place by classical RK4 in NumPy (dt =
+    T/200), vectorised over the orbits."""
+    dt = 2 * math.pi / _FREQUENCY / _STEPS
+
+    def accel(th, v, t):
+        return (_AMPLITUDE * math.cos(_FREQUENCY * t) - _OMEGA0 ** 2 * np.sin(th)
+                - 2 * _ALPHA * v)
+
+    for p in range(periods):
+        for j in range(_STEPS):
+            t = (p * _STEPS + j) * dt
+            k1t, k1v = theta_dot, accel(theta, theta_dot, t)
+            k2t = theta_dot + 0.5 * dt * k1v
+            k2v = accel(theta + 0.5 * dt * k1t, k2t, t + 0.5 * dt)
+            k3t = theta_dot + 0.5 * dt * k2v
+            k3v = accel(theta + 0.5 * dt * k2t, k3t, t + 0.5 * dt)
+            k4t = theta_dot + dt * k3v
+            k4v = accel(theta + dt * k3t, k4t, t + dt)
+            theta += dt / 6 * (k1t + 2 * k2t + 2 * k3t + k4t)
+            theta_dot += dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+
+
+def _orbits(n: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(0)
+    return rng.uniform(-math.pi, math.pi, n), rng.uniform(-2.0, 4.0, n)
+
+
+def _kernel_row(quick: bool) -> dict:
+    from atlas.kernels import driven
+
+    table = driven.forcing_table(_AMPLITUDE, _FREQUENCY, 0.0, _STEPS)
+    dt = driven.step_size(_FREQUENCY, _STEPS)
+    n, periods = (20_000, 2) if quick else (100_000, 5)
+    for size in (n, 2_000 if quick else 10_000):  # untimed: the kernels of both batch sizes
+        theta, theta_dot = _orbits(size)  # compiled (or loaded from the cache)
+        driven.advance(theta, theta_dot, _ALPHA, _OMEGA0, 0.0, table, dt, 1)
+    theta, theta_dot = _orbits(n)
+    start = time.perf_counter()
+    driven.advance(theta, theta_dot, _ALPHA, _OMEGA0, 0.0, table, dt, periods)
+    kernel_s = time.perf_counter() - start
+    ref_n = 2_000 if quick else 10_000
+    ref_theta, ref_dot = _orbits(n)
+    ref_theta, ref_dot = ref_theta[:ref_n].copy(), ref_dot[:ref_n].copy()
+    start = time.perf_counter()
+    numpy_periods(ref_theta, ref_dot, 1)
+    numpy_s = time.perf_counter() - start
+    check_theta, check_dot = _orbits(n)
+    check_theta, check_dot = check_theta[:ref_n].copy(), check_dot[:ref_n].copy()
+    driven.advance(check_theta, check_dot, _ALPHA, _OMEGA0, 0.0, table, dt, 1)
+    differ = float(max(np.abs(check_theta - ref_theta).max(), np.abs(check_dot - ref_dot).max()))
+    kernel_rate = n * periods * _STEPS / kernel_s
+    numpy_rate = ref_n * _STEPS / numpy_s
+    return {"variant": f"kernel: P on {n:,} orbits x {periods} periods (N = {_STEPS}), "
+                       f"{kernel_rate / 1e6:.0f} M RK4 steps/s",
+            "wall_s": kernel_s, "ratio": kernel_rate / numpy_rate,
+            "against": f"NumPy RK4 of the same map, {numpy_rate / 1e6:.1f} M steps/s",
+            "note": f"ratio = speed-up; the NumPy states agree to {differ:.1e} after one "
+                    "period (must be < 1e-9)"}
+
+
+def _atlas_row(quick: bool) -> dict:
+    num = 100 if quick else 400
+    config = ("name: {name}\npendulum:\n  alpha: 0.1\n  omega0: 1.0\n"
+              "  drive: {{amplitude: 1.66, frequency: 1.0}}\n"
+              "grid:\n  theta0: {{start: -pi, stop: pi, num: {num}}}\n"
+              "  theta_dot0: {{start: -2.0, stop: 4.0, num: {num}}}\n"
+              "integrator: {{dt: pi/100, t_max: 1000.0}}\noutput: {output}\n")
+    with tempfile.TemporaryDirectory(prefix="atlas-bench-driven-") as tmp:
+        folder = Path(tmp)
+        walls = {}
+        for name, n in (("warm", 24), ("wada", num)):
+            path = folder / f"{name}.yaml"
+            path.write_text(config.format(name=name, num=n, output=folder / f"{name}.h5"))
+            walls[name], _ = run_python(["-m", "atlas", "run", str(path), "-q"])
+    return {"variant": f"Wada atlas, {num}² grid, 3 attractors, every label checked at dt/2, "
+                       "end to end", "wall_s": walls["wada"], "ratio": float("nan"),
+            "against": "-", "note": "configs/wada.yaml's problem; includes start-up"}
+
+
+def driven_rows(quick: bool) -> list[dict]:
+    """The rows (``atlas.commands.bench``'s row shape): the kernel against NumPy, then the
+    Wada atlas end to end."""
+    return [_kernel_row(quick), _atlas_row(quick)]

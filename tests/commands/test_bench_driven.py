@@ -1,0 +1,32 @@
+"""``atlas bench``'s driven-pendulum kernel row computes the same map as its NumPy reference
+(no timing asserted: the row's ratio is whatever this machine gives)."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from atlas.commands import bench_driven
+from atlas.kernels import driven
+
+
+def test_the_numpy_reference_is_the_kernels_map():
+    """The reference the kernel is timed against is the same RK4 map: after two periods the
+    states agree to rounding (one period of the kernel's table-driven drive against the
+    reference's cos at each stage)."""
+    theta, theta_dot = np.array([0.3, -2.0, 1.0]), np.array([0.1, 3.0, -1.5])
+    ref_theta, ref_dot = theta.copy(), theta_dot.copy()
+    bench_driven.numpy_periods(ref_theta, ref_dot, 2)
+    table = driven.forcing_table(1.66, 1.0, 0.0, 200)
+    driven.advance(theta, theta_dot, 0.1, 1.0, 0.0, table, driven.step_size(1.0, 200), 2)
+    np.testing.assert_allclose(theta, ref_theta, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(theta_dot, ref_dot, rtol=0, atol=1e-11)
+
+
+def test_the_kernel_row_says_its_rate_and_the_agreement():
+    row = bench_driven._kernel_row(quick=True)
+    assert row["wall_s"] > 0 and math.isfinite(row["ratio"]) and row["ratio"] > 0
+    agree = float(re.search(r"agree to ([0-9.e+-]+)", row["note"]).group(1))
+    assert agree < 1e-9
