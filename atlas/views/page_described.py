@@ -13,12 +13,13 @@ than follow an orbit of the wrong equation.
 from __future__ import annotations
 
 import html
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from atlas.layout import at_point, point_label, points
+from atlas.layout import at_point, point_group, point_label, points
 from atlas.models.base import Model
 from atlas.views.map_png import labelled_wells, map_png
 from atlas.views.style import NO_LABEL_COLOR, RUNNING_COLOR_HEX, well_colour
@@ -48,8 +49,9 @@ def _ends(values: np.ndarray) -> str:
     return f"{float(values[0]):g} to {float(values[-1]):g}"
 
 
-def _point_section(ds: xr.Dataset, model: Model, title: str) -> str:
-    """One parameter point: its map, the window, the key with the stored shares."""
+def _point_section(ds: xr.Dataset, model: Model, title: str, names: dict[int, str]) -> str:
+    """One parameter point: its map, the window, the key with the stored shares (each
+    attractor named by ``names`` where given)."""
     columns, rows = model.axes
     kinds = model.status_kinds()
     attractor = ds["attractor"].values.astype(np.int16)
@@ -57,7 +59,7 @@ def _point_section(ds: xr.Dataset, model: Model, title: str) -> str:
     labelled, wells = labelled_wells(attractor, status, kinds)
     share = dict(zip(ds["k"].values.tolist(), ds["basin_fraction"].values.tolist())
                  ) if "basin_fraction" in ds else {}
-    key = [(well_colour(int(k)), f"k = {int(k):+d}",
+    key = [(well_colour(int(k)), names.get(int(k), f"k = {int(k):+d}"),
             f"{share[int(k)]:.4f} of the grid" if int(k) in share else "") for k in wells]
     running = kinds[status.astype(np.int64) + 128] == 2
     if running.any():
@@ -75,11 +77,25 @@ def _point_section(ds: xr.Dataset, model: Model, title: str) -> str:
             f"to top); one pixel per grid point.</p><table>{cells}</table></section>")
 
 
+def _names(group: xr.Dataset | None) -> dict[int, str]:
+    """Each attractor's name by its index, where the point stores ``/attractors`` (the driven
+    pendulum: "#1 period 2, winding -2")."""
+    if group is None:
+        return {}
+    from atlas.views.info_driven import attractor_name
+
+    return {i: f"#{i} " + attractor_name(str(group["kind"].values[i]),
+                                          int(group["period"].values[i]),
+                                          int(group["winding"].values[i]))
+            for i in range(group.sizes.get("attractor", 0))}
+
+
 def described_page(tree: xr.DataTree, path: Path, model: Model) -> str:
     """The whole HTML page of the atlas ``tree`` of ``model``, read from ``path``."""
     ds = tree.to_dataset(inherit=False)
     columns, rows = model.axes
-    sections = "".join(_point_section(at_point(ds, point), model, point_label(point))
+    sections = "".join(_point_section(at_point(ds, point), model, point_label(point),
+                                      _names(point_group(tree, "attractors", point)))
                        for point in points(ds))
     meanings = "".join(f"<tr><td>{code}</td><td>{_esc(word)}</td><td>"
                        f"{_esc(model.in_file.get(code, ''))}</td></tr>"
@@ -98,11 +114,12 @@ style-src 'unsafe-inline'">
 <header>
 <h1>Basins of the {_esc(model.title)} (model {_esc(model.name)}): {_esc(Path(path).name)}</h1>
 <p>Grid {ds.sizes[columns.name]} × {ds.sizes[rows.name]} ({_esc(columns.long_name)} ×
-{_esc(rows.long_name)}); dt = {_esc(ds.attrs.get("dt", "?"))} s, t_max =
-{_esc(ds.attrs.get("t_max", "?"))} s. Each pixel is an initial state, coloured by the label
-the file stores for it.</p>
-<p>This page shows the stored labels only: following a clicked orbit is the pendulum's page's
-(it integrates the pendulum's own equation in the browser), not this model's.</p>
+{_esc(rows.long_name)}); dt = {_esc(f"{float(ds.attrs.get('dt', math.nan)):g}")} s,
+t_max = {_esc(f"{float(ds.attrs.get('t_max', math.nan)):g}")} s. Each pixel is an initial
+state, coloured by the label the file stores for it.</p>
+<p>This page shows the stored labels only. Clicking to follow an orbit works on the
+pendulum's page only, because that page integrates the pendulum's own equation in the
+browser.</p>
 </header>
 {sections}
 <footer>
