@@ -148,7 +148,11 @@ def test_its_bad_input_is_one_line(tmp_path, capsys):
     body = CONFIG.format(amplitude=1.66, output=tmp_path / "b.h5")
     for bad, word in ((body.replace("dt: pi/100", "dt: 1.0"), "integrator.dt"),
                       (body.replace("t_max: 600", "t_max: 20"), "integrator.t_max"),
-                      (body.replace("amplitude: 1.66", "amplitude: -1"), "amplitude")):
+                      (body.replace("amplitude: 1.66", "amplitude: -1"), "amplitude"),
+                      (body.replace("dt: pi/100", "dt: 1e-5"), "integrator.dt"),
+                      (body.replace("t_max: 600", "t_max: 1e9"), "integrator.t_max"),
+                      (body.replace("frequency: 1.0", "frequency: 0"), "frequency"),
+                      (body.replace("amplitude: 1.66", "amplitude: []"), "amplitude")):
         path = write_config(tmp_path / "bad.yaml", bad)
         assert main(["run", str(path)]) == 2
         err = capsys.readouterr().err.strip().splitlines()

@@ -13,7 +13,8 @@ from atlas.pipeline.config_sections import PendulumConfig
 if TYPE_CHECKING:
     from atlas.pipeline.config import Config
 
-__all__ = ["Section", "check", "begin", "sample", "plan", "MIN_STEPS", "MIN_PERIODS"]
+__all__ = ["Section", "check", "begin", "sample", "plan", "MIN_STEPS", "MIN_PERIODS",
+           "MAX_STEPS", "MAX_PERIODS"]
 
 #: The config section of its parameters: the pendulum's, with ``drive``.
 Section = PendulumConfig
@@ -21,6 +22,12 @@ Section = PendulumConfig
 MIN_STEPS = 16
 #: The fewest drive periods t_max must hold (a label needs the orbit's returns to settle).
 MIN_PERIODS = 50
+#: The most RK4 steps per drive period (a finer dt adds nothing RK4's fourth order does not
+#: give at a thousandth of the cost, and the attractors' search costs N per period).
+MAX_STEPS = 4096
+#: The most drive periods t_max may hold: each undecided orbit (and each sample of the
+#: pre-flight estimate, which has no attractor to stop it) runs that long.
+MAX_PERIODS = 20_000
 
 
 def check(cfg: Config, study: bool) -> None:
@@ -36,9 +43,16 @@ def check(cfg: Config, study: bool) -> None:
         if cfg.integrator.dt > period / MIN_STEPS:
             raise ValueError(f"integrator.dt: {cfg.integrator.dt:g} s is more than a "
                              f"{MIN_STEPS}th of the drive period {period:.4g} s")
+        if cfg.integrator.dt < period / MAX_STEPS:
+            raise ValueError(f"integrator.dt: {cfg.integrator.dt:g} s is less than a "
+                             f"{MAX_STEPS}th of the drive period {period:.4g} s")
         if cfg.integrator.t_max < MIN_PERIODS * period:
             raise ValueError(f"integrator.t_max: {cfg.integrator.t_max:g} s holds fewer than "
                              f"{MIN_PERIODS} drive periods of {period:.4g} s")
+        if cfg.integrator.t_max > MAX_PERIODS * period:
+            raise ValueError(f"integrator.t_max: {cfg.integrator.t_max:g} s holds more than "
+                             f"{MAX_PERIODS:,} drive periods of {period:.4g} s (an orbit "
+                             "undecided by then would run that long)")
 
 
 def begin(cfg, layout) -> list:
