@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -86,8 +87,10 @@ class Drive:
         """The RK4 step T/N [s]."""
         return self.period / self.steps_per_period
 
-    @property
+    @cached_property
     def table(self) -> np.ndarray:
+        """The drive at the half-steps of one period (:func:`atlas.kernels.driven.
+        forcing_table`), computed once per drive."""
         return kernels.forcing_table(self.amplitude, self.frequency, self.phase,
                                      self.steps_per_period)
 
