@@ -1,5 +1,5 @@
 """``atlas bench``, the driven pendulum's rows: the stroboscopic map's kernel against a
-NumPy RK4 of the same map, and the Wada atlas (``configs/wada.yaml``'s problem) end to end.
+NumPy RK4 of the same map, and the Wada atlas (``configs/driven.yaml``'s problem) end to end.
 
 The kernel row applies P (one drive period, N = 200 RK4 steps; α = 0.1 s⁻¹, ω0 = 1 rad s⁻¹,
 A = 1.66 rad s⁻², Ω = 1 rad s⁻¹) to orbits spread over the Wada window with
@@ -101,13 +101,13 @@ def _atlas_row(quick: bool) -> dict:
     with tempfile.TemporaryDirectory(prefix="atlas-bench-driven-") as tmp:
         folder = Path(tmp)
         walls = {}
-        for name, n in (("warm", 24), ("wada", num)):
+        for name, n in (("warm", 24), ("driven", num)):
             path = folder / f"{name}.yaml"
             path.write_text(config.format(name=name, num=n, output=folder / f"{name}.h5"))
             walls[name], _ = run_python(["-m", "atlas", "run", str(path), "-q"])
     return {"variant": f"Wada atlas, {num}² grid, 3 attractors, every label checked at dt/2, "
-                       "end to end", "wall_s": walls["wada"], "ratio": float("nan"),
-            "against": "-", "note": "configs/wada.yaml's problem; includes start-up"}
+                       "end to end", "wall_s": walls["driven"], "ratio": float("nan"),
+            "against": "-", "note": "configs/driven.yaml's problem; includes start-up"}
 
 
 def driven_rows(quick: bool) -> list[dict]:

@@ -25,7 +25,7 @@ WADA = Drive(alpha=0.1, omega0=1.0, torque=0.0, amplitude=1.66, frequency=1.0, p
 WINDOW = ((-math.pi, math.pi), (-2.0, 4.0))
 
 CONFIG = """\
-name: wada
+name: driven
 pendulum:
   alpha: 0.1
   omega0: 1.0
