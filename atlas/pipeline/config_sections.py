@@ -22,6 +22,7 @@ from pydantic import (
 from atlas import defaults
 from atlas.defaults import BACKEND_WORDS, METHODS
 from atlas.limits import MAX_RATE, MIN_RATE
+from atlas.models.driven.description import LONGEST_PERIOD, MAX_PERIOD
 from atlas.models.pendulum.description import PARAMETERS
 from atlas.pipeline.config_numbers import Number, Numbers
 
@@ -62,11 +63,23 @@ class ParameterSection(StrictModel):
 class DriveConfig(StrictModel):
     """The periodic torque A cos(Ω t + φ) of the driven pendulum: ``amplitude`` A [rad s⁻²]
     and ``frequency`` Ω [rad s⁻¹] (each a number, a list or a range: dims of a parameter
-    atlas), ``phase`` φ [rad] (one number)."""
+    atlas), ``phase`` φ [rad] (one number); and ``max_period``, the largest period [drive
+    periods] of the stroboscopic map's periodic attractors searched for (a longer one is
+    found as a chaotic, recurrent attractor)."""
 
     amplitude: Numbers
     frequency: Numbers
     phase: Number = 0.0
+    max_period: int = MAX_PERIOD
+
+    @field_validator("max_period", mode="before")
+    @classmethod
+    def _max_period(cls, value):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"must be a whole number of drive periods, got {value!r}")
+        if not 1 <= value <= LONGEST_PERIOD:
+            raise ValueError(f"must be from 1 to {LONGEST_PERIOD} drive periods, got {value}")
+        return value
 
     @field_validator("amplitude", "frequency")
     @classmethod

@@ -152,12 +152,62 @@ def test_its_bad_input_is_one_line(tmp_path, capsys):
                       (body.replace("dt: pi/100", "dt: 1e-5"), "integrator.dt"),
                       (body.replace("t_max: 600", "t_max: 1e9"), "integrator.t_max"),
                       (body.replace("frequency: 1.0", "frequency: 0"), "frequency"),
-                      (body.replace("amplitude: 1.66", "amplitude: []"), "amplitude")):
+                      (body.replace("amplitude: 1.66", "amplitude: []"), "amplitude"),
+                      (body.replace("amplitude: 1.66", "amplitude: .nan"), "amplitude"),
+                      (body.replace("frequency: 1.0", "frequency: -1.0"), "frequency"),
+                      (body.replace("frequency: 1.0", "frequency: 1.0, max_period: 0"),
+                       "max_period"),
+                      (body.replace("frequency: 1.0", "frequency: 1.0, max_period: 2.5"),
+                       "max_period"),
+                      (body.replace("dt: pi/100", "dt: 0.05"), "integrator.dt")):
         path = write_config(tmp_path / "bad.yaml", bad)
         assert main(["run", str(path)]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and word in err[0], err
     assert not list(tmp_path.glob("*.h5"))
+
+
+def test_a_dt_that_is_not_a_whole_fraction_of_the_period_names_the_nearest_that_are(
+        tmp_path, capsys):
+    """dt = 0.05 s is not T/N for T = 2π s: the line names N = 126 and N = 125 and their dt,
+    which (written as 2pi/126) are then accepted; in a sweep over Ω the frequency at which
+    dt fails is named."""
+    body = CONFIG.format(amplitude=1.66, output=tmp_path / "n.h5")
+    path = write_config(tmp_path / "n.yaml", body.replace("dt: pi/100", "dt: 0.05"))
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "N = 126 gives dt = 0.0498665" in err and "N = 125 gives 0.0502654" in err, err
+    for n in (125, 126):
+        ok = body.replace("dt: pi/100", f"dt: 2pi/{n}")
+        atlas.load_config(write_config(tmp_path / "ok.yaml", ok))  # no error
+    swept = body.replace("frequency: 1.0", "frequency: [1.0, 1.1]")
+    path = write_config(tmp_path / "s.yaml", swept)
+    assert main(["run", str(path)]) == 2
+    assert "Ω = 1.1 rad/s" in capsys.readouterr().err
+    assert not list(tmp_path.glob("*.h5"))
+
+
+def test_the_period_bound_is_the_configs_and_is_stored(tmp_path, caplog):
+    """``drive.max_period`` bounds the periodic orbits searched for and is stored: with 1,
+    the period-2 rotations of the three-attractor case are not periodic up to the bound and
+    are kept as recurrent (chaotic) attractors, never as periodic ones; with the default 8
+    all three are periodic."""
+    def attractors(extra: str):
+        body = CONFIG.format(amplitude=1.66, output=tmp_path / "m.h5").replace(
+            "frequency: 1.0", "frequency: 1.0" + extra).replace("num: 20", "num: 4").replace(
+            "num: 16", "num: 4")
+        cfg = atlas.load_config(write_config(tmp_path / "m.yaml", body))
+        return atlas.run(cfg, output=None, quiet=True)["attractors"].to_dataset()
+
+    bounded = attractors(", max_period: 1")
+    assert "raise max_period to find it periodic" in caplog.text
+    default = attractors("")
+    assert int(bounded.attrs["max_period"]) == 1 and int(default.attrs["max_period"]) == 8
+    assert sorted(default["period"].values.tolist()) == [1, 2, 2]
+    assert set(default["kind"].values.tolist()) == {"periodic"}
+    periodic = bounded["kind"].values == "periodic"
+    assert bounded["period"].values[periodic].tolist() == [1]
+    assert (~periodic).sum() == 2  # the two rotations, kept apart
 
 
 def test_labels_that_change_with_dt_are_flagged_and_fewer_as_dt_shrinks(tmp_path):

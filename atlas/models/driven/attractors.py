@@ -39,9 +39,10 @@ from functools import cached_property
 import numpy as np
 
 from atlas.kernels import driven as kernels
+from atlas.models.driven.description import MAX_PERIOD
 
 __all__ = ["Drive", "Attractor", "find_attractors", "capture_radius", "capture", "contracts",
-           "MAX_RETURNS", "HALVINGS",
+           "MAX_RETURNS", "HALVINGS", "CLOUD_MAX", "beyond_bound",
            "wrap", "SEEDS", "TRANSIENT", "RECORD", "MAX_PERIOD"]
 
 TWO_PI = 2.0 * math.pi
@@ -52,8 +53,6 @@ TRANSIENT = 400
 #: Returns recorded per seed (periodicity is read from the last ones; a chaotic cloud is
 #: all of them).
 RECORD = 240
-#: The largest period [drive periods] searched for.
-MAX_PERIOD = 8
 #: Two returns p periods apart are "the same" (up to whole turns) within this distance,
 #: before Newton's refinement.
 REPEAT_TOL = 1e-6
@@ -209,7 +208,7 @@ def find_attractors(drive: Drive, window, *, seeds: int = SEEDS, transient: int 
         if found is None:
             cloud = seed.copy()
             cloud[:, 0] = wrap(cloud[:, 0])
-            clouds.append(cloud)
+            clouds.append(_distinct(cloud))
             continue
         p, w = found
         x, jac, residual = _refine(drive, seed[-1].copy(), p, w, newton_tol)
@@ -233,16 +232,48 @@ def _chaotic(clouds: list[np.ndarray], periodic: list[Attractor]) -> list[Attrac
     spacing of a periodic attractor is a slow transient to it, not an attractor."""
     merged: list[np.ndarray] = []
     for cloud in clouds:
-        spacing = _spacing(cloud)
+        spacing = _reach(cloud)
         if any(_distance(cloud, a.points).min() < spacing for a in periodic):
             continue
         for i, other in enumerate(merged):
-            if _distance(cloud, other).min() < max(spacing, _spacing(other)):
-                merged[i] = np.concatenate([other, cloud])
+            if _distance(cloud, other).min() < max(spacing, _reach(other)):
+                merged[i] = _thinned(_distinct(np.concatenate([other, cloud])))
                 break
         else:
             merged.append(cloud)
     return [Attractor("chaotic", cloud) for cloud in merged]
+
+
+def beyond_bound(cloud: np.ndarray) -> bool:
+    """Whether a cloud of returns (its distinct points) is a periodic orbit longer than the
+    period bound rather than a chaotic attractor: it has at most RECORD/4 distinct points."""
+    return len(cloud) <= RECORD // 4
+
+
+def _reach(cloud: np.ndarray) -> float:
+    """How near another cloud or orbit must come to be the same attractor: the cloud's
+    spacing, or for a periodic orbit beyond the bound (whose few points lie far apart)
+    100 REPEAT_TOL."""
+    return 100 * REPEAT_TOL if beyond_bound(cloud) else _spacing(cloud)
+
+
+#: The most points a chaotic attractor's cloud keeps (evenly thinned beyond).
+CLOUD_MAX = 4000
+
+
+def _distinct(cloud: np.ndarray) -> np.ndarray:
+    """The cloud's points, each kept once where several agree to REPEAT_TOL (in the order
+    first met): the returns of a periodic orbit longer than the period bound are its few
+    points, not a cloud of hundreds of copies."""
+    _, first = np.unique(np.round(cloud / REPEAT_TOL), axis=0, return_index=True)
+    return cloud[np.sort(first)]
+
+
+def _thinned(cloud: np.ndarray) -> np.ndarray:
+    """At most CLOUD_MAX of the cloud's points, evenly spaced in the order recorded."""
+    if len(cloud) <= CLOUD_MAX:
+        return cloud
+    return cloud[np.linspace(0, len(cloud) - 1, CLOUD_MAX).astype(np.int64)]
 
 
 def _spacing(cloud: np.ndarray) -> float:
@@ -273,13 +304,22 @@ def capture_radius(attractors: list[Attractor]) -> float:
 HALVINGS = 8
 
 
-def capture(drive: Drive, attractor: Attractor, largest: float) -> tuple[float, bool]:
+def capture(drive: Drive, attractor: Attractor, largest: float,
+            others: np.ndarray | None = None) -> tuple[float, bool]:
     """(radius, contracting) of one attractor: for a periodic one the largest of
     ``largest`` · 2^−j (j ≤ :data:`HALVINGS`) whose ball was seen to map into itself
     (:func:`contracts`; True), else ``largest`` (False); for a chaotic one twice its cloud's
-    spacing (False: a cloud is no contraction), so that a return inside the cloud is seen."""
+    spacing (False: a cloud is no contraction), so that a return inside the cloud is seen,
+    and at most a quarter of its distance to the points ``others`` (n, 2) of the other
+    attractors, so that no two captures overlap."""
     if attractor.kind == "chaotic":
-        return 2.0 * _spacing(attractor.points), False
+        # a periodic orbit beyond the bound: a quarter of its points' spacing, as a
+        # periodic attractor's; a cloud: twice its spacing
+        radius = (0.25 if beyond_bound(attractor.points) else 2.0) * _spacing(
+            attractor.points)
+        if others is not None and len(others):
+            radius = min(radius, 0.25 * float(_distance(attractor.points, others).min()))
+        return radius, False
     for j in range(HALVINGS + 1):
         if contracts(drive, attractor, largest * 0.5 ** j):
             return largest * 0.5 ** j, True

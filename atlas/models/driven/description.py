@@ -17,7 +17,8 @@ from atlas.models.pendulum.description import AXES
 from atlas.models.pendulum.description import PARAMETERS as PENDULUM_PARAMETERS
 
 __all__ = ["PARAMETERS", "CONVERGED", "UNRESOLVED", "NONFINITE", "NEAR", "CHAOTIC",
-           "STATUSES", "IN_FILE", "ATTRACTOR_FILL", "DRIVEN_PENDULUM"]
+           "STATUSES", "IN_FILE", "ATTRACTOR_FILL", "MAX_PERIOD", "LONGEST_PERIOD",
+           "DRIVEN_PENDULUM"]
 
 #: The parameters: the pendulum's, then the drive's (dims in this order).
 PARAMETERS = {
@@ -56,6 +57,12 @@ IN_FILE = {
     CHAOTIC: "on a chaotic attractor of the RK4 stroboscopic map: within its recorded cloud "
              "of points for confirm returns in a row (a recurrent, non-periodic attractor)",
 }
+
+#: The largest period [drive periods] of the periodic attractors searched for, by default
+#: (``pendulum.drive.max_period``), and the largest a config may ask for (the search reads
+#: a period from the seeds' last returns, of which it records more than four times this).
+MAX_PERIOD = 8
+LONGEST_PERIOD = 48
 
 #: ``attractor`` where no label applies (int16; also the file's _FillValue).
 ATTRACTOR_FILL = int(np.iinfo(np.int16).min)

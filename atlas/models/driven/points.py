@@ -8,7 +8,6 @@ decided) and counts its labels.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -21,6 +20,7 @@ from atlas.layout import Layout, per_point, point_label
 from atlas.models.driven.attractors import (
     Attractor,
     Drive,
+    beyond_bound,
     capture,
     capture_radius,
     find_attractors,
@@ -29,10 +29,12 @@ from atlas.models.driven.description import (
     ATTRACTOR_FILL,
     CHAOTIC,
     CONVERGED,
+    MAX_PERIOD,
     NEAR,
     NONFINITE,
     UNRESOLVED,
 )
+from atlas.models.driven.plan import steps_per_period
 from atlas.store.schema import summary_dataset
 
 __all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
@@ -45,15 +47,14 @@ CLOUD_POINTS = 2000
 
 
 def drives(cfg, layout: Layout) -> list[Drive]:
-    """The drive of every parameter point with its N: the fewest steps per period that make
-    dt = T/N no longer than ``integrator.dt``."""
+    """The drive of every parameter point with its N = T/dt steps per period (a whole number:
+    :func:`atlas.models.driven.plan.check`)."""
     out = []
     for p in range(layout.n_params):
         point = layout.point(p)
-        period = 2.0 * math.pi / point["frequency"]
         out.append(Drive(point["alpha"], point["omega0"], point["torque"], point["amplitude"],
                          point["frequency"], point["phase"],
-                         int(math.ceil(period / cfg.integrator.dt - 1e-9))))
+                         steps_per_period(point["frequency"], cfg.integrator.dt)))
     return out
 
 
@@ -141,11 +142,11 @@ class DrivenPoint:
 
 
 def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.ndarray,
-                       radii: np.ndarray) -> xr.Dataset:
+                       radii: np.ndarray, max_period: int = MAX_PERIOD) -> xr.Dataset:
     """One parameter point's node of ``/attractors``: per attractor its kind, period,
     winding, status its labels get, capture radius, Floquet multipliers' moduli and its
     points on P (θ wrapped to [−π, π), θ̇; NaN past its own count), with the discretisation
-    as attributes."""
+    and the period bound ``max_period`` of the search as attributes."""
     n = max([len(a.points) for a in attractors] + [1])
     theta = np.full((len(attractors), n), np.nan)
     theta_dot = np.full((len(attractors), n), np.nan)
@@ -154,7 +155,8 @@ def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.n
     moduli = np.array([np.abs(a.multipliers) for a in attractors]).reshape(-1, 2)
     return xr.Dataset(
         {"kind": ("attractor", np.array([a.kind for a in attractors], dtype=str),
-                  {"long_name": "periodic or chaotic"}),
+                  {"long_name": "periodic, or chaotic (recurrent, and not periodic with "
+                               "a period up to max_period)"}),
          "period": ("attractor", np.array([a.period for a in attractors], np.int32),
                     {"units": "1", "long_name": "period in drive periods (0: chaotic)"}),
          "winding": ("attractor", np.array([a.winding for a in attractors], np.int32),
@@ -184,7 +186,7 @@ def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.n
                               "spread over the window",
                "steps_per_period": np.int64(drive.steps_per_period),
                "drive_period": drive.period, "drive_period_units": "s",
-               "confirm": np.int64(CONFIRM)})
+               "confirm": np.int64(CONFIRM), "max_period": np.int64(max_period)})
 
 
 @dataclass
@@ -223,9 +225,12 @@ def _prepared(cfg, layout: Layout, drive: Drive
               ) -> tuple[DrivenPoint, xr.Dataset, str | None]:
     g = cfg.grid
     window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
-    found = find_attractors(drive, window)
+    found = find_attractors(drive, window, max_period=cfg.pendulum.drive.max_period)
     largest = capture_radius(found)
-    captures = [capture(drive, a, largest) for a in found]
+    captures = [capture(drive, a, largest,
+                        np.concatenate([b.points for b in found if b is not a] or
+                                       [np.zeros((0, 2))]))
+                for a in found]
     statuses = np.array([CHAOTIC if a.kind == "chaotic" else CONVERGED if contracting
                          else NEAR for a, (_, contracting) in zip(found, captures)], np.int8)
     radii = np.array([radius for radius, _ in captures])
@@ -238,7 +243,15 @@ def _prepared(cfg, layout: Layout, drive: Drive
                         max(1, int(cfg.integrator.t_max / drive.period)),
                         grid=(layout.x0, layout.v0))
     warning = None if found else "no attractor found in the window"
-    return point, attractors_dataset(drive, found, statuses, radii), warning
+    longer = [f"#{i}" for i, a in enumerate(found)
+              if a.kind == "chaotic" and beyond_bound(a.points)]
+    if longer:
+        warning = (f"attractor {', '.join(longer)}: its returns repeat with a period longer "
+                   f"than pendulum.drive.max_period = {cfg.pendulum.drive.max_period} and "
+                   "it is kept as a recurrent (chaotic) one: raise max_period to find it "
+                   "periodic")
+    return point, attractors_dataset(drive, found, statuses, radii,
+                                     cfg.pendulum.drive.max_period), warning
 
 
 def plan(cfg, layout: Layout, begun: list[Drive], track=None) -> DrivenPlan:
