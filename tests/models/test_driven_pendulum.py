@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -73,6 +74,23 @@ def test_the_three_attractors_of_the_wada_case_are_found(wada_attractors):
     keys = [(a.period, a.winding) for a in found]
     firsts = np.array([a.points[0] for a in found])
     assert len({tuple(np.round(f, 6)) for f in firsts}) == len(keys)
+
+
+def test_the_four_attractors_at_a_171_include_mirror_twins():
+    """At F = 1.71 the published count is four (Wagemakers, Daza & Sanjuán 2021, Fig. 2(b)):
+    two period-1 oscillations with the same period and winding (mirror twins, kept as two
+    attractors by their points) and the two period-2 rotations; each a periodic point of
+    the exact equation too (DOP853)."""
+    found = find_attractors(replace(WADA, amplitude=1.71), WINDOW)
+    assert sorted((a.period, a.winding) for a in found) == [(1, 0), (1, 0), (2, -2), (2, 2)]
+    twins = [a for a in found if a.period == 1]
+    assert np.hypot(wrap(twins[0].points[0, 0] - twins[1].points[0, 0]),
+                    twins[0].points[0, 1] - twins[1].points[0, 1]) > 0.1
+    for a in found:
+        assert a.kind == "periodic" and a.residual <= 1e-12
+        assert np.all(np.abs(a.multipliers) < 1.0)
+        image = _exact_map(a.points[0], a.period, replace(WADA, amplitude=1.71))
+        assert np.hypot(wrap(image[0] - a.points[0, 0]), image[1] - a.points[0, 1]) < 1e-4
 
 
 def test_a_chaotic_attractor_is_named_chaotic_not_periodic():

@@ -211,7 +211,9 @@ def find_attractors(drive: Drive, window, *, seeds: int = SEEDS, transient: int 
             clouds.append(_distinct(cloud))
             continue
         p, w = found
-        x, jac, residual = _refine(drive, seed[-1].copy(), p, w, newton_tol)
+        start = seed[-1].copy()
+        start[0] = wrap(start[0])  # a rotation's θ has grown by many turns: ulp(θ) matters
+        x, jac, residual = _refine(drive, start, p, w, newton_tol)
         if residual > 1e3 * newton_tol:  # Newton did not converge: leave it to other seeds
             continue
         orbit = _orbit(drive, x, p)
