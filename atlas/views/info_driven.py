@@ -19,8 +19,14 @@ __all__ = ["driven_lines", "attractor_name"]
 
 
 def attractor_name(kind: str, period: int, winding: int) -> str:
-    """"period 3, winding 0" or "chaotic": an attractor as keys and texts name it."""
-    return "chaotic" if kind == "chaotic" else f"period {period}, winding {winding:+d}"
+    """"oscillation, period 1", "rotation, period 2, winding -2" or "chaotic": an
+    attractor as keys and texts name it (its kind in words first: what its colour family
+    says, :func:`atlas.views.style.attractor_colours`)."""
+    if kind == "chaotic":
+        return "chaotic"
+    if winding == 0:
+        return f"oscillation, period {period}"
+    return f"rotation, period {period}, winding {winding:+d}"
 
 
 def _attractor_lines(ds: xr.Dataset, group: xr.Dataset | None, model: Model) -> list[str]:

@@ -28,12 +28,14 @@ def labelled_wells(attractor: np.ndarray, status: np.ndarray, kinds: np.ndarray
 
 
 def map_png(attractor: np.ndarray, status: np.ndarray, wells: np.ndarray,
-            kinds: np.ndarray) -> str:
+            kinds: np.ndarray, colours: dict[int, str] | None = None) -> str:
     """The basin map as a palette PNG data URI, one pixel per grid point, the velocity
     upward: the i-th well of ``wells`` in palette entry i
     (:func:`atlas.views.style.well_colour`, as the page's key), no label white, running in
     the running basin's grey (which status is which: ``kinds``, as
-    :func:`labelled_wells`). At most 254 wells fit a palette; the rest (never met in
+    :func:`labelled_wells`); ``colours``: a label's own colour where the model gives one
+    (a driven pendulum's attractors: :func:`atlas.views.style.attractor_colours`). At most
+    254 wells fit a palette; the rest (never met in
     practice) share the last well's entry."""
     from PIL import Image
 
@@ -43,7 +45,9 @@ def map_png(attractor: np.ndarray, status: np.ndarray, wells: np.ndarray,
     index = np.where(labelled, where, len(wells)).astype(np.uint8)
     index[kinds[status.astype(np.int64) + 128] == 2] = len(wells) + 1
     image = Image.fromarray(index[::-1], mode="P")
-    palette = ([v for k in wells for v in _rgb(well_colour(k))] + _rgb(NO_LABEL_COLOR)
+    colours = colours or {}
+    palette = ([v for k in wells for v in _rgb(colours.get(int(k)) or well_colour(k))]
+               + _rgb(NO_LABEL_COLOR)
                + _rgb(RUNNING_COLOR_HEX))
     image.putpalette(palette)
     buffer = io.BytesIO()

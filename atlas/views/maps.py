@@ -45,6 +45,7 @@ from atlas.views.style import (
     SEPARATRIX_FAINT,
     SEPARATRIX_WIDTH,
     T_TRAP_CMAP,
+    attractor_colours,
     axes,
     basin_colours,
     critical_point_markers,
@@ -150,14 +151,16 @@ def _basin_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
 
 def _attractors_scene(group: xr.Dataset | None) -> dict | None:
     """A driven pendulum's attractors as the basin map draws them (from ``/attractors``):
-    each attractor's name by its index k (:func:`atlas.views.info_driven.attractor_name`)
-    and its points on the stroboscopic map (θ [rad] wrapped, θ̇ [rad/s]; a chaotic one's
-    cloud); None where the point has no such group."""
+    each attractor's name and colour (:func:`atlas.views.style.attractor_colours`: by
+    kind) by its index k (:func:`atlas.views.info_driven.attractor_name`) and its points
+    on the stroboscopic map (θ [rad] wrapped, θ̇ [rad/s]; a chaotic one's cloud); None where the
+    point has no such group."""
     from atlas.views.info_driven import attractor_name
 
     if group is None:
         return None
     names, marks = {}, []
+    colours = dict(enumerate(attractor_colours(group["kind"].values, group["winding"].values)))
     for i in range(group.sizes.get("attractor", 0)):
         kind = str(group["kind"].values[i])
         names[i] = f"#{i} " + attractor_name(kind, int(group["period"].values[i]),
@@ -165,7 +168,7 @@ def _attractors_scene(group: xr.Dataset | None) -> dict | None:
         theta, theta_dot = group["theta"].values[i], group["theta_dot"].values[i]
         keep = np.isfinite(theta)
         marks.append((theta[keep], theta_dot[keep], kind))
-    return {"names": names, "marks": marks}
+    return {"names": names, "marks": marks, "colours": colours}
 
 
 def draw_attractors(ax, marks: list) -> None:
@@ -232,16 +235,19 @@ def label_bands(ax, grid, image: np.ndarray, ks: list[int]) -> None:
                 path_effects=[pe.withStroke(linewidth=1.8, foreground="white")])
 
 
-def basin_key(wells: list[int], running: bool, unlabelled: bool):
+def basin_key(wells: list[int], running: bool, unlabelled: bool,
+              colours: dict[int, str] | None = None):
     """The colour key of basin maps showing ``wells`` (ascending k), with the running basin
     and "no label" where present: (colormap, norm, tick values, tick names, what the colours
     mean, in a line). Each well has its own fixed colour (:func:`basin_colours`). An image
     holds k for a well, ``wells[-1] + 1`` for the running basin, NaN for no label; a k
     between two wells that is none (a model whose labels skip it) has no colour of its own,
-    the norm's bins lying halfway between the values drawn."""
+    the norm's bins lying halfway between the values drawn. ``colours``: each label's own
+    colour where the model gives one (a driven pendulum's attractors, by kind), instead of
+    the wells'."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    palette = basin_colours(wells, running=running)
+    palette = basin_colours(wells, running=running) | (colours or {})
     colors, names = [palette[k] for k in wells], [_well_name(k) for k in wells]
     if running:  # the running basin: one more colour after the wells
         colors.append(palette["running"])
@@ -275,7 +281,8 @@ def _draw_basin(ax, grid, image, separatrices, critical, cycle, title: str,
     k, kmin, kmax, running = image
     wells = drawn_wells(k, kmin, kmax)
     unlabelled = bool(np.isnan(k).any())
-    cmap, norm, ticks, names, _ = basin_key(wells, running, unlabelled)
+    cmap, norm, ticks, names, _ = basin_key(
+        wells, running, unlabelled, None if attractors is None else attractors["colours"])
     if attractors is not None:  # a driven pendulum's: each named by period and winding
         names = [attractors["names"].get(w, str(w)) for w in wells] + names[len(wells):]
     mesh = grid_image(ax, grid, k, grid_axes, cmap=cmap, norm=norm)

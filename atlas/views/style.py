@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["STYLE", "MAP_SIZE", "CURVE_SIZE", "PNG_OPTIONS", "well_colour", "well_palette",
-           "basin_colours", "WELL_CYCLE", "RUNNING_COLOR_HEX", "RUNNING_LINE_COLOR_HEX",
+           "basin_colours", "attractor_colours", "WELL_CYCLE", "RUNNING_COLOR_HEX",
+           "RUNNING_LINE_COLOR_HEX",
            "NO_LABEL_COLOR", "NEAR_BOUNDARY_COLOR", "T_TRAP_CMAP", "DISTANCE_CMAP",
            "colormap_table", "SEPARATRIX_COLOR", "SEPARATRIX_WIDTH", "SEPARATRIX_ALPHA",
            "SEPARATRIX_FAINT", "CYCLE_COLOR", "LABELLED_WELLS", "SADDLE_MARKER",
@@ -169,6 +170,43 @@ def basin_colours(ks, running: bool = False, lines: bool = False) -> dict[int | 
         colours["running"] = RUNNING_LINE_COLOR_HEX if lines else RUNNING_COLOR_HEX
     colours["none"] = NO_LABEL_COLOR
     return colours
+
+
+# The driven pendulum's attractors (:func:`attractor_colours`) are coloured by kind, from the
+# same families, so that what a colour family means carries over from the wells: an
+# oscillation (periodic, winding 0, as the rest state k = 0 it swings about) green, the first
+# one the green of k = 0 and the next ones greens of the four lightness levels; a rotation
+# with winding > 0 the warm family and winding < 0 the cool one (the i-th of a sign the
+# colour of well ±i, as a well's: neighbours far apart in lightness); a chaotic attractor
+# greys of no hue (light, then dark, ...): no one orbit, no one hue.
+_CHAOTIC_L = (0.80, 0.40, 0.62, 0.27)
+
+
+def attractor_colours(kinds, windings, lines: bool = False) -> list[str]:
+    """The colour ("#rrggbb") of each attractor of a driven pendulum's point, from its
+    ``kinds`` ("periodic" | "chaotic") and ``windings`` (net turns per period of the orbit),
+    in their order (the scheme above): attractors that differ in kind (oscillation, rotation
+    either way, chaotic) take colours of different families; ``lines`` as
+    :func:`well_colour`."""
+    seen = {"oscillation": 0, "forward": 0, "backward": 0, "chaotic": 0}
+    out = []
+    for kind, winding in zip(kinds, windings):
+        family = ("chaotic" if str(kind) == "chaotic" else "oscillation" if int(winding) == 0
+                  else "forward" if int(winding) > 0 else "backward")
+        j = seen[family]
+        seen[family] += 1
+        if family == "forward":
+            out.append(well_colour(j + 1, lines))
+        elif family == "backward":
+            out.append(well_colour(-(j + 1), lines))
+        elif family == "oscillation":
+            levels = _LINE_LEVELS if lines else _L_LEVELS
+            out.append(well_colour(0, lines) if j == 0 else
+                       _oklch_hex(levels[(j - 1) % 4], _ZERO_LCH[1], _ZERO_LCH[2]))
+        else:
+            level = _CHAOTIC_L[j % len(_CHAOTIC_L)]
+            out.append(_oklch_hex(min(level, 0.55) if lines else level, 0.0, 0.0))
+    return out
 
 
 #: The running basin's colour: a neutral grey, "#rrggbb" (and, darker, as a line).

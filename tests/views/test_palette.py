@@ -17,6 +17,7 @@ from atlas.views.style import (
     RUNNING_COLOR_HEX,
     T_TRAP_CMAP,
     WELL_CYCLE,
+    attractor_colours,
     basin_colours,
     colormap_table,
     well_colour,
@@ -236,3 +237,32 @@ def test_the_basin_map_draws_each_well_in_its_own_colour(wells):
     for (r, c), well in np.ndenumerate(k):
         colour = NO_LABEL_COLOR if np.isnan(well) else well_colour(int(well))
         np.testing.assert_array_equal(drawn[r, c], _rgb([colour])[0] * 255)
+
+
+#: A driven pendulum's attractors of every kind: two oscillations (mirror twins, as at
+#: F = 1.71), a rotation each way and a chaotic attractor, with no label.
+DRIVEN_KINDS = (["periodic", "periodic", "periodic", "periodic", "chaotic"], [0, 0, -2, 2, 0])
+
+
+def _hue_chroma(colour: str) -> tuple[float, float]:
+    """CIECAM02 hue [deg] and chroma of an sRGB colour (colorspacious: independent of the
+    Oklab arithmetic the palette is built with)."""
+    jch = colorspacious.cspace_convert(_rgb([colour])[0], "sRGB1", "JCh")
+    return float(jch[2]), float(jch[1])
+
+
+def test_a_driven_attractors_colour_family_is_its_kind():
+    """Oscillations green (the first one k = 0's green), rotations with winding > 0 warm and
+    < 0 cool (the wells' families: the i-th of a sign is well ±i's colour), chaotic ones
+    grey (no chroma); two attractors of one kind differ, and every attractor of the set and
+    no-label white are distinct for every vision."""
+    colours = attractor_colours(*DRIVEN_KINDS)
+    assert colours[0] == well_colour(0)
+    assert colours[2] == well_colour(-1) and colours[3] == well_colour(1)
+    green, _ = _hue_chroma(colours[0])
+    twin_hue, twin_chroma = _hue_chroma(colours[1])
+    assert abs(twin_hue - green) < 25 and twin_chroma > 20 and colours[1] != colours[0]
+    assert _hue_chroma(colours[4])[1] < 4  # a neutral sRGB grey: CIECAM02 C ≈ 2.6
+    for _, cvd in VISIONS:
+        d = _distances(colours + [NO_LABEL_COLOR], cvd)
+        assert d[np.triu_indices(len(d), 1)].min() > 10, d
