@@ -238,7 +238,9 @@ def _prepared(cfg, layout: Layout, drive: Drive
                         max(1, int(cfg.integrator.t_max / drive.period)),
                         grid=(layout.x0, layout.v0))
     warning = None if found else "no attractor found in the window"
-    return point, attractors_dataset(drive, found, statuses, radii), warning
+    # the file stores each attractor's targets: a chaotic cloud's last CLOUD_POINTS points
+    stored = [replace(a, points=c) for a, c in zip(found, clouds)]
+    return point, attractors_dataset(drive, stored, statuses, radii), warning
 
 
 def plan(cfg, layout: Layout, begun: list[Drive], track=None) -> DrivenPlan:
