@@ -195,21 +195,28 @@
     ctx.clearRect(0, 0, b.width, b.height);
     // the attractors' points on P (periodic ones: a chaotic cloud would cover its basin)
     const t = s.d.targets;
-    ctx.font = 'bold 15px "DejaVu Sans", system-ui, sans-serif';
-    ctx.textBaseline = 'middle';
+    const marks = [];
     for (let k = 0; k < t.theta.length; k++) {
       if (s.d.kinds[t.attractor[k]] !== 'periodic') continue;
       const [x, y] = toCss(s, shown(s, t.theta[k]), t.theta_dot[k]);
       diamond(ctx, x, y, 8);
-      const name = `#${t.attractor[k]}`;
-      ctx.lineWidth = 4;
-      ctx.strokeStyle = '#ffffff';
-      ctx.strokeText(name, x + 11, y);
-      ctx.fillStyle = '#000000';
-      ctx.fillText(name, x + 11, y);
+      marks.push([`#${t.attractor[k]}`, x + 11, y]);
     }
     const o = s.orbit;
-    if (!o) return;
+    if (o) drawOrbit(s, ctx, o);
+    // the attractors' names last, over the orbit
+    ctx.font = 'bold 15px "DejaVu Sans", system-ui, sans-serif';
+    ctx.textBaseline = 'middle';
+    for (const [name, x, y] of marks) {
+      ctx.lineWidth = 4;
+      ctx.strokeStyle = '#ffffff';
+      ctx.strokeText(name, x, y);
+      ctx.fillStyle = '#000000';
+      ctx.fillText(name, x, y);
+    }
+  }
+
+  function drawOrbit(s, ctx, o) {
     // the path between the returns: thin and faint, broken where θ is wrapped
     ctx.lineWidth = 1;
     ctx.strokeStyle = 'rgba(0, 0, 0, 0.25)';
