@@ -250,7 +250,9 @@ def _prepared(cfg, layout: Layout, drive: Drive
                    f"than pendulum.drive.max_period = {cfg.pendulum.drive.max_period} and "
                    "it is kept as a recurrent (chaotic) one: raise max_period to find it "
                    "periodic")
-    return point, attractors_dataset(drive, found, statuses, radii,
+    # the file stores each attractor's targets: a chaotic cloud's last CLOUD_POINTS points
+    stored = [replace(a, points=c) for a, c in zip(found, clouds)]
+    return point, attractors_dataset(drive, stored, statuses, radii,
                                      cfg.pendulum.drive.max_period), warning
 
 
