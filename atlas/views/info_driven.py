@@ -11,11 +11,12 @@ import numpy as np
 from atlas.layout import at_point, point_group, point_label, points
 from atlas.models.base import Model
 from atlas.views.described import grid_line
+from atlas.views.style import attractor_colours
 
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["driven_lines", "attractor_name"]
+__all__ = ["driven_lines", "attractor_name", "attractor_names", "attractor_key"]
 
 
 def attractor_name(kind: str, period: int, winding: int) -> str:
@@ -27,6 +28,27 @@ def attractor_name(kind: str, period: int, winding: int) -> str:
     if winding == 0:
         return f"oscillation, period {period}"
     return f"rotation, period {period}, winding {winding:+d}"
+
+
+def attractor_names(group: xr.Dataset | None) -> dict[int, str]:
+    """Each attractor of one point's ``/attractors`` group by its index, named as every key
+    and text names it ("#1 rotation, period 2, winding -2"); {} where there is none."""
+    if group is None:
+        return {}
+    return {i: f"#{i} " + attractor_name(str(group["kind"].values[i]),
+                                          int(group["period"].values[i]),
+                                          int(group["winding"].values[i]))
+            for i in range(group.sizes.get("attractor", 0))}
+
+
+def attractor_key(group: xr.Dataset | None) -> tuple[dict[int, str], dict[int, str]]:
+    """(names, colours) of one point's attractors by index: :func:`attractor_names` and
+    their colours by kind (:func:`atlas.views.style.attractor_colours`), for the maps, their
+    keys and the page alike."""
+    if group is None:
+        return {}, {}
+    colours = attractor_colours(group["kind"].values, group["winding"].values)
+    return attractor_names(group), dict(enumerate(colours))
 
 
 def _attractor_lines(ds: xr.Dataset, group: xr.Dataset | None, model: Model) -> list[str]:

@@ -45,7 +45,6 @@ from atlas.views.style import (
     SEPARATRIX_FAINT,
     SEPARATRIX_WIDTH,
     T_TRAP_CMAP,
-    attractor_colours,
     axes,
     basin_colours,
     critical_point_markers,
@@ -152,22 +151,19 @@ def _basin_scene(tree: xr.DataTree, maps: dict | None = None, **index) -> dict:
 def _attractors_scene(group: xr.Dataset | None) -> dict | None:
     """A driven pendulum's attractors as the basin map draws them (from ``/attractors``):
     each attractor's name and colour (:func:`atlas.views.style.attractor_colours`: by
-    kind) by its index k (:func:`atlas.views.info_driven.attractor_name`) and its points
+    kind) by its index k (:func:`atlas.views.info_driven.attractor_key`) and its points
     on the stroboscopic map (θ [rad] wrapped, θ̇ [rad/s]; a chaotic one's cloud); None where the
     point has no such group."""
-    from atlas.views.info_driven import attractor_name
+    from atlas.views.info_driven import attractor_key
 
     if group is None:
         return None
-    names, marks = {}, []
-    colours = dict(enumerate(attractor_colours(group["kind"].values, group["winding"].values)))
+    names, colours = attractor_key(group)
+    marks = []
     for i in range(group.sizes.get("attractor", 0)):
-        kind = str(group["kind"].values[i])
-        names[i] = f"#{i} " + attractor_name(kind, int(group["period"].values[i]),
-                                             int(group["winding"].values[i]))
         theta, theta_dot = group["theta"].values[i], group["theta_dot"].values[i]
         keep = np.isfinite(theta)
-        marks.append((theta[keep], theta_dot[keep], kind))
+        marks.append((theta[keep], theta_dot[keep], str(group["kind"].values[i])))
     return {"names": names, "marks": marks, "colours": colours}
 
 

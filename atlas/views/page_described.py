@@ -25,6 +25,7 @@ import numpy as np
 from atlas.layout import at_point, point_group, point_label, points
 from atlas.models.base import Model
 from atlas.models.driven.description import DRIVEN_PENDULUM
+from atlas.views.info_driven import attractor_key
 from atlas.views.map_png import labelled_wells, map_png
 from atlas.views.style import NO_LABEL_COLOR, RUNNING_COLOR_HEX, well_colour
 
@@ -53,11 +54,12 @@ def _ends(values: np.ndarray) -> str:
     return f"{float(values[0]):g} to {float(values[-1]):g}"
 
 
-def _point_section(ds: xr.Dataset, model: Model, title: str, names: dict[int, str],
-                   index: int | None = None) -> str:
+def _point_section(ds: xr.Dataset, model: Model, title: str,
+                   key: tuple[dict[int, str], dict[int, str]], index: int | None = None) -> str:
     """One parameter point: its map, the window, the key with the stored shares (each
-    attractor named by ``names`` where given); with ``index`` (the driven pendulum's page),
-    a layer over the map that a click follows an orbit on, and its readout."""
+    attractor named and coloured by ``key``, (names, colours), where given); with
+    ``index`` (the driven pendulum's page), a layer over the map that a click follows an
+    orbit on, and its readout."""
     columns, rows = model.axes
     kinds = model.status_kinds()
     attractor = ds["attractor"].values.astype(np.int16)
@@ -65,7 +67,8 @@ def _point_section(ds: xr.Dataset, model: Model, title: str, names: dict[int, st
     labelled, wells = labelled_wells(attractor, status, kinds)
     share = dict(zip(ds["k"].values.tolist(), ds["basin_fraction"].values.tolist())
                  ) if "basin_fraction" in ds else {}
-    key = [(well_colour(int(k)), names.get(int(k), f"k = {int(k):+d}"),
+    names, colours = key
+    key = [(colours.get(int(k)) or well_colour(int(k)), names.get(int(k), f"k = {int(k):+d}"),
             f"{share[int(k)]:.4f} of the grid" if int(k) in share else "") for k in wells]
     running = kinds[status.astype(np.int64) + 128] == 2
     if running.any():
@@ -76,7 +79,7 @@ def _point_section(ds: xr.Dataset, model: Model, title: str, names: dict[int, st
     cells = "".join(f'<tr><td><span class="swatch" style="background:{colour}"></span></td>'
                     f"<td>{_esc(name)}</td><td>{_esc(text)}</td></tr>"
                     for colour, name, text in key)
-    image = f'<img src="{map_png(attractor, status, wells, kinds)}" alt="basin map">'
+    image = f'<img src="{map_png(attractor, status, wells, kinds, colours)}" alt="basin map">'
     opening, readout = "<section>", ""
     if index is not None:
         opening = f'<section data-point="{index}">'
@@ -89,19 +92,6 @@ def _point_section(ds: xr.Dataset, model: Model, title: str, names: dict[int, st
             f"<p>{_esc(columns.label)} from {_esc(_ends(ds[columns.name].values))} (left to "
             f"right), {_esc(rows.label)} from {_esc(_ends(ds[rows.name].values))} (bottom "
             f"to top); one pixel per grid point.</p><table>{cells}</table></section>")
-
-
-def _names(group: xr.Dataset | None) -> dict[int, str]:
-    """Each attractor's name by its index, where the point stores ``/attractors`` (the driven
-    pendulum: "#1 period 2, winding -2")."""
-    if group is None:
-        return {}
-    from atlas.views.info_driven import attractor_name
-
-    return {i: f"#{i} " + attractor_name(str(group["kind"].values[i]),
-                                          int(group["period"].values[i]),
-                                          int(group["winding"].values[i]))
-            for i in range(group.sizes.get("attractor", 0))}
 
 
 def _orbits(tree: xr.DataTree, ds: xr.Dataset, model: Model) -> list[dict | None] | None:
@@ -143,7 +133,7 @@ def described_page(tree: xr.DataTree, path: Path, model: Model) -> str:
     orbits = _orbits(tree, ds, model)
     sections = "".join(
         _point_section(at_point(ds, point), model, point_label(point),
-                       _names(point_group(tree, "attractors", point)),
+                       attractor_key(point_group(tree, "attractors", point)),
                        p if orbits is not None and orbits[p] is not None else None)
         for p, point in enumerate(points(ds)))
     style, script, csp, note = _STYLE, "", "", _STATIC

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from atlas.layout import point_group
-from atlas.views.info_driven import attractor_name
+from atlas.views.info_driven import attractor_names
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -65,7 +65,6 @@ def orbit_data(tree: xr.DataTree, ds: xr.Dataset, point: dict[str, float], t_max
         return None
     n = int(group.attrs["steps_per_period"])
     period = 2.0 * math.pi / point["frequency"]
-    count = group.sizes.get("attractor", 0)
     return {
         "alpha": point["alpha"], "omega0": point["omega0"], "torque": point.get("torque", 0.0),
         "amplitude": point["amplitude"], "frequency": point["frequency"],
@@ -74,10 +73,7 @@ def orbit_data(tree: xr.DataTree, ds: xr.Dataset, point: dict[str, float], t_max
         "confirm": int(group.attrs["confirm"]),
         "radius": [float(r) for r in group["capture_radius"].values],
         "attractor_status": [int(s) for s in group["status"].values],
-        "names": [f"#{i} " + attractor_name(str(group["kind"].values[i]),
-                                             int(group["period"].values[i]),
-                                             int(group["winding"].values[i]))
-                  for i in range(count)],
+        "names": list(attractor_names(group).values()),
         "kinds": [str(kind) for kind in group["kind"].values],
         "targets": _targets(group),
         "grid": {"theta0": _axis(ds["theta0"].values),

@@ -175,11 +175,14 @@ def basin_colours(ks, running: bool = False, lines: bool = False) -> dict[int | 
 # The driven pendulum's attractors (:func:`attractor_colours`) are coloured by kind, from the
 # same families, so that what a colour family means carries over from the wells: an
 # oscillation (periodic, winding 0, as the rest state k = 0 it swings about) green, the first
-# one the green of k = 0 and the next ones greens of the four lightness levels; a rotation
+# one the green of k = 0 and the next ones greens of other lightnesses; a rotation
 # with winding > 0 the warm family and winding < 0 the cool one (the i-th of a sign the
 # colour of well ±i, as a well's: neighbours far apart in lightness); a chaotic attractor
 # greys of no hue (light, then dark, ...): no one orbit, no one hue.
 _CHAOTIC_L = (0.80, 0.40, 0.62, 0.27)
+# the second, third, ... oscillation's green (the first is k = 0's): dark first, so that
+# mirror twins differ in lightness from each other and from the light rotations
+_OSCILLATION_L = (0.33, 0.80, 0.45)
 
 
 def attractor_colours(kinds, windings, lines: bool = False) -> list[str]:
@@ -200,9 +203,9 @@ def attractor_colours(kinds, windings, lines: bool = False) -> list[str]:
         elif family == "backward":
             out.append(well_colour(-(j + 1), lines))
         elif family == "oscillation":
-            levels = _LINE_LEVELS if lines else _L_LEVELS
+            level = _OSCILLATION_L[(j - 1) % len(_OSCILLATION_L)]
             out.append(well_colour(0, lines) if j == 0 else
-                       _oklch_hex(levels[(j - 1) % 4], _ZERO_LCH[1], _ZERO_LCH[2]))
+                       _oklch_hex(min(level, 0.72) if lines else level, *_ZERO_LCH[1:]))
         else:
             level = _CHAOTIC_L[j % len(_CHAOTIC_L)]
             out.append(_oklch_hex(min(level, 0.55) if lines else level, 0.0, 0.0))

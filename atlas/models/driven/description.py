@@ -10,6 +10,8 @@ what its test shows, no more: see :data:`IN_FILE`.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from atlas.models.base import MapVariable, Model, status_flags
@@ -17,8 +19,8 @@ from atlas.models.pendulum.description import AXES
 from atlas.models.pendulum.description import PARAMETERS as PENDULUM_PARAMETERS
 
 __all__ = ["PARAMETERS", "CONVERGED", "UNRESOLVED", "NONFINITE", "NEAR", "CHAOTIC",
-           "STATUSES", "IN_FILE", "ATTRACTOR_FILL", "MAX_PERIOD", "LONGEST_PERIOD",
-           "DRIVEN_PENDULUM"]
+           "STATUSES", "IN_FILE", "ATTRACTOR_FILL", "MAX_PERIOD", "LONGEST_PERIOD", "WHOLE",
+           "steps_per_period", "DRIVEN_PENDULUM"]
 
 #: The parameters: the pendulum's, then the drive's (dims in this order).
 PARAMETERS = {
@@ -63,6 +65,18 @@ IN_FILE = {
 #: a period from the seeds' last returns, of which it records more than four times this).
 MAX_PERIOD = 8
 LONGEST_PERIOD = 48
+
+#: How close T/dt must come to a whole number N (relative): dt = 2pi/200 written in a config
+#: is T/200 of Ω = 1 to rounding, dt = 0.0314 is not.
+WHOLE = 1e-9
+
+
+def steps_per_period(frequency: float, dt: float) -> int | None:
+    """N where ``dt`` [s] is the drive period T = 2π/Ω (``frequency`` [rad s⁻¹]) over N whole
+    steps, so that every return to P falls on a step; None where it is not."""
+    n = round(2.0 * math.pi / frequency / dt)
+    return n if n >= 1 and abs(n * dt * frequency / (2.0 * math.pi) - 1.0) <= WHOLE else None
+
 
 #: ``attractor`` where no label applies (int16; also the file's _FillValue).
 ATTRACTOR_FILL = int(np.iinfo(np.int16).min)

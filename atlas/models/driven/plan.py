@@ -8,13 +8,14 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from atlas.models.driven.description import steps_per_period
 from atlas.pipeline.config_sections import PendulumConfig
 
 if TYPE_CHECKING:
     from atlas.pipeline.config import Config
 
-__all__ = ["Section", "check", "begin", "sample", "plan", "steps_per_period", "MIN_STEPS",
-           "MIN_PERIODS", "MAX_STEPS", "MAX_PERIODS", "WHOLE"]
+__all__ = ["Section", "check", "begin", "sample", "plan", "MIN_STEPS",
+           "MIN_PERIODS", "MAX_STEPS", "MAX_PERIODS"]
 
 #: The config section of its parameters: the pendulum's, with ``drive``.
 Section = PendulumConfig
@@ -28,18 +29,6 @@ MAX_STEPS = 4096
 #: The most drive periods t_max may hold: each undecided orbit (and each sample of the
 #: pre-flight estimate, which has no attractor to stop it) runs that long.
 MAX_PERIODS = 20_000
-#: How close T/dt must come to a whole number N (relative): dt = 2pi/200 written in a config
-#: is T/200 of Ω = 1 to rounding, dt = 0.0314 is not.
-WHOLE = 1e-9
-
-
-def steps_per_period(frequency: float, dt: float) -> int | None:
-    """N where ``dt`` [s] is the drive period T = 2π/Ω (``frequency`` [rad s⁻¹]) over N whole
-    steps, so that every return to P falls on a step; None where it is not."""
-    n = round(2.0 * math.pi / frequency / dt)
-    return n if n >= 1 and abs(n * dt * frequency / (2.0 * math.pi) - 1.0) <= WHOLE else None
-
-
 def _not_whole(dt: float, frequency: float) -> str:
     """The error for a ``dt`` [s] that is not T/N: the two nearest that are."""
     period = 2.0 * math.pi / frequency

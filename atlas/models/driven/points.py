@@ -33,8 +33,8 @@ from atlas.models.driven.description import (
     NEAR,
     NONFINITE,
     UNRESOLVED,
+    steps_per_period,
 )
-from atlas.models.driven.plan import steps_per_period
 from atlas.store.schema import summary_dataset
 
 __all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
