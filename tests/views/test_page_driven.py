@@ -30,6 +30,7 @@ from atlas.layout import at_point, point_group, points
 from atlas.models.driven.attractors import Drive
 from atlas.models.driven.description import UNRESOLVED
 from atlas.models.driven.points import DrivenPoint
+from atlas.views.info_driven import attractor_names
 from atlas.views.page import write_view
 from tests.browser import (
     find_browser,
@@ -97,7 +98,8 @@ def stored(driven):
         attractor, status, _, _ = point.label(theta0[None, :], theta_dot0[:, None])
         np.testing.assert_array_equal(attractor, here["attractor"].values)
         np.testing.assert_array_equal(status, here["status"].values)
-        out.append({"ds": here, "point": point})
+        out.append({"ds": here, "point": point,
+                    "names": attractor_names(point_group(tree, "attractors", params))})
     return out
 
 
@@ -173,11 +175,11 @@ def test_a_click_follows_the_orbit_as_atlas_does(driven, stored, browser):
     assert last["periods"] * drive.period == pytest.approx(float(t_trap), rel=1e-6)
     readout = browser.evaluate("document.querySelector('section[data-point=\"0\"] "
                                ".orbit-readout').innerText")
-    name = f"#{int(attractor)} period"
-    assert f"It reaches {name}" in readout
+    names = s["names"]
+    assert f"It reaches {names[int(attractor)]}" in readout
     stored_k = int(ds["attractor"].values[j, i])
     assert f"nearest grid point (θ0 = {float(ds.theta0[i]):.4f} rad" in readout
-    assert f"): #{stored_k} period" in readout
+    assert f"): {names[stored_k]}" in readout
     # the returns are drawn: the overlay is dark at a return inside the window
     inside = [r for r in last["returns"] if -2 < r[1] < 4]
     th = (inside[0][0] + math.pi) % (2 * math.pi) - math.pi
