@@ -46,10 +46,11 @@ def test_relative_links_resolve(page):
 
 
 def test_readme_is_a_quick_start():
-    """About 200 lines, with the two commands, a picture of the basins and one of basin
-    stability against the torque, one config and the file read back."""
+    """About 200 lines, with the two commands, a picture of the basins, one of basin
+    stability against the torque and one of the driven pendulum's basins, one config and
+    the file read back."""
     text = README.read_text(encoding="utf-8")
     assert len(text.splitlines()) <= 220
     assert "make run" in text and "make test" in text
-    assert len(re.findall(r"!\[[^]]*\]\(", text)) == 2
+    assert len(re.findall(r"!\[[^]]*\]\(", text)) == 3
     assert len(_blocks(text, "yaml")) == 1 and len(_blocks(text, "python")) == 2
