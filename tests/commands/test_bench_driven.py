@@ -30,3 +30,13 @@ def test_the_kernel_row_says_its_rate_and_the_agreement():
     assert row["wall_s"] > 0 and math.isfinite(row["ratio"]) and row["ratio"] > 0
     agree = float(re.search(r"agree to ([0-9.e+-]+)", row["note"]).group(1))
     assert agree < 1e-9
+
+
+def test_the_atlas_rows_set_the_run_against_its_kernel():
+    """The quick end-to-end row and its share outside the kernel: the kernel alone, labelling
+    the file's grid from the file's attractors, gives exactly the stored labels (so it timed
+    the same work), and the share is a fraction of the run."""
+    run, share = bench_driven._atlas_rows(quick=True)
+    assert run["wall_s"] > 0 and share["wall_s"] < run["wall_s"]
+    assert 0 < share["ratio"] < 1
+    assert "the file's labels at 100.00% of the points" in share["note"], share["note"]

@@ -27,7 +27,6 @@ import pytest
 import atlas
 from atlas.kernels import driven as kernels
 from atlas.layout import at_point, point_group, points
-from atlas.models.driven.attractors import Drive
 from atlas.models.driven.description import UNRESOLVED
 from atlas.models.driven.points import DrivenPoint
 from atlas.views.info_driven import attractor_names
@@ -72,16 +71,7 @@ def driven(tmp_path_factory):
 
 def _point(tree, params: dict, t_max: float) -> DrivenPoint:
     """The labelling of one parameter point as the run made it, from what the file stores."""
-    group = point_group(tree, "attractors", params)
-    drive = Drive(params["alpha"], params["omega0"], params["torque"], params["amplitude"],
-                  params["frequency"], params["phase"], int(group.attrs["steps_per_period"]))
-    theta, theta_dot = group["theta"].values, group["theta_dot"].values
-    kept = np.isfinite(theta)
-    owner = np.nonzero(kept)[0].astype(np.int16)
-    return DrivenPoint(drive, np.column_stack([theta[kept], theta_dot[kept]]), owner,
-                       group["status"].values.astype(np.int8),
-                       group["capture_radius"].values[owner],
-                       max(1, int(t_max / drive.period)))
+    return DrivenPoint.stored(point_group(tree, "attractors", params), params, t_max)
 
 
 @pytest.fixture(scope="module")

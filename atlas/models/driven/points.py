@@ -81,6 +81,23 @@ class DrivenPoint:
         return cls(drive, np.zeros((0, 2)), np.zeros(0, np.int16), np.zeros(0, np.int8),
                    np.zeros(0), max(1, int(t_max / drive.period)))
 
+    @classmethod
+    def stored(cls, group: xr.Dataset, point: dict[str, float], t_max: float
+               ) -> DrivenPoint:
+        """The point as its run labelled it, rebuilt from what the file stores: its
+        ``/attractors`` node ``group`` (the targets, their radius and status, N), its
+        parameters ``point`` and the file's ``t_max`` [s] (no grid: nothing is checked at
+        dt/2)."""
+        drive = Drive(point["alpha"], point["omega0"], point.get("torque", 0.0),
+                      point["amplitude"], point["frequency"], point.get("phase", 0.0),
+                      int(group.attrs["steps_per_period"]))
+        theta, theta_dot = group["theta"].values, group["theta_dot"].values
+        kept = np.isfinite(theta)
+        owner = np.nonzero(kept)[0].astype(np.int16)
+        return cls(drive, np.ascontiguousarray(np.column_stack([theta[kept], theta_dot[kept]])),
+                   owner, group["status"].values.astype(np.int8),
+                   group["capture_radius"].values[owner], max(1, int(t_max / drive.period)))
+
     def label(self, x0, v0, rows=None, backend: str = "cpu", numba_threads=None,
               t_max: float | None = None):
         """The labels of the orbits from θ0 = ``x0`` [rad], θ̇0 = ``v0`` [rad s⁻¹] (arrays
