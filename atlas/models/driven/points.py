@@ -36,7 +36,7 @@ from atlas.models.driven.description import (
 from atlas.store.schema import summary_dataset
 
 __all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
-           "attractors_dataset"]
+           "attractors_dataset", "stored_point"]
 
 #: Returns of P in a row within an attractor's capture radius that decide a label.
 CONFIRM = 8
@@ -219,6 +219,39 @@ def begin(cfg, layout: Layout) -> list[Drive]:
     return drives(cfg, layout)
 
 
+def _targets(points: list[np.ndarray], kinds: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """(targets (K, 2), the index of each one's attractor (int16 K)): every point on P of a
+    periodic attractor, the last :data:`CLOUD_POINTS` of a chaotic one's cloud."""
+    clouds = [p if kind == "periodic" else p[-CLOUD_POINTS:] for p, kind in zip(points, kinds)]
+    targets = np.concatenate(clouds) if clouds else np.zeros((0, 2))
+    owner = np.concatenate([np.full(len(c), i, np.int16) for i, c in enumerate(clouds)]) \
+        if clouds else np.zeros(0, np.int16)
+    return np.ascontiguousarray(targets), owner
+
+
+def stored_point(drive: Drive, group: xr.Dataset, t_max: float) -> DrivenPoint:
+    """The :class:`DrivenPoint` a run labelled a parameter point's grid with, rebuilt from
+    what its file stores: the point's ``/attractors`` node (``group``, as
+    :func:`attractors_dataset` wrote it: each attractor's points on P, kind, status and
+    capture radius), its ``drive`` (the file's parameters, with the node's
+    steps_per_period) and the file's ``t_max`` [s]. Its :meth:`DrivenPoint.label` gives the
+    run's labels (tests/commands/test_orbit_driven.py)."""
+    n = group.sizes.get("attractor", 0)
+    points, kinds = [], []
+    for i in range(n):
+        theta = np.asarray(group["theta"].values[i], np.float64)
+        theta_dot = np.asarray(group["theta_dot"].values[i], np.float64)
+        keep = np.isfinite(theta) & np.isfinite(theta_dot)
+        points.append(np.column_stack([theta[keep], theta_dot[keep]]))
+        kinds.append(str(group["kind"].values[i]))
+    targets, owner = _targets(points, kinds)
+    radii = np.asarray(group["capture_radius"].values, np.float64) if n else np.zeros(0)
+    statuses = np.asarray(group["status"].values, np.int8) if n else np.zeros(0, np.int8)
+    return DrivenPoint(drive, targets, owner, statuses,
+                       radii[owner] if len(owner) else np.zeros(0),
+                       max(1, int(t_max / drive.period)))
+
+
 def _prepared(cfg, layout: Layout, drive: Drive
               ) -> tuple[DrivenPoint, xr.Dataset, str | None]:
     g = cfg.grid
@@ -229,11 +262,8 @@ def _prepared(cfg, layout: Layout, drive: Drive
     statuses = np.array([CHAOTIC if a.kind == "chaotic" else CONVERGED if contracting
                          else NEAR for a, (_, contracting) in zip(found, captures)], np.int8)
     radii = np.array([radius for radius, _ in captures])
-    clouds = [a.points if a.kind == "periodic" else a.points[-CLOUD_POINTS:] for a in found]
-    targets = np.concatenate(clouds) if clouds else np.zeros((0, 2))
-    owner = np.concatenate([np.full(len(c), i, np.int16) for i, c in enumerate(clouds)]) \
-        if clouds else np.zeros(0, np.int16)
-    point = DrivenPoint(drive, np.ascontiguousarray(targets), owner, statuses,
+    targets, owner = _targets([a.points for a in found], [a.kind for a in found])
+    point = DrivenPoint(drive, targets, owner, statuses,
                         radii[owner] if len(owner) else np.zeros(0),
                         max(1, int(cfg.integrator.t_max / drive.period)),
                         grid=(layout.x0, layout.v0))
