@@ -24,7 +24,7 @@ from atlas.commands.orbit_driven import DrivenOrbit
 from atlas.errors import AtlasError
 from atlas.views.style import ATTRACTOR_MARKER, ORBIT_START_MARKER, STYLE, pi_ticks
 
-__all__ = ["plot_driven_orbit", "wrap_with_breaks"]
+__all__ = ["plot_driven_orbit", "driven_figure", "wrap_with_breaks"]
 
 TWO_PI = 2.0 * math.pi
 #: The phase panel beyond the atlas's window (white is the map's "no label").
@@ -194,30 +194,36 @@ def _returns_panel(ax, ax_zoom, fig, orbit: DrivenOrbit, group) -> None:
     ax.legend(loc="upper left", fontsize=7)
 
 
+def driven_figure(orbit: DrivenOrbit, tree, index: dict | None, group):
+    """The figure of ``orbit`` (module docstring; a matplotlib Figure, no pyplot): ``tree``
+    the opened atlas, ``index`` its point's indices along the swept dims, ``group`` the
+    point's ``/attractors`` node. Its panels are named by their titles and axis labels."""
+    from matplotlib.figure import Figure  # no pyplot: a file, never a window or a backend
+
+    fig = Figure(figsize=(16, 8))
+    grid = fig.add_gridspec(2, 3, width_ratios=[1.45, 0.75, 0.55], height_ratios=[1, 1.15])
+    ax = fig.add_subplot(grid[:, 0])
+    ax_t = fig.add_subplot(grid[0, 1:])
+    ax_p, ax_zoom = fig.add_subplot(grid[1, 1]), fig.add_subplot(grid[1, 2])
+    _phase_panel(ax, orbit, tree, index or {}, group)
+    _time_panel(ax_t, orbit, group)
+    _returns_panel(ax_p, ax_zoom, fig, orbit, group)
+    ax_t.set_title(f"θ(t) from θ0 = {orbit.theta0:.4g} rad, θ̇0 = {orbit.theta_dot0:.4g} rad/s",
+                   fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
 def plot_driven_orbit(orbit: DrivenOrbit, output: str | Path, tree, index: dict | None,
                       group) -> Path:
-    """Write the three panels (module docstring) of ``orbit`` to ``output`` (PNG, SVG or
-    PDF): ``tree`` the opened atlas, ``index`` its point's indices along the swept dims,
-    ``group`` the point's ``/attractors`` node."""
+    """Write :func:`driven_figure` of ``orbit`` to ``output`` (PNG, SVG or PDF)."""
     import matplotlib
-    from matplotlib.figure import Figure  # no pyplot: a file, never a window or a backend
 
     from atlas.store.outputs import figure_metadata
 
     output = Path(output)
     with matplotlib.rc_context(STYLE):
-        fig = Figure(figsize=(16, 8))
-        grid = fig.add_gridspec(2, 3, width_ratios=[1.45, 0.75, 0.55],
-                                height_ratios=[1, 1.15])
-        ax = fig.add_subplot(grid[:, 0])
-        ax_t = fig.add_subplot(grid[0, 1:])
-        ax_p, ax_zoom = fig.add_subplot(grid[1, 1]), fig.add_subplot(grid[1, 2])
-        _phase_panel(ax, orbit, tree, index or {}, group)
-        _time_panel(ax_t, orbit, group)
-        _returns_panel(ax_p, ax_zoom, fig, orbit, group)
-        fig.tight_layout()
-        ax_t.set_title(f"θ(t) from θ0 = {orbit.theta0:.4g} rad, θ̇0 = {orbit.theta_dot0:.4g} "
-                       "rad/s", fontsize=10)
+        fig = driven_figure(orbit, tree, index, group)
         try:
             fig.savefig(output, metadata=figure_metadata(output.suffix, "atlas orbit"))
         except OSError as exc:
