@@ -418,7 +418,7 @@ def trajectory(theta0, theta_dot0, alpha, omega0, torque, table, dt, periods, st
     θ̇ [rad s⁻¹]) at t = i·stride·dt (``stride`` must divide N, so that every return to P is
     a row: row p·N/stride). The same RK4 step, drive table and path choice as
     :func:`advance` (parameters as there), one orbit at a time: its returns are those of
-    :func:`advance` and :func:`sample` (tests/kernels/test_driven.py)."""
+    :func:`advance` and :func:`sample`, bit for bit (tests/kernels/test_driven.py)."""
     forcing, accel = drive(omega0, torque, table, dt)
     n = (forcing.size - 1) // 2
     if periods < 0 or stride < 1 or n % stride:
