@@ -29,6 +29,8 @@ __all__ = ["plot_driven_orbit", "driven_figure", "wrap_with_breaks"]
 TWO_PI = 2.0 * math.pi
 #: The phase panel beyond the atlas's window (white is the map's "no label").
 OUTSIDE = "0.84"
+#: A chaotic attractor's cloud of points on P.
+CLOUD = {"marker": ".", "ms": 1.5, "color": "black", "ls": "none"}
 #: θ(t) gets ticks at multiples of π while it spans at most this many turns.
 MAX_TURNS_TICKED = 8
 
@@ -130,16 +132,18 @@ def _draw_returns(ax, orbit: DrivenOrbit, group, norm, label: bool):
     others = [k for k in range(group.sizes.get("attractor", 0)) if k != orbit.attractor]
     for k in others:
         pts = _attractor_points(group, k)
-        ax.plot(pts[:, 0], pts[:, 1], marker="D", ms=5.0, mfc="white", mec="0.4", mew=1.0,
-                ls="none", zorder=3,
+        style = CLOUD if str(group["kind"].values[k]) == "chaotic" else {
+            "marker": "D", "ms": 5.0, "mfc": "white", "mec": "0.4", "mew": 1.0, "ls": "none"}
+        ax.plot(pts[:, 0], pts[:, 1], **style, zorder=3,
                 label="other attractors' points on P" if label and k == others[0] else None)
     if orbit.attractor is not None:
         pts = _attractor_points(group, orbit.attractor)
         radius = float(group["capture_radius"].values[orbit.attractor])
-        ax.plot(pts[:, 0], pts[:, 1], **ATTRACTOR_MARKER, zorder=6,
+        chaotic = str(group["kind"].values[orbit.attractor]) == "chaotic"
+        ax.plot(pts[:, 0], pts[:, 1], **(CLOUD if chaotic else ATTRACTOR_MARKER), zorder=6,
                 label=f"{_name(group, orbit.attractor)} (reached): its points on P"
                 if label else None)
-        for i, (x, y) in enumerate(pts):
+        for i, (x, y) in enumerate([] if chaotic else pts):  # a cloud: no ring per point
             ax.add_patch(Circle((x, y), radius, fill=False, ec="tab:red", lw=1.2, zorder=4,
                                 label=f"capture radius {radius:.3g}" if label and i == 0
                                 else None))
@@ -182,11 +186,12 @@ def _returns_panel(ax, ax_zoom, fig, orbit: DrivenOrbit, group) -> None:
     pi_ticks(ax, -math.pi, math.pi)
     lo, hi = ax.get_ylim()
     ax.set_ylim(lo, hi + 0.6 * (hi - lo))  # room for the legend above the returns
-    if orbit.attractor is not None and orbit.periods > 0:
+    zoomed = orbit.attractor is not None and orbit.periods > 0
+    if zoomed:
         _zoom(ax_zoom, orbit, group, norm)
-    else:
+    else:  # no label: nothing to zoom on
         ax_zoom.set_axis_off()
-    bar = fig.colorbar(dots, ax=ax_zoom, pad=0.03, fraction=0.08)
+    bar = fig.colorbar(dots, ax=ax_zoom if zoomed else ax, pad=0.03, fraction=0.08)
     bar.set_label("return n (t = nT)")
     ax.set_xlabel("θ(nT) wrapped to [−π, π) [rad]")
     ax.set_ylabel("θ̇(nT) [rad/s]")

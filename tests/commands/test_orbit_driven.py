@@ -232,3 +232,32 @@ def test_a_drive_option_without_a_driven_atlas_is_one_line(tmp_path, capsys):
                  "-o", str(tmp_path / "o.png")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--amplitude" in err[0] and "driven" in err[0], err
+
+
+def test_an_orbit_without_a_label_says_so_and_is_drawn(driven_files, tmp_path):
+    """An orbit undecided by t_max (here a point cut to 3 periods) prints no attractor, the
+    status's meaning and why t_trap has none; its figure is drawn without a zoom."""
+    from dataclasses import replace
+
+    from atlas.commands.orbit_driven import nearest_stored
+    from atlas.commands.orbit_driven_figure import plot_driven_orbit
+    from atlas.commands.orbit_driven_text import driven_lines
+
+    path, _ = driven_files
+    source = open_driven_point(path)
+    try:
+        labeller = replace(source.labeller, max_periods=3)
+        orbit = follow(labeller, 0.5, 1.0, 3 * labeller.drive.period)
+        assert orbit.attractor is None and orbit.status == 1 and orbit.periods == 3
+        assert orbit.returns.shape == (4, 2) and math.isnan(orbit.t_trap)
+        lines = driven_lines(orbit, source.params, source.group,
+                             nearest_stored(source.point, 0.5, 1.0), source.point)
+        text = "\n".join(lines)
+        assert "label        none (unresolved" in text
+        assert "status       unresolved: no label decided before t_max" in text
+        assert "t_trap       none: no label after 3 drive periods" in text
+        out = plot_driven_orbit(orbit, tmp_path / "u.png", source.tree, source.index,
+                                source.group)
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    finally:
+        source.tree.close()
