@@ -263,23 +263,29 @@ def _orbit_values(values: list[str]) -> tuple[str | None, str, str]:
 
 
 def _cmd_orbit(args) -> int:
-    from atlas.commands.orbit import default_output, parse_number, report
-    from atlas.commands.orbit_figure import plot_orbit
+    from atlas.commands.orbit import (
+        DRIVE_PARAMETERS,
+        default_output,
+        parse_number,
+        plot,
+        report,
+    )
     from atlas.store.outputs import check_output
 
     file, theta0, theta_dot0 = _orbit_values(args.values)
     theta0, theta_dot0 = (parse_number(text, name) for text, name in
                           ((theta0, "theta0"), (theta_dot0, "theta_dot0")))
+    selectors = ("alpha", "omega0", "torque", *DRIVE_PARAMETERS)
     opts = {name: None if getattr(args, name) is None else parse_number(getattr(args, name),
                                                                          f"--{name}")
-            for name in ("alpha", "omega0", "torque", "dt", "t_max")}
+            for name in (*selectors, "dt", "t_max")}
     output = Path(args.output) if args.output else default_output(
-        file, theta0, theta_dot0, {name: opts[name] for name in ("alpha", "omega0", "torque")})
+        file, theta0, theta_dot0, {name: opts[name] for name in selectors})
     check_output(output, "figure", inputs=(file,) if file else (), command="atlas orbit")
     orbit, lines, context = report(theta0, theta_dot0, file=file, **opts)
     _output_folder(output.parent)
     try:
-        plot_orbit(orbit, output, context["tree"], context["index"])
+        plot(orbit, output, context)
     finally:
         if context["tree"] is not None:
             context["tree"].close()
@@ -319,12 +325,15 @@ def _add_view_orbit_zoom(sub) -> None:
     p = sub.add_parser("orbit",
                        help="one orbit: label, certificate, phase curve and theta(t) as PNG",
                        usage="%(prog)s [-h] [FILE] THETA0 THETA_DOT0 [--alpha ALPHA] "
-                       "[--omega0 OMEGA0]\n                   [--torque TORQUE] [--dt DT] "
+                       "[--omega0 OMEGA0]\n                   [--torque TORQUE] [--amplitude A] "
+                       "[--frequency F] [--phase PHI]\n                   [--dt DT] "
                        "[--t-max T_MAX] [-o OUTPUT]",
                        description="atlas orbit [FILE] THETA0 THETA_DOT0: one orbit from "
                        "(THETA0 [rad], THETA_DOT0 [rad/s]), numbers or pi expressions, negative "
                        "ones as they are (atlas orbit FILE -pi/2 1); with an atlas FILE at its "
-                       "parameters and certificate, else give --alpha and --omega0")
+                       "parameters and certificate, else give --alpha and --omega0; a driven "
+                       "pendulum's FILE: its RK4 map and attractors, theta(t), the phase curve "
+                       "and the stroboscopic returns")
     _takes_negative_numbers(p)
     p.add_argument("values", nargs="+", metavar="[FILE] THETA0 THETA_DOT0",
                    help="an atlas file (optional), then the initial angle theta0 [rad] and "
@@ -332,6 +341,12 @@ def _add_view_orbit_zoom(sub) -> None:
     p.add_argument("--alpha", help="damping [1/s] (with a file: selects a parameter point)")
     p.add_argument("--omega0", help="natural frequency [rad/s] (with a file: selects a point)")
     p.add_argument("--torque", help="torque [rad/s^2] (default 0; with a file: selects a point)")
+    p.add_argument("--amplitude", help="drive amplitude A [rad/s^2] (a driven pendulum's "
+                   "file: selects a point)")
+    p.add_argument("--frequency", help="drive frequency [rad/s] (a driven pendulum's file: "
+                   "selects a point)")
+    p.add_argument("--phase", help="drive phase [rad] (a driven pendulum's file: selects a "
+                   "point)")
     p.add_argument("--dt", help="RK4 step [s] (default 0.01; with a file: the file's)")
     p.add_argument("--t-max", dest="t_max", help="t_max [s] (default 200; a file: the file's)")
     p.add_argument("-o", "--output", help="the figure, .png, .svg or .pdf (default: "

@@ -99,7 +99,7 @@ def _atlas_rows(quick: bool) -> list[dict]:
     twice (at dt and at dt/2, as the run does), in this process, from the file's attractors."""
     import atlas
     from atlas.layout import point_group, points
-    from atlas.models.driven.points import DrivenPoint
+    from atlas.models.driven.points import stored_point
 
     num = 100 if quick else 1000
     config = ("name: {name}\npendulum:\n  alpha: 0.1\n  omega0: 1.0\n"
@@ -117,8 +117,8 @@ def _atlas_rows(quick: bool) -> list[dict]:
         tree = atlas.open(folder / "driven.h5")
         ds = tree.to_dataset(inherit=False)
         params = points(ds)[0]
-        point = DrivenPoint.stored(point_group(tree, "attractors", params), params,
-                                   float(ds.attrs["t_max"]))
+        point = stored_point(point_group(tree, "attractors", params), params,
+                             float(ds.attrs["t_max"]))
         x0, v0 = ds["theta0"].values[None, :], ds["theta_dot0"].values[:, None]
         point.label(x0[:, :8], v0[:8])  # untimed: compiled or loaded from the cache
         start = time.perf_counter()

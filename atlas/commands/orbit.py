@@ -36,7 +36,11 @@ from atlas.labels.trap import CHECK_EVERY
 from atlas.status import RUNNING, TRAPPED
 
 __all__ = ["report", "running_barrier_for", "parse_number", "default_output", "looks_like_file",
-           "check_file_argument"]
+           "check_file_argument", "file_model", "plot", "DRIVE_PARAMETERS"]
+
+#: The driven pendulum's parameters that only its atlases have (``atlas orbit`` options that
+#: select a point of one).
+DRIVE_PARAMETERS = ("amplitude", "frequency", "phase")
 
 
 def running_barrier_for(alpha: float, omega0: float, torque: float, dt: float):
@@ -120,16 +124,65 @@ def _follow(theta0: float, theta_dot0: float, source: FilePoint | None, alpha, o
     return dataclasses.replace(orbit, cycle=cycle), kernel
 
 
+def file_model(file: str | Path) -> str:
+    """The name of the model whose atlas ``file`` is (:func:`atlas.models.registry.of_attrs`;
+    AtlasError for a model atlas does not know)."""
+    from atlas.models.registry import of_attrs
+    from atlas.store.reader import open_atlas
+
+    tree = open_atlas(Path(file))
+    try:
+        return of_attrs(tree.attrs).name
+    except ValueError as exc:
+        raise InputFileError(f"{file}: {exc}") from None
+    finally:
+        tree.close()
+
+
+def _driven_report(theta0: float, theta_dot0: float, file: str | Path, *,
+                   dt: float | None = None, t_max: float | None = None,
+                   **asked: float | None):
+    """:func:`report` of a driven pendulum's atlas: (DrivenOrbit, lines, context: the opened
+    ``tree``, which the caller closes, the point's ``index``, the ``nearest`` grid point's
+    stored labels and the point's ``/attractors`` node, ``group``)."""
+    from atlas.commands.orbit_driven import follow, nearest_stored, open_driven_point
+    from atlas.commands.orbit_driven_text import driven_lines
+
+    source = open_driven_point(file, dt=dt, t_max=t_max, **asked)
+    try:
+        orbit = follow(source.labeller, theta0, theta_dot0, source.t_max)
+        nearest = nearest_stored(source.point, theta0, theta_dot0)
+        lines = driven_lines(orbit, source.params, source.group, nearest, source.point)
+    except BaseException:
+        source.tree.close()
+        raise
+    return orbit, lines, {"tree": source.tree, "index": source.index, "nearest": nearest,
+                          "group": source.group}
+
+
 def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
            alpha: float | None = None, omega0: float | None = None,
            dt: float | None = None, t_max: float | None = None,
-           torque: float | None = None):
+           torque: float | None = None, **drive: float | None):
     """The orbit and the lines ``atlas orbit`` prints: (Orbit, lines, context for
-    :func:`atlas.commands.orbit_figure.plot_orbit`: the opened ``tree`` or None, which the
-    caller closes, and the point's ``index``). With ``file``, α, ω0, τ, dt, t_max come from
-    the atlas (α/ω0/τ select a parameter point) and so does the certificate its run used
-    (format 4; a file of format 3 is refused with one line); without, α and ω0 are required,
-    τ defaults to 0 and the limit cycle and its barrier are computed."""
+    :func:`plot`: the opened ``tree`` or None, which the caller closes, and the point's
+    ``index``). With ``file``, α, ω0, τ, dt, t_max come from the atlas (α/ω0/τ select a
+    parameter point) and so does the certificate its run used (format 4; a file of format 3
+    is refused with one line); without, α and ω0 are required, τ defaults to 0 and the limit
+    cycle and its barrier are computed. A driven pendulum's atlas is followed by
+    :func:`_driven_report` (``drive``: amplitude, frequency, phase select
+    one of its points, with α, ω0 and τ); its orbit is a DrivenOrbit."""
+    from atlas.models.registry import DRIVEN
+
+    given = [name for name in DRIVE_PARAMETERS if drive.get(name) is not None]
+    if set(drive) - set(DRIVE_PARAMETERS):
+        raise TypeError(f"report() got unexpected options {sorted(set(drive))}")
+    if file is not None and file_model(file) == DRIVEN:
+        return _driven_report(theta0, theta_dot0, file, dt=dt, t_max=t_max, alpha=alpha,
+                              omega0=omega0, torque=torque, **drive)
+    if given:
+        raise AtlasError(f"--{given[0]} selects a point of a driven pendulum's atlas; "
+                         + ("give one" if file is None else f"{file} is not one"))
     source = None
     if file is not None:
         source = open_point(file, alpha, omega0, torque, dt, t_max)
@@ -167,6 +220,20 @@ def report(theta0: float, theta_dot0: float, *, file: str | Path | None = None,
     context = {"tree": None if source is None else source.tree,
                "index": {} if source is None else source.index, "nearest": nearest}
     return orbit, lines, context
+
+
+def plot(orbit, output: str | Path, context: dict) -> Path:
+    """Write the figure of an orbit :func:`report` returned, with its ``context``: the
+    pendulum's (:func:`atlas.commands.orbit_figure.plot_orbit`) or a driven pendulum's
+    (:func:`atlas.commands.orbit_driven_figure.plot_driven_orbit`)."""
+    if "group" in context:  # a driven pendulum's orbit: its point's /attractors node
+        from atlas.commands.orbit_driven_figure import plot_driven_orbit
+
+        return plot_driven_orbit(orbit, output, context["tree"], context["index"],
+                                 context["group"])
+    from atlas.commands.orbit_figure import plot_orbit
+
+    return plot_orbit(orbit, output, context["tree"], context["index"])
 
 
 def default_output(file: str | Path | None, theta0: float, theta_dot0: float,

@@ -38,7 +38,8 @@ from atlas.kernels import ATTRACTOR_FILL, NONFINITE, TRAPPED, UNRESOLVED, cached
 from atlas.kernels.fastsin import SIN_FASTMATH, fast_sin, reduce_pi, sin_near
 from atlas.kernels.lanes import FULL, LANES, MAX_STAGE_OFFSET, SHARED, TILE, n_chunks, serial_twin
 
-__all__ = ["step_size", "forcing_table", "advance", "sample", "label_driven", "DECIDED"]
+__all__ = ["step_size", "forcing_table", "advance", "sample", "trajectory", "label_driven",
+           "DECIDED"]
 
 #: ``status`` of an orbit that :func:`label_driven` labelled: it was within ``radius`` of one
 #: attractor's targets at ``confirm`` consecutive returns of P (the shared code 0, "trapped").
@@ -374,6 +375,57 @@ def sample(theta0, theta_dot0, alpha, omega0, torque, table, dt, transient, coun
     if count > 0:
         _run(_sample, _sample_serial, theta0, theta_dot0, alpha, omega0, torque, table, dt,
              (np.int64(transient), out))
+    return out
+
+
+@cached_njit(nogil=True, fastmath=SIN_FASTMATH)
+def _trajectory(theta0, theta_dot0, alpha, omega0, dt, forcing, accel, stride, out):
+    """One orbit, step by step: out[i] = (θ, θ̇) after i·``stride`` steps (out[0] the start),
+    on the path :func:`orbit_path` chooses for it. It is stepped in a block of LANES copies
+    by the loop of :func:`make_period_chunk` (the one LLVM vectorises), so that its bits are
+    those of the lane kernels' orbit, not a scalar twin's."""
+    path = orbit_path(theta0, theta_dot0, alpha, dt, accel)
+    th = np.full(LANES, theta0)
+    v = np.full(LANES, theta_dot0)
+    out[0, 0] = theta0
+    out[0, 1] = theta_dot0
+    n = (forcing.size - 1) // 2
+    periods = (out.shape[0] - 1) * stride // n
+    i = 0
+    for _ in range(periods):
+        for j in range(0, forcing.size - 1, 2):
+            f0 = forcing[j]
+            f1 = forcing[j + 1]
+            f2 = forcing[j + 2]
+            if path == SHARED:
+                for lane in range(LANES):
+                    th[lane], v[lane] = _shared_step(th[lane], v[lane], alpha, omega0, dt,
+                                                     f0, f1, f2)
+            else:
+                for lane in range(LANES):
+                    th[lane], v[lane] = _full_step(th[lane], v[lane], alpha, omega0, dt,
+                                                   f0, f1, f2)
+            i += 1
+            if i % stride == 0:
+                out[i // stride, 0] = th[0]
+                out[i // stride, 1] = v[0]
+
+
+def trajectory(theta0, theta_dot0, alpha, omega0, torque, table, dt, periods, stride=1
+               ) -> np.ndarray:
+    """One orbit from (θ0 [rad], θ̇0 [rad s⁻¹]) at t = 0 over ``periods`` drive periods, kept
+    step by step: float64 (periods·N/``stride`` + 1, 2), row i the state (θ unwrapped [rad],
+    θ̇ [rad s⁻¹]) at t = i·stride·dt (``stride`` must divide N, so that every return to P is
+    a row: row p·N/stride). The same RK4 step, drive table and path choice as
+    :func:`advance` (parameters as there), one orbit at a time: its returns are those of
+    :func:`advance` and :func:`sample`, bit for bit (tests/kernels/test_driven.py)."""
+    forcing, accel = drive(omega0, torque, table, dt)
+    n = (forcing.size - 1) // 2
+    if periods < 0 or stride < 1 or n % stride:
+        raise ValueError("periods must be ≥ 0 and stride a divisor of the steps per period")
+    out = np.empty((int(periods) * (n // int(stride)) + 1, 2))
+    _trajectory(float(theta0), float(theta_dot0), float(alpha), float(omega0), float(dt),
+                forcing, accel, np.int64(stride), out)
     return out
 
 

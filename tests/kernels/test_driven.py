@@ -17,6 +17,7 @@ from atlas.kernels.driven import (
     label_driven,
     sample,
     step_size,
+    trajectory,
 )
 
 # b = 0.2 (α = b/2), ω0 = 1, Ω = 1, A = 1.66: coexisting oscillating and running attractors
@@ -115,6 +116,24 @@ def test_sample_is_repeated_advance():
         advance(th, v, ALPHA, OMEGA0, 0.2, TABLE, DT, 1)
         np.testing.assert_array_equal(out[:, k, 0], th)
         np.testing.assert_array_equal(out[:, k, 1], v)
+
+
+@pytest.mark.parametrize("n, speed", [(N, 3.0), (32, 3.0), (16, 400.0)])
+def test_trajectory_returns_are_the_lane_kernels_bit_for_bit(n, speed):
+    """One orbit kept step by step (atlas orbit's) passes P at the lane kernels' bits, on
+    the SHARED path and (fast orbits at a coarse step) the FULL one, with a torque; every
+    s-th step kept is the same state."""
+    table, dt = forcing_table(AMP, FREQ, PHASE, n), step_size(FREQ, n)
+    theta0, theta_dot0 = _states(12, seed=5, speed=speed)
+    returns = sample(theta0, theta_dot0, ALPHA, OMEGA0, 0.2, table, dt, 0, 6)
+    for i in range(theta0.size):
+        path = trajectory(theta0[i], theta_dot0[i], ALPHA, OMEGA0, 0.2, table, dt, 6)
+        assert path.shape == (6 * n + 1, 2)
+        np.testing.assert_array_equal(path[0], [theta0[i], theta_dot0[i]])
+        np.testing.assert_array_equal(path[n::n], returns[i])
+        np.testing.assert_array_equal(
+            trajectory(theta0[i], theta_dot0[i], ALPHA, OMEGA0, 0.2, table, dt, 6, 4),
+            path[::4])
 
 
 def test_label_without_drive_finds_the_rest_states():

@@ -28,7 +28,7 @@ import atlas
 from atlas.kernels import driven as kernels
 from atlas.layout import at_point, point_group, points
 from atlas.models.driven.description import UNRESOLVED
-from atlas.models.driven.points import DrivenPoint
+from atlas.models.driven.points import DrivenPoint, stored_point
 from atlas.views.info_driven import attractor_names
 from atlas.views.page import write_view
 from tests.browser import (
@@ -71,7 +71,7 @@ def driven(tmp_path_factory):
 
 def _point(tree, params: dict, t_max: float) -> DrivenPoint:
     """The labelling of one parameter point as the run made it, from what the file stores."""
-    return DrivenPoint.stored(point_group(tree, "attractors", params), params, t_max)
+    return stored_point(point_group(tree, "attractors", params), params, t_max)
 
 
 @pytest.fixture(scope="module")

@@ -38,7 +38,7 @@ from atlas.models.driven.description import (
 from atlas.store.schema import summary_dataset
 
 __all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
-           "attractors_dataset"]
+           "attractors_dataset", "stored_point"]
 
 #: Returns of P in a row within an attractor's capture radius that decide a label.
 CONFIRM = 8
@@ -80,23 +80,6 @@ class DrivenPoint:
         label costs at most: the pre-flight estimate's sample)."""
         return cls(drive, np.zeros((0, 2)), np.zeros(0, np.int16), np.zeros(0, np.int8),
                    np.zeros(0), max(1, int(t_max / drive.period)))
-
-    @classmethod
-    def stored(cls, group: xr.Dataset, point: dict[str, float], t_max: float
-               ) -> DrivenPoint:
-        """The point as its run labelled it, rebuilt from what the file stores: its
-        ``/attractors`` node ``group`` (the targets, their radius and status, N), its
-        parameters ``point`` and the file's ``t_max`` [s] (no grid: nothing is checked at
-        dt/2)."""
-        drive = Drive(point["alpha"], point["omega0"], point.get("torque", 0.0),
-                      point["amplitude"], point["frequency"], point.get("phase", 0.0),
-                      int(group.attrs["steps_per_period"]))
-        theta, theta_dot = group["theta"].values, group["theta_dot"].values
-        kept = np.isfinite(theta)
-        owner = np.nonzero(kept)[0].astype(np.int16)
-        return cls(drive, np.ascontiguousarray(np.column_stack([theta[kept], theta_dot[kept]])),
-                   owner, group["status"].values.astype(np.int8),
-                   group["capture_radius"].values[owner], max(1, int(t_max / drive.period)))
 
     def label(self, x0, v0, rows=None, backend: str = "cpu", numba_threads=None,
               t_max: float | None = None):
@@ -238,6 +221,44 @@ def begin(cfg, layout: Layout) -> list[Drive]:
     return drives(cfg, layout)
 
 
+def _targets(points: list[np.ndarray], kinds: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """(targets (K, 2), the index of each one's attractor (int16 K)): every point on P of a
+    periodic attractor, the last :data:`CLOUD_POINTS` of a chaotic one's cloud."""
+    clouds = [p if kind == "periodic" else p[-CLOUD_POINTS:] for p, kind in zip(points, kinds)]
+    targets = np.concatenate(clouds) if clouds else np.zeros((0, 2))
+    owner = np.concatenate([np.full(len(c), i, np.int16) for i, c in enumerate(clouds)]) \
+        if clouds else np.zeros(0, np.int16)
+    return np.ascontiguousarray(targets), owner
+
+
+def stored_point(group: xr.Dataset, params: dict[str, float], t_max: float) -> DrivenPoint:
+    """The :class:`DrivenPoint` a run labelled a parameter point's grid with, rebuilt from
+    what its file stores: the point's ``/attractors`` node (``group``, as
+    :func:`attractors_dataset` wrote it: each attractor's points on P, kind, status and
+    capture radius, and N), its parameters ``params`` (α, ω0, τ, A, Ω, φ; the file's) and
+    the file's ``t_max`` [s]; no grid (nothing is checked at dt/2). Its
+    :meth:`DrivenPoint.label` gives the run's labels (tests/commands/test_orbit_driven.py,
+    tests/views/test_page_driven.py)."""
+    drive = Drive(float(params["alpha"]), float(params["omega0"]),
+                  float(params.get("torque", 0.0)), float(params["amplitude"]),
+                  float(params["frequency"]), float(params.get("phase", 0.0)),
+                  int(group.attrs["steps_per_period"]))
+    n = group.sizes.get("attractor", 0)
+    points, kinds = [], []
+    for i in range(n):
+        theta = np.asarray(group["theta"].values[i], np.float64)
+        theta_dot = np.asarray(group["theta_dot"].values[i], np.float64)
+        keep = np.isfinite(theta) & np.isfinite(theta_dot)
+        points.append(np.column_stack([theta[keep], theta_dot[keep]]))
+        kinds.append(str(group["kind"].values[i]))
+    targets, owner = _targets(points, kinds)
+    radii = np.asarray(group["capture_radius"].values, np.float64) if n else np.zeros(0)
+    statuses = np.asarray(group["status"].values, np.int8) if n else np.zeros(0, np.int8)
+    return DrivenPoint(drive, targets, owner, statuses,
+                       radii[owner] if len(owner) else np.zeros(0),
+                       max(1, int(t_max / drive.period)))
+
+
 def _prepared(cfg, layout: Layout, drive: Drive
               ) -> tuple[DrivenPoint, xr.Dataset, str | None]:
     g = cfg.grid
@@ -251,11 +272,8 @@ def _prepared(cfg, layout: Layout, drive: Drive
     statuses = np.array([CHAOTIC if a.kind == "chaotic" else CONVERGED if contracting
                          else NEAR for a, (_, contracting) in zip(found, captures)], np.int8)
     radii = np.array([radius for radius, _ in captures])
-    clouds = [a.points if a.kind == "periodic" else a.points[-CLOUD_POINTS:] for a in found]
-    targets = np.concatenate(clouds) if clouds else np.zeros((0, 2))
-    owner = np.concatenate([np.full(len(c), i, np.int16) for i, c in enumerate(clouds)]) \
-        if clouds else np.zeros(0, np.int16)
-    point = DrivenPoint(drive, np.ascontiguousarray(targets), owner, statuses,
+    targets, owner = _targets([a.points for a in found], [a.kind for a in found])
+    point = DrivenPoint(drive, targets, owner, statuses,
                         radii[owner] if len(owner) else np.zeros(0),
                         max(1, int(cfg.integrator.t_max / drive.period)),
                         grid=(layout.x0, layout.v0))
@@ -268,7 +286,8 @@ def _prepared(cfg, layout: Layout, drive: Drive
                    "it is kept as a recurrent (chaotic) one: raise max_period to find it "
                    "periodic")
     # the file stores each attractor's targets: a chaotic cloud's last CLOUD_POINTS points
-    stored = [replace(a, points=c) for a, c in zip(found, clouds)]
+    stored = [a if a.kind == "periodic" else replace(a, points=a.points[-CLOUD_POINTS:])
+              for a in found]
     return point, attractors_dataset(drive, stored, statuses, radii,
                                      cfg.pendulum.drive.max_period), warning
 
