@@ -22,6 +22,7 @@ import numpy as np
 
 from atlas.commands.orbit_driven import DrivenOrbit
 from atlas.errors import AtlasError
+from atlas.views.info_driven import attractor_names
 from atlas.views.style import ATTRACTOR_MARKER, ORBIT_START_MARKER, STYLE, pi_ticks
 
 __all__ = ["plot_driven_orbit", "driven_figure", "wrap_with_breaks"]
@@ -45,10 +46,8 @@ def wrap_with_breaks(theta: np.ndarray, theta_dot: np.ndarray
 
 
 def _name(group, k: int) -> str:
-    if str(group["kind"].values[k]) == "chaotic":
-        return f"#{k} chaotic"
-    return (f"#{k} period {int(group['period'].values[k])}, winding "
-            f"{int(group['winding'].values[k]):+d}").replace("-", "−")
+    """Attractor k as every key names it (:func:`atlas.views.info_driven.attractor_names`)."""
+    return attractor_names(group)[k].replace("-", "−")
 
 
 def _decision(orbit: DrivenOrbit, group) -> str:
@@ -205,7 +204,7 @@ def driven_figure(orbit: DrivenOrbit, tree, index: dict | None, group):
     point's ``/attractors`` node. Its panels are named by their titles and axis labels."""
     from matplotlib.figure import Figure  # no pyplot: a file, never a window or a backend
 
-    fig = Figure(figsize=(16, 8))
+    fig = Figure(figsize=(16, 8), layout="constrained")
     grid = fig.add_gridspec(2, 3, width_ratios=[1.45, 0.75, 0.55], height_ratios=[1, 1.15])
     ax = fig.add_subplot(grid[:, 0])
     ax_t = fig.add_subplot(grid[0, 1:])
@@ -215,7 +214,6 @@ def driven_figure(orbit: DrivenOrbit, tree, index: dict | None, group):
     _returns_panel(ax_p, ax_zoom, fig, orbit, group)
     ax_t.set_title(f"θ(t) from θ0 = {orbit.theta0:.4g} rad, θ̇0 = {orbit.theta_dot0:.4g} rad/s",
                    fontsize=10)
-    fig.tight_layout()
     return fig
 
 

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from atlas.commands.orbit_text import outside_line
 from atlas.models.driven.description import DRIVEN_PENDULUM, NONFINITE
+from atlas.views.info_driven import attractor_names
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -24,15 +25,12 @@ __all__ = ["driven_lines", "attractor_text"]
 
 
 def attractor_text(group: xr.Dataset, k: int | None) -> str:
-    """"attractor #1 (periodic: period 1, winding +1)", "attractor #3 (chaotic)" or "no
-    attractor", from the point's ``/attractors`` node."""
+    """"attractor #1 rotation, period 2, winding -2", "attractor #3 chaotic" or "no
+    attractor", from the point's ``/attractors`` node, named as every key names it
+    (:func:`atlas.views.info_driven.attractor_names`)."""
     if k is None:
         return "no attractor"
-    kind = str(group["kind"].values[k])
-    if kind == "chaotic":
-        return f"attractor #{k} (chaotic)"
-    return (f"attractor #{k} (periodic: period {int(group['period'].values[k])}, winding "
-            f"{int(group['winding'].values[k]):+d})")
+    return f"attractor {attractor_names(group)[k]}"
 
 
 def _status(code: int) -> str:

@@ -21,6 +21,7 @@ from atlas.commands.orbit import plot, report
 from atlas.commands.orbit_driven import follow, open_driven_point
 from atlas.kernels import driven as kernels
 from atlas.models.driven.attractors import Drive
+from atlas.views.info_driven import attractor_names
 from tests.helpers import write_config
 
 CONFIG = """\
@@ -85,8 +86,9 @@ def test_the_printed_label_is_the_stored_one(driven_files, tmp_path, capsys):
         text = capsys.readouterr().out
         keys = [line.split()[0] for line in text.splitlines()]
         assert keys == ["orbit", "drive", "label", "status", "t_trap", "dt/2", "file", "wrote"]
-        assert f"label        attractor #{k} (periodic: period" in text
-        assert f"stored attractor #{k} (periodic" in text
+        names = attractor_names(atlas.open(path)["attractors"].to_dataset())
+        assert f"label        attractor {names[k]}, " in text
+        assert f"stored attractor {names[k]}, " in text
         assert "status       converged: within the capture radius" in text
         assert f"t_trap       {float(ds['t_trap'].values[j, i]):.2f} s" in text
         assert "RK4 with dt = T/32" in text and "t_max = 320 s" in text
