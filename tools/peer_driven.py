@@ -322,6 +322,9 @@ def compare(args) -> dict:
                               for k, c in peer["clusters"].items()},
                  "noise": int(np.sum(np.asarray(peer["labels"]) < 0))},
         "agreement": agreed.as_dict(),
+        "points_per_attractor": {
+            name: np.bincount(labels[labels >= 0], minlength=len(points_theta)).tolist()
+            for name, labels in (("atlas", atlas_labels), ("peer", peer_labels))},
         "disagreeing_flagged_at_half_dt": int(half_dt[disagree].sum()),
         "disagreements": check_disagreements(disagree, theta0, theta_dot0, atlas_labels,
                                              peer_labels, half_dt, cfg, points_theta,
