@@ -13,7 +13,7 @@ CONFIG ?= configs/default.yaml
 output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
 
 .DEFAULT_GOAL := help
-.PHONY: stability help run test test-fast atlas figures bench faults lint clean venv docs
+.PHONY: stability help run test test-fast atlas figures bench bench-peers faults lint clean venv docs
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -e 's/:.*## /\t/' | expand -t 10
@@ -77,6 +77,17 @@ figures: $(RUN) ## the essay's Figures 1-12 → outputs/figures/
 
 bench: $(RUN) ## benchmark table → outputs/bench.json
 	$(BIN)/atlas bench
+
+# The published Python peer, side by side on the same points and machine: pynamicalsys in its
+# own venv (.venv-peers, no dependency of atlas), atlas from .venv (docs/peers.md).
+PEERS := .venv-peers
+
+$(PEERS)/bin/python:
+	$(PYTHON) -m venv $(PEERS)
+	$(PEERS)/bin/python -m pip install --quiet --upgrade pip pynamicalsys
+
+bench-peers: $(RUN) $(PEERS)/bin/python ## pynamicalsys against atlas on the driven pendulum's 128² points → outputs/peer_driven.json
+	$(BIN)/python -m tools.peer_driven --peer-python $(PEERS)/bin/python --out outputs/peer_driven.json
 
 faults: $(DEV) ## soak: kill -9, SIGTERM, disk full, lock races, Dask faults; prints one table
 	$(BIN)/python -m tools.faults
