@@ -303,7 +303,7 @@ def _cmd_zoom(args) -> int:
         (args.theta0, "theta0"), (args.theta_dot0, "theta_dot0"), (args.width, "--width")))
     opts = {name: None if getattr(args, name) is None else parse_number(getattr(args, name),
                                                                          f"--{name}")
-            for name in ("alpha", "omega0", "torque")}
+            for name in ("alpha", "omega0", "torque", "amplitude", "frequency", "phase")}
     if args.num is not None:
         opts["num"] = args.num
     zoom = zoom_config(args.file, theta0, theta_dot0, width, **opts)
@@ -372,6 +372,11 @@ def _add_view_orbit_zoom(sub) -> None:
     p.add_argument("--alpha", help="a parameter atlas: selects the point's damping [1/s]")
     p.add_argument("--omega0", help="a parameter atlas: selects the point's omega0 [rad/s]")
     p.add_argument("--torque", help="a parameter atlas: selects the point's torque [rad/s^2]")
+    p.add_argument("--amplitude", help="a driven atlas: selects the drive's amplitude "
+                   "[rad/s^2]")
+    p.add_argument("--frequency", help="a driven atlas: selects the drive's frequency "
+                   "[rad/s]")
+    p.add_argument("--phase", help="a driven atlas: selects the drive's phase [rad]")
     p.add_argument("-o", "--output", help="write the config here (default: print it)")
     p.set_defaults(func=_cmd_zoom)
 

@@ -77,22 +77,29 @@ def _check_window(theta0: float, theta_dot0: float, width: float, num: int) -> N
 def zoom_config(file: str | Path, theta0: float, theta_dot0: float, width: float, *,
                 num: int = DEFAULT_NUM, alpha: float | None = None,
                 omega0: float | None = None, torque: float | None = None,
-                output: str | Path | None = None) -> Zoom:
+                output: str | Path | None = None, **drive: float | None) -> Zoom:
     """The config of the window ``width`` wide [rad, rad s⁻¹] centred on (``theta0``,
     ``theta_dot0``) at the parameter point of atlas ``file`` that ``alpha``, ``omega0``,
-    ``torque`` select; its output ``output`` (default, next to the file:
+    ``torque`` (and for a driven pendulum's atlas ``drive``: amplitude, frequency, phase)
+    select; its output ``output`` (default, next to the file:
     ``<file's stem>-zoom-<width>-at-<θ0>_<θ̇0>.h5``, so that two zooms of one width around
     different points name different atlases). Bad input raises one AtlasError line."""
-    import yaml
-    from pydantic import ValidationError
 
     from atlas.commands.orbit_file import open_point
-    from atlas.pipeline.config import Config, ConfigError, first_error
     from atlas.store.reader import describe
 
     path = Path(file)  # a config given for it is refused with a hint by the reader
     if not (math.isfinite(width) and width > 0):  # before the file is opened
         raise AtlasError(f"--width must be a finite number > 0, got {width:g}")
+    if _is_driven(path):
+        from atlas.commands.zoom_driven import driven_lines
+
+        body = driven_lines(path, _yaml_number, alpha=alpha, omega0=omega0, torque=torque,
+                            **drive)
+        return _zoom(path, theta0, theta_dot0, width, num, output, body)
+    if any(value is not None for value in drive.values()):
+        raise AtlasError(f"--{next(k for k, v in drive.items() if v is not None)}: {path} is "
+                         "not a driven pendulum's atlas")
     point = open_point(path, alpha=alpha, omega0=omega0, torque=torque)
     try:
         params, dt, t_max, method = point.params, point.dt, point.t_max, point.method
@@ -102,6 +109,49 @@ def zoom_config(file: str | Path, theta0: float, theta_dot0: float, width: float
     sep = {"enabled": True, "tol": point.tol, "max_spacing": None}
     sep.update({k: v for k, v in (stored.get("separatrices") or {}).items() if k in sep})
     enabled = bool(sep["enabled"])
+    n = _yaml_number
+    body = [
+        "pendulum:",
+        f"  alpha: {n(params['alpha'])}    # damping α [1/s]",
+        f"  omega0: {n(params['omega0'])}    # natural frequency ω0 [rad/s]",
+        f"  torque: {n(params.get('torque', 0.0))}    # constant torque τ [rad/s²]",
+        "",
+        "integrator:",
+        f"  dt: {n(dt)}    # RK4 step [s]",
+        f"  t_max: {n(t_max)}    # [s]",
+        f"  method: {method}",
+        "separatrices:",
+        f"  enabled: {'true' if enabled else 'false'}",
+    ]
+    if sep["tol"] is not None and math.isfinite(float(sep["tol"])):
+        body.append(f"  tol: {n(sep['tol'])}")
+    if sep["max_spacing"] is not None:
+        body.append(f"  max_spacing: {n(sep['max_spacing'])}")
+    return _zoom(path, theta0, theta_dot0, width, num, output, body)
+
+
+def _is_driven(path: Path) -> bool:
+    """Whether ``path`` is a driven pendulum's atlas (read from its attributes; a file that
+    cannot be read is left to the readers, which say why)."""
+    from atlas.models.driven.description import DRIVEN_PENDULUM
+    from atlas.store.reader import describe
+
+    try:
+        return describe(path)["attrs"].get("model") == DRIVEN_PENDULUM.name
+    except Exception:  # noqa: BLE001 (the pendulum's reader names the problem)
+        return False
+
+
+def _zoom(path: Path, theta0: float, theta_dot0: float, width: float, num: int,
+          output: str | Path | None, body: list[str]) -> Zoom:
+    """The zoom config: its head, ``body`` (the model's sections: its parameters, then after
+    an empty line the integrator's and the rest) with the grid after the parameters, and the
+    output, validated as ``atlas run`` will validate it."""
+    import yaml
+    from pydantic import ValidationError
+
+    from atlas.pipeline.config import Config, ConfigError, first_error
+
     _check_window(theta0, theta_dot0, width, num)
     tag = f"{width_tag(width)}-at-{theta0:.10g}_{theta_dot0:.10g}"
     if output is None:
@@ -112,27 +162,15 @@ def zoom_config(file: str | Path, theta0: float, theta_dot0: float, width: float
         "# a square window centred on (θ0, θ̇0), at the parameter point and integrator of "
         "that file",
         f"name: {_yaml_text(f'{path.stem}-zoom-{tag}')}",
-        "pendulum:",
-        f"  alpha: {n(params['alpha'])}    # damping α [1/s]",
-        f"  omega0: {n(params['omega0'])}    # natural frequency ω0 [rad/s]",
-        f"  torque: {n(params.get('torque', 0.0))}    # constant torque τ [rad/s²]",
+        *body[:body.index("")],
         f"grid:    # width {width!r} [rad] × {width!r} [rad/s]",
         f"  theta0: {{start: {n(theta0 - half)}, stop: {n(theta0 + half)}, num: {num}}}"
         f"    # θ0 [rad], centre {theta0!r}",
         f"  theta_dot0: {{start: {n(theta_dot0 - half)}, stop: {n(theta_dot0 + half)}, "
         f"num: {num}}}    # θ̇0 [rad/s], centre {theta_dot0!r}",
-        "integrator:",
-        f"  dt: {n(dt)}    # RK4 step [s]",
-        f"  t_max: {n(t_max)}    # [s]",
-        f"  method: {method}",
-        "separatrices:",
-        f"  enabled: {'true' if enabled else 'false'}",
+        *body[body.index("") + 1:],
+        f"output: {_yaml_text(str(output))}",
     ]
-    if sep["tol"] is not None and math.isfinite(float(sep["tol"])):
-        lines.append(f"  tol: {n(sep['tol'])}")
-    if sep["max_spacing"] is not None:
-        lines.append(f"  max_spacing: {n(sep['max_spacing'])}")
-    lines.append(f"output: {_yaml_text(str(output))}")
     text = "\n".join(lines) + "\n"
     try:  # the config is validated as `atlas run` will validate it
         config = Config.model_validate(yaml.safe_load(text))

@@ -60,6 +60,21 @@ class ParameterSection(StrictModel):
                 for combo in itertools.product(*(self.values(n) for n in self.NAMES))]
 
 
+class SearchWindow(StrictModel):
+    """A window of the phase plane, ``theta0`` [lo, hi] [rad] × ``theta_dot0`` [lo, hi]
+    [rad s⁻¹], each lo < hi."""
+
+    theta0: tuple[Number, Number]
+    theta_dot0: tuple[Number, Number]
+
+    @field_validator("theta0", "theta_dot0")
+    @classmethod
+    def _ordered(cls, value):
+        if not value[0] < value[1]:
+            raise ValueError(f"[lo, hi] must have lo < hi, got [{value[0]:g}, {value[1]:g}]")
+        return value
+
+
 class DriveConfig(StrictModel):
     """The periodic torque A cos(Ω t + φ) of the driven pendulum: ``amplitude`` A [rad s⁻²]
     and ``frequency`` Ω [rad s⁻¹] (each a number, a list or a range: dims of a parameter
@@ -71,6 +86,10 @@ class DriveConfig(StrictModel):
     frequency: Numbers
     phase: Number = 0.0
     max_period: int = MAX_PERIOD
+    #: Where the attractors' search spreads its seeds, {theta0: [lo, hi], theta_dot0: [lo,
+    #: hi]} [rad, rad s⁻¹]; None: the grid's window. ``atlas zoom`` writes its file's, so that
+    #: a small window finds (and numbers) the same attractors as the atlas it zooms into.
+    search_window: SearchWindow | None = None
 
     @field_validator("max_period", mode="before")
     @classmethod

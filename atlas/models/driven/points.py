@@ -38,7 +38,7 @@ from atlas.models.driven.description import (
 from atlas.store.schema import summary_dataset
 
 __all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
-           "attractors_dataset", "stored_point"]
+           "attractors_dataset", "stored_point", "search_window"]
 
 #: Returns of P in a row within an attractor's capture radius that decide a label.
 CONFIRM = 8
@@ -216,6 +216,15 @@ class DrivenPlan:
         return summary_dataset(self.layout, out)
 
 
+def search_window(cfg) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Where the attractors' search spreads its seeds: ``pendulum.drive.search_window``, else
+    the grid's window ((θ lo, hi) [rad], (θ̇ lo, hi) [rad s⁻¹])."""
+    given, g = cfg.pendulum.drive.search_window, cfg.grid
+    if given is not None:
+        return (tuple(given.theta0), tuple(given.theta_dot0))
+    return ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
+
+
 def begin(cfg, layout: Layout) -> list[Drive]:
     """Every point's drive (nothing to refuse here: the config's checks hold)."""
     return drives(cfg, layout)
@@ -261,8 +270,7 @@ def stored_point(group: xr.Dataset, params: dict[str, float], t_max: float) -> D
 
 def _prepared(cfg, layout: Layout, drive: Drive
               ) -> tuple[DrivenPoint, xr.Dataset, str | None]:
-    g = cfg.grid
-    window = ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
+    window = search_window(cfg)
     found = find_attractors(drive, window, max_period=cfg.pendulum.drive.max_period)
     largest = capture_radius(found)
     captures = [capture(drive, a, largest,
@@ -288,8 +296,11 @@ def _prepared(cfg, layout: Layout, drive: Drive
     # the file stores each attractor's targets: a chaotic cloud's last CLOUD_POINTS points
     stored = [a if a.kind == "periodic" else replace(a, points=a.points[-CLOUD_POINTS:])
               for a in found]
-    return point, attractors_dataset(drive, stored, statuses, radii,
-                                     cfg.pendulum.drive.max_period), warning
+    ds = attractors_dataset(drive, stored, statuses, radii, cfg.pendulum.drive.max_period)
+    ds.attrs["search_window"] = np.array(window, np.float64).ravel()
+    ds.attrs["search_window_comment"] = ("theta0 lo, hi [rad], theta_dot0 lo, hi [rad s-1]: "
+                                         "where the attractors' search spread its seeds")
+    return point, ds, warning
 
 
 def plan(cfg, layout: Layout, begun: list[Drive], track=None) -> DrivenPlan:
