@@ -71,9 +71,12 @@ def _attractor_lines(ds: xr.Dataset, group: xr.Dataset | None, model: Model) -> 
                      f"{error.get(i, 0.0):.4f} of the grid (labels {status}, capture radius "
                      f"{float(group['capture_radius'].values[i]):.3g})")
     changed = float(ds["changed_at_half_dt_fraction"])
-    lines.append(f"  ± : the grid count's binomial standard error plus its change at dt/2 "
-                 f"({changed:.2%} of the labels change when dt is halved); a fractal "
-                 "boundary's grid bias is not in it")
+    how = ("the larger of the grid count's binomial standard error and its spread over the "
+           "grid's four interleaved half-resolution grids"
+           if "basin_fraction_shifted_spread" in ds else
+           "the grid count's binomial standard error")
+    lines.append(f"  ± : {how}, plus its change at dt/2 ({changed:.2%} of the labels change "
+                 "when dt is halved)")
     return lines
 
 

@@ -111,13 +111,18 @@ DRIVEN_PENDULUM = Model(
     basin_variables={
         "basin_fraction": {"long_name": "fraction of the grid points labelled k (a count, "
                                         "not an area)"},
+        "basin_fraction_shifted_spread": {
+            "long_name": "spread of basin_fraction over the grid's four interleaved "
+                         "half-resolution grids (row and column parity), as an error of "
+                         "the whole grid's fraction: their standard deviation over 2"},
         "basin_fraction_error": {
             "long_name": "uncertainty of basin_fraction as an estimate of the basin's share "
                          "of the window",
-            "comment": "the binomial standard error sqrt(f (1 - f) / N) over the grid's N "
-                       "points, taken as a sample of the window, plus |f - f(dt/2)|, the "
+            "comment": "the larger of the binomial standard error sqrt(f (1 - f) / N) over "
+                       "the grid's N points and basin_fraction_shifted_spread (what the "
+                       "grid's own lattice does to the count), plus |f - f(dt/2)|, the "
                        "change of the share when every point is labelled again with half "
-                       "the step; a fractal boundary's grid bias is not in it"},
+                       "the step"},
     },
     point_variables={
         "unresolved_fraction": {"long_name": "fraction of the grid without a label "
