@@ -57,7 +57,8 @@ def driven(tmp_path_factory):
 
 def test_undriven_pendulum_boundaries_are_smooth():
     """The undriven pendulum's wells on 200² of [−π, π] × [−4, 4] (atlas.label): α = 1
-    within 0.05 from the grid (scale "span") and from random points; S_bb < ln 2 and Puy's
+    within 0.05 from the grid (scale "span"; 0.97) and from random points (0.99; ε up to
+    0.1 of the window gives 0.95: neighbouring boundaries within ε); S_bb < ln 2 and Puy's
     test says smooth."""
     theta = np.linspace(-math.pi, math.pi, 200)
     theta_dot = np.linspace(-4, 4, 200)
@@ -69,8 +70,8 @@ def test_undriven_pendulum_boundaries_are_smooth():
     assert len(np.unique(labels)) >= 3
     grid = uncertainty_exponent_grid(labels, range(2, 16), scale="span")
     assert grid.alpha == pytest.approx(1.0, abs=0.05)
-    points = uncertainty_exponent(label, ((-math.pi, math.pi), (-4, 4)), n_points=10_000,
-                                  eps_range=(1e-3, 1e-1), n_eps=5)
+    points = uncertainty_exponent(label, ((-math.pi, math.pi), (-4, 4)), n_points=30_000,
+                                  eps_range=(3e-4, 3e-2), n_eps=5)
     assert points.alpha == pytest.approx(1.0, abs=max(0.05, 3 * points.alpha_error))
     assert basin_entropy(labels, 5).sbb < LN2
     assert not fractal_test(labels, 5).fractal
