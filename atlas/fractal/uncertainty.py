@@ -38,7 +38,7 @@ __all__ = ["UncertaintyExponent", "fit_exponent", "uncertainty_exponent",
            "uncertainty_exponent_grid"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class UncertaintyExponent:
     """The uncertainty exponent and what it was fitted to.
 

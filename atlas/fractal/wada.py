@@ -38,7 +38,7 @@ _SQUARE = np.ones((3, 3), bool)
 _NEIGHBOURS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class WadaGrid:
     """The grid method's answer. ``w``: W_1 … W_N after the last refinement (``w[m − 1]``:
     the share of boundary cells that saw m basins); ``history``: W after each refinement,
@@ -91,20 +91,20 @@ def wada_grid(labels, x, y, label: Callable, *, max_refinements: int = 5,
     if n < 2:
         raise ValueError("the grid method needs two basins or more")
     rows, cols = np.nonzero(boundary_cells(labels, missing))
-    colours = [set() for _ in rows]
+    known = list(values)  # the labels met so far: a column of `seen` each
+    seen = np.zeros((len(rows), max(n, len(known))), bool)
     partner = np.full((len(rows), 2), -1)
     for di, dj in ((0, 0),) + _NEIGHBOURS:
         i, j = rows + di, cols + dj
         inside = (i >= 0) & (i < labels.shape[0]) & (j >= 0) & (j < labels.shape[1])
         ic, jc = np.clip(i, 0, labels.shape[0] - 1), np.clip(j, 0, labels.shape[1] - 1)
         ok = inside & ~missing[ic, jc]
-        for k in np.nonzero(ok)[0]:
-            colours[k].add(int(labels[ic[k], jc[k]]))
+        seen[np.nonzero(ok)[0], np.searchsorted(values, labels[ic, jc][ok])] = True
         new = ok & (partner[:, 0] < 0) & (labels[ic, jc] != labels[rows, cols])
         partner[new] = np.column_stack([ic, jc])[new]
 
     def shares():
-        m = np.array([len(c) for c in colours], int)
+        m = seen.sum(axis=1)
         if m.size and m.max() > n:
             raise ValueError(f"a boundary cell saw {m.max()} basins, more than n_basins={n}")
         return np.bincount(m, minlength=n + 1)[1:] / max(len(m), 1)
@@ -115,24 +115,29 @@ def wada_grid(labels, x, y, label: Callable, *, max_refinements: int = 5,
     labelled = unlabelled = 0
     q = 0
     for q in range(1, max_refinements + 1):
-        todo = np.array([k for k, c in enumerate(colours) if len(c) < n], int)
+        todo = np.nonzero(seen.sum(axis=1) < n)[0]
         if todo.size == 0:
             q -= 1
             break
         t = np.arange(1, 2 ** q, 2) / 2 ** q
         pts = p1[todo, None, :] + t[None, :, None] * (p2[todo] - p1[todo])[:, None, :]
-        got = np.asarray(label(pts[..., 0].ravel(), pts[..., 1].ravel())).reshape(
-            len(todo), len(t))
+        got = np.asarray(label(pts[..., 0].ravel(), pts[..., 1].ravel())).reshape(-1)
         labelled += got.size
-        unlabelled += int((got == fill).sum()) if fill is not None else 0
-        for k, row in zip(todo, got):
-            colours[k].update(int(v) for v in row[row != fill])
+        ok = np.ones(got.shape, bool) if fill is None else got != fill
+        unlabelled += int((~ok).sum())
+        for v in np.setdiff1d(got[ok], known):  # a basin the grid did not show
+            known.append(v)
+            if len(known) > seen.shape[1]:
+                seen = np.column_stack([seen, np.zeros(len(seen), bool)])
+        lookup = {v: c for c, v in enumerate(known)}
+        column = np.array([lookup[v] for v in got[ok].tolist()], int)
+        seen[np.repeat(todo, len(t))[ok], column] = True
         history.append(shares())
     history = np.array(history)
     return WadaGrid(history[-1], history, n, len(rows), q, labelled, unlabelled)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class WadaMerge:
     """The merging method's answer. ``basins``: the labels, in order; ``hausdorff``: the
     matrix of Hausdorff distances [cells] between the boundaries of the merged pictures

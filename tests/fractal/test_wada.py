@@ -118,3 +118,24 @@ def test_grid_method_ignores_unlabelled_points():
     w = wada_grid(labels, X, Y, none, max_refinements=2)
     assert w.n_unlabelled == w.n_labelled > 0
     assert np.array_equal(w.history[0], w.history[-1])
+
+
+def test_grid_method_counts_a_basin_the_grid_does_not_show():
+    """A thin basin 2 along x = 0.01, narrower than the grid's spacing, between basins 0
+    and 1: the grid shows two labels; the refinement finds the third on every segment that
+    crosses x = 0.01. With n_basins=3 W_3 counts them; with the grid's own count (two)
+    every boundary cell is done before any refinement."""
+    h = X[1] - X[0]
+
+    def thin(x, y):
+        x = np.asarray(x)
+        return np.where(np.abs(x - 0.01) < h / 20, 2, (x > 0.01).astype(int)) \
+            + 0 * np.asarray(y, int)
+
+    labels = grid_of(thin)
+    assert set(np.unique(labels)) == {0, 1}
+    w = wada_grid(labels, X, Y, thin, n_basins=3, max_refinements=5)
+    assert w.w[2] > 0.3 and w.history[0, 2] == 0.0
+    two = wada_grid(labels, X, Y, thin, max_refinements=5)
+    assert two.n_basins == 2 and two.refinements == 0 and two.w[1] == 1.0
+    assert two.n_labelled == 0
