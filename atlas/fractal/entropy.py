@@ -66,6 +66,27 @@ def _entropies(counts: np.ndarray) -> np.ndarray:
     return terms.sum(axis=-1)
 
 
+def _box_counts(labels, box, mask, unlabelled, trim, fill) -> np.ndarray:
+    """The count of each label code in each box: an array (box rows, box columns, codes)."""
+    codes, counted = labelled_matrix(labels, mask, unlabelled, fill)
+    b0, b1 = (box, box) if np.isscalar(box) else tuple(box)
+    b0, b1 = int(b0), int(b1)
+    if b0 < 1 or b1 < 1:
+        raise ValueError(f"a box has at least one cell a side, not {(b0, b1)}")
+    rows, cols = codes.shape
+    if (rows % b0 or cols % b1) and not trim:
+        raise ValueError(f"a {rows} x {cols} matrix is not tiled by {b0} x {b1} boxes "
+                         "(trim=True drops the cells left over)")
+    n0, n1 = rows // b0, cols // b1
+    codes = codes[:n0 * b0, :n1 * b1].reshape(n0, b0, n1, b1)
+    keep = counted[:n0 * b0, :n1 * b1].reshape(n0, b0, n1, b1)
+    k = int(codes.max()) + 1 if codes.size else 1
+    box_index = np.broadcast_to(np.arange(n0)[:, None, None, None] * n1
+                                + np.arange(n1)[None, None, :, None], codes.shape)
+    return np.bincount((box_index * k + codes)[keep], minlength=n0 * n1 * k
+                       ).reshape(n0, n1, k)
+
+
 def box_entropies(labels, box, *, mask=None, unlabelled: str = "basin", trim: bool = False,
                   fill: int | None = FILL) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per box of ``box`` cells (an int, or (rows, columns)) tiling ``labels`` from its first
@@ -73,27 +94,7 @@ def box_entropies(labels, box, *, mask=None, unlabelled: str = "basin", trim: bo
     cells, each as a matrix of boxes. A shape not divisible by the box is an error (as in
     Attractors.jl) unless ``trim``: then the last rows and columns that fill no whole box are
     dropped."""
-    codes, counted = labelled_matrix(labels, mask, unlabelled, fill)
-    b0, b1 = (box, box) if np.isscalar(box) else tuple(box)
-    b0, b1 = int(b0), int(b1)
-    if b0 < 1 or b1 < 1:
-        raise ValueError(f"a box has at least one cell a side, not {(b0, b1)}")
-    rows, cols = codes.shape
-    if rows % b0 or cols % b1:
-        if not trim:
-            raise ValueError(f"a {rows} x {cols} matrix is not tiled by {b0} x {b1} boxes "
-                             "(trim=True drops the cells left over)")
-    n0, n1 = rows // b0, cols // b1
-    codes = codes[:n0 * b0, :n1 * b1]
-    counted = counted[:n0 * b0, :n1 * b1]
-    k = int(codes.max()) + 1 if codes.size else 1
-    box_index = (np.arange(n0)[:, None, None, None] * n1
-                 + np.arange(n1)[None, None, :, None])
-    box_index = np.broadcast_to(box_index, (n0, b0, n1, b1)).reshape(-1)
-    flat_codes = codes.reshape(n0, b0, n1, b1).reshape(-1)
-    keep = counted.reshape(n0, b0, n1, b1).reshape(-1)
-    counts = np.bincount(box_index[keep] * k + flat_codes[keep],
-                         minlength=n0 * n1 * k).reshape(n0, n1, k)
+    counts = _box_counts(labels, box, mask, unlabelled, trim, fill)
     return _entropies(counts), (counts > 0).sum(axis=-1), counts.sum(axis=-1)
 
 
@@ -103,21 +104,21 @@ def basin_entropy(labels, box, *, mask=None, unlabelled: str = "basin", trim: bo
     or (rows, columns)), as Daza et al. 2016 and Attractors.jl's ``basin_entropy``.
 
     Unlabelled cells (``mask`` True, by default the cells that hold ``fill``, atlas's
-    −32768: :mod:`atlas.fractal.labels`) are by default one more
-    basin (``unlabelled="basin"``, as Attractors.jl, which counts −1 as an ID); with
+    −32768: :mod:`atlas.fractal.labels`) are by default one more basin
+    (``unlabelled="basin"``, as Attractors.jl, which counts −1 as an ID); with
     ``unlabelled="exclude"`` they are left out: a box's frequencies are over its labelled
     cells, and a box with none is not counted in N. ``trim``: see :func:`box_entropies`."""
-    s, m, n = box_entropies(labels, box, mask=mask, unlabelled=unlabelled, trim=trim,
-                            fill=fill)
+    counts = _box_counts(labels, box, mask, unlabelled, trim, fill)
+    s, m, n = _entropies(counts), (counts > 0).sum(axis=-1), counts.sum(axis=-1)
     boxes = n > 0
     boundary = m >= 2
     n_boxes, n_boundary = int(boxes.sum()), int(boundary.sum())
     total = float(s[boxes].sum())
     sb = total / n_boxes if n_boxes else math.nan
     sbb = total / n_boundary if n_boundary else math.nan
-    codes, counted = labelled_matrix(labels, mask, unlabelled, fill)
     b = (int(box), int(box)) if np.isscalar(box) else (int(box[0]), int(box[1]))
-    return BasinEntropy(sb, sbb, b, n_boxes, n_boundary, int(np.unique(codes[counted]).size),
+    return BasinEntropy(sb, sbb, b, n_boxes, n_boundary,
+                        int((counts.sum(axis=(0, 1)) > 0).sum()),
                         bool(n_boundary and sbb > math.log(2)), unlabelled)
 
 
