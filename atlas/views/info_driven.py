@@ -16,7 +16,8 @@ from atlas.views.style import attractor_colours
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["driven_lines", "attractor_name", "attractor_names", "attractor_key"]
+__all__ = ["driven_lines", "attractor_name", "attractor_names", "attractor_key",
+           "measure_lines"]
 
 
 def attractor_name(kind: str, period: int, winding: int) -> str:
@@ -80,6 +81,38 @@ def _attractor_lines(ds: xr.Dataset, group: xr.Dataset | None, model: Model) -> 
     return lines
 
 
+def measure_lines(ds: xr.Dataset) -> list[str]:
+    """The fractal measures of one point's map (:mod:`atlas.models.driven.measures`), each
+    with what it is and how far it goes; none for a file without them."""
+    if "boundary_basin_entropy" not in ds:
+        return []
+    sbb, fractal = float(ds["boundary_basin_entropy"]), float(ds["fractal_boundary"])
+    lines = [f"fractal measures of the map (labels of the RK4 stroboscopic map, "
+             f"boxes of {ds['basin_entropy'].attrs.get('box', '5 x 5 grid points')})",
+             f"  basin entropy S_b {float(ds['basin_entropy']):.4f}, boundary basin entropy "
+             f"S_bb {sbb:.4f} nats: " + (
+                 "> ln 2 = 0.6931, the boundary is fractal" if fractal == 1 else
+                 "not above ln 2: no evidence of a fractal boundary from this test (which "
+                 "two basins can never pass)")]
+    alpha = float(ds["uncertainty_exponent"])
+    if np.isfinite(alpha):
+        eps = ds["epsilon"].values
+        lines.append(f"  uncertainty exponent alpha {alpha:.3f} ± "
+                     f"{float(ds['uncertainty_exponent_error']):.3f} (the fit's standard error "
+                     f"only), from {int(ds['uncertain_fraction'].attrs['n_points']):,} random "
+                     f"points at epsilon {eps[0]:.0e} to {eps[-1]:.0e} of the window: boundary "
+                     f"dimension D = 2 - alpha = {float(ds['boundary_dimension']):.3f}"
+                     + (" (a smooth boundary has alpha = 1)" if alpha < 0.9 else ""))
+    wada = ds["wada"].values[np.isfinite(ds["wada"].values)]
+    if wada.size:
+        shares = ", ".join(f"W_{m} {w:.3f}" for m, w in enumerate(wada, 1))
+        lines.append(f"  Wada grid method: {shares} (W_{wada.size}: the share of boundary "
+                     f"cells that meet all {wada.size} basins; 1 for Wada basins); merging "
+                     f"method: Hausdorff distances {float(ds['wada_merge_distance_min']):.2f}"
+                     f" to {float(ds['wada_merge_distance_max']):.2f} cells")
+    return lines
+
+
 def driven_lines(tree: xr.DataTree, model: Model, chosen: list[dict] | None = None
                  ) -> list[str]:
     """The summary of a driven pendulum's atlas: the grid, then every parameter point
@@ -91,6 +124,7 @@ def driven_lines(tree: xr.DataTree, model: Model, chosen: list[dict] | None = No
         lines.append(f"pendulum  {point_label(point)}")
         group = point_group(tree, "attractors", point)
         lines += ["  " + line for line in _attractor_lines(at_point(ds, point), group, model)]
+        lines += ["  " + line for line in measure_lines(at_point(ds, point))]
         if "status" in ds:  # the file (atlas run's summary holds no map)
             status = at_point(ds, point)["status"].values
             counts = {name: int(np.sum(status == code)) for code, name in model.statuses.items()}

@@ -28,6 +28,7 @@ from atlas.views.maps import MAP_FIGURES, basin_map, boundary_distance_map, trap
 from atlas.views.multiples import draw_multiples, multiples_scene, multiples_size
 from atlas.views.selectors import choose_points, point_index, point_suffix
 from atlas.views.style import CURVE_SIZE, MAP_SIZE, PNG_OPTIONS, STYLE
+from atlas.views.uncertainty import draw_uncertainty, has_uncertainty, uncertainty_scene
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -75,6 +76,9 @@ def _figure_jobs(tree: xr.DataTree, path: Path, outdir: Path | None = None,
         scene = multiples_scene(tree)
         jobs.insert(0, (out(""), multiples_size(len(scene["panels"])), draw_multiples,
                         scene, dpi))
+    if has_uncertainty(ds):  # a driven pendulum's: f(ε) and its fit
+        jobs.append((out("_uncertainty"), CURVE_SIZE, draw_uncertainty,
+                     uncertainty_scene(tree), dpi))
     fractions, stability = CURVE_FIGURES["fractions"], CURVE_FIGURES["basin_stability"]
     swept = tree.to_dataset(inherit=False).dims
     exact = "basin_fraction_exact" in ds  # the curves draw the exact fractions

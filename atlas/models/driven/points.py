@@ -136,7 +136,8 @@ class DrivenPoint:
 
         unlabelled = np.int64(np.isin(status, (UNRESOLVED, NONFINITE)).sum())
         tally = {"count": count(attractor), "count_half_dt": count(again),
-                 "changed": np.int64(changed.sum()), "unlabelled": unlabelled}
+                 "changed": np.int64(changed.sum()), "unlabelled": unlabelled,
+                 "labels": attractor}  # the map's rows, for the fractal measures
         if self.grid is not None and rows is not None:
             # the four interleaved half-resolution grids (row parity, column parity)
             row_parity = np.arange(len(self.grid[1]))[rows] % 2
@@ -241,7 +242,46 @@ class DrivenPlan:
                         "changed_at_half_dt_fraction":
                             sum(int(t["changed"]) for t in tally) / n,
                         "attractor_count": float(len(f))})
-        return summary_dataset(self.layout, out)
+        return summary_dataset(self.layout, out).merge(self._measured(tallies))
+
+    def _measured(self, tallies: list[list[dict]]) -> xr.Dataset:
+        """The fractal measures of every point's map (:mod:`atlas.models.driven.measures`),
+        from its tiles' rows; none where a tile holds no rows (a partial run of an earlier
+        version)."""
+        from atlas.models.driven import measures
+
+        layout = self.layout
+        if not all("labels" in t for tally in tallies for t in tally):
+            return xr.Dataset()
+        found = [measures.measure(point, np.concatenate([t["labels"] for t in tally]),
+                                  layout.x0, layout.v0, len(point.attractor_status))
+                 for point, tally in zip(self.points, tallies)]
+        lead, dims = layout.parameter_shape, layout.swept
+        seen = max([len(m["wada"]) for m in found] + [1])
+        data = {}
+        for name, attrs in MEASURES.items():
+            values = np.array([m[name] for m in found], np.float64).reshape(lead)
+            data[name] = (dims, values, attrs)
+        data["uncertain_fraction"] = (
+            (*dims, "epsilon"), np.array([m["uncertain_fraction"] for m in found]).reshape(
+                *lead, len(measures.EPSILONS)),
+            {"units": "1", "long_name": "fraction f of the random initial conditions whose "
+                                        "label changes when moved by +-epsilon",
+             "n_points": np.int64(measures.UNCERTAIN_POINTS), "seed": np.int64(measures.SEED)})
+        wada = np.full((len(found), seen), np.nan)
+        for row, m in zip(wada, found):
+            row[:len(m["wada"])] = m["wada"]
+        data["wada"] = ((*dims, "basins_seen"), wada.reshape(*lead, seen), {
+            "units": "1", "long_name": "Wada grid method: W_m, the share of boundary cells "
+                                      "whose refined neighbourhood meets m basins",
+            "thinned_to_at_most": np.int64(measures.WADA_CELLS),
+            "refinements": np.int64(measures.WADA_REFINEMENTS),
+            "reference": "Daza, Wagemakers, Sanjuan & Yorke, Sci. Rep. 5, 16579 (2015)"})
+        return xr.Dataset(data, coords={
+            "epsilon": ("epsilon", measures.EPSILONS, {
+                "units": "1", "long_name": "perturbation as a fraction of the window's sides"}),
+            "basins_seen": ("basins_seen", np.arange(1, seen + 1, dtype=np.int16), {
+                "units": "1", "long_name": "number m of basins a boundary cell meets"})})
 
 
 def search_window(cfg) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -251,6 +291,34 @@ def search_window(cfg) -> tuple[tuple[float, float], tuple[float, float]]:
     if given is not None:
         return (tuple(given.theta0), tuple(given.theta_dot0))
     return ((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop))
+
+
+#: The scalar fractal measures stored per point (:mod:`atlas.models.driven.measures`).
+MEASURES = {
+    "basin_entropy": {"units": "1", "long_name": "basin entropy S_b (natural log)",
+                      "box": "5 x 5 grid points",
+                      "reference": "Daza et al., Sci. Rep. 6, 31416 (2016)"},
+    "boundary_basin_entropy": {"units": "1", "long_name": "boundary basin entropy S_bb "
+                               "(natural log)", "box": "5 x 5 grid points"},
+    "fractal_boundary": {"units": "1", "long_name": "1 where S_bb > ln 2, a sufficient "
+                         "(not necessary) condition of a fractal boundary; never with two "
+                         "basins"},
+    "uncertainty_exponent": {"units": "1", "long_name": "uncertainty exponent alpha: "
+                             "f(epsilon) ~ epsilon^alpha, least-squares fit in log-log",
+                             "reference": "Grebogi, McDonald, Ott & Yorke, Phys. Lett. A "
+                                          "99, 415 (1983)"},
+    "uncertainty_exponent_error": {"units": "1", "long_name": "standard error of the "
+                                   "uncertainty exponent's fit (not its whole uncertainty)"},
+    "boundary_dimension": {"units": "1", "long_name": "box-counting dimension of the basin "
+                           "boundary, 2 - alpha"},
+    "wada_merge_distance_max": {"units": "1", "long_name": "merging method: largest "
+                                "Hausdorff distance between a basin's boundary and the "
+                                "others' [cells of the thinned map]",
+                                "reference": "Daza, Wagemakers & Sanjuan, Sci. Rep. 8, 9954 "
+                                             "(2018)"},
+    "wada_merge_distance_min": {"units": "1", "long_name": "merging method: smallest such "
+                                "Hausdorff distance [cells of the thinned map]"},
+}
 
 
 def begin(cfg, layout: Layout) -> list[Drive]:
