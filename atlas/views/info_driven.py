@@ -106,10 +106,12 @@ def measure_lines(ds: xr.Dataset) -> list[str]:
     wada = ds["wada"].values[np.isfinite(ds["wada"].values)]
     if wada.size:
         shares = ", ".join(f"W_{m} {w:.3f}" for m, w in enumerate(wada, 1))
+        merged = float(ds["wada_merge_distance_max"])
         lines.append(f"  Wada grid method: {shares} (W_{wada.size}: the share of boundary "
-                     f"cells that meet all {wada.size} basins; 1 for Wada basins); merging "
-                     f"method: Hausdorff distances {float(ds['wada_merge_distance_min']):.2f}"
-                     f" to {float(ds['wada_merge_distance_max']):.2f} cells")
+                     f"cells that meet all {wada.size} basins; 1 for Wada basins)" + (
+                         f"; merging method: Hausdorff distances "
+                         f"{float(ds['wada_merge_distance_min']):.2f} to {merged:.2f} cells"
+                         if np.isfinite(merged) else ""))
     return lines
 
 

@@ -20,7 +20,7 @@ from atlas.fractal import (
     wada_grid,
     wada_merge,
 )
-from atlas.models.driven.points import DrivenPoint
+from atlas.models.driven.points import stored_point
 from tests.helpers import write_config
 
 pytestmark = pytest.mark.slow  # runs atlas (compiled kernels; seconds once cached)
@@ -43,14 +43,13 @@ integrator: {dt: pi/100, t_max: 600}
 @pytest.fixture(scope="module")
 def driven(tmp_path_factory):
     """The 100 × 100 atlas of the Wada case (t_max 600 s), and its labelling as a callable
-    ``label(θ0, θ̇0)`` (DrivenPoint.stored: the run's own rule, from its attractors)."""
+    ``label(θ0, θ̇0)`` (stored_point: the run's own rule, from its attractors)."""
     tmp = tmp_path_factory.mktemp("fractal")
     cfg = atlas.load_config(write_config(tmp / "wada.yaml", CONFIG))
     tree = atlas.run(cfg, output=None, quiet=True)
     ds = tree.to_dataset(inherit=False)
     params = atlas.layout.points(ds)[0]
-    point = DrivenPoint.stored(atlas.layout.point_group(tree, "attractors", params), params,
-                               600.0)
+    point = stored_point(atlas.layout.point_group(tree, "attractors", params), params, 600.0)
     return (ds["attractor"].values, ds["theta0"].values, ds["theta_dot0"].values,
             lambda x, v: point.label(x, v)[0])
 

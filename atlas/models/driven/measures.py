@@ -56,27 +56,32 @@ def measure(point, labels: np.ndarray, x0: np.ndarray, v0: np.ndarray, n_attract
            "uncertain_fraction": np.full(len(EPSILONS), np.nan),
            "wada": np.full(n_attractors, np.nan), "wada_merge_distance_max": math.nan,
            "wada_merge_distance_min": math.nan}
-    if min(labels.shape) >= BOX:
+    if min(labels.shape) >= BOX and np.any(labels != ATTRACTOR_FILL):
         entropy = basin_entropy(labels, BOX, trim=True, fill=ATTRACTOR_FILL)
         out.update(basin_entropy=entropy.sb, boundary_basin_entropy=entropy.sbb,
                    fractal_boundary=float(entropy.fractal))
     if n_attractors < 2:
         return out
     window = ((float(x0[0]), float(x0[-1])), (float(v0[0]), float(v0[-1])))
-    exponent = uncertainty_exponent(label, window, EPSILONS, n_points=UNCERTAIN_POINTS,
-                                    seed=SEED, fill=ATTRACTOR_FILL)
-    out.update(uncertainty_exponent=exponent.alpha,
-               uncertainty_exponent_error=exponent.alpha_error,
-               boundary_dimension=exponent.dimension,
-               uncertain_fraction=np.asarray(exponent.f, float))
+    try:
+        exponent = uncertainty_exponent(label, window, EPSILONS, n_points=UNCERTAIN_POINTS,
+                                        seed=SEED, fill=ATTRACTOR_FILL)
+    except ValueError:  # fewer than two ε met an uncertain point: no exponent to fit
+        pass
+    else:
+        out.update(uncertainty_exponent=exponent.alpha,
+                   uncertainty_exponent_error=exponent.alpha_error,
+                   boundary_dimension=exponent.dimension,
+                   uncertain_fraction=np.asarray(exponent.f, float))
     step = max(1, math.ceil(max(labels.shape) / WADA_CELLS))
     thin = labels[::step, ::step]
     present = np.unique(thin[thin != ATTRACTOR_FILL])
     if len(present) >= 2:
         grid = wada_grid(thin, x0[::step], v0[::step], label, n_basins=n_attractors,
                          max_refinements=WADA_REFINEMENTS, fill=ATTRACTOR_FILL)
+        out.update(wada=np.asarray(grid.w, float)[:n_attractors])
+    if len(present) >= 3:  # the merging method compares three basins or more
         merged = wada_merge(thin, fill=ATTRACTOR_FILL)
-        out.update(wada=np.asarray(grid.w, float)[:n_attractors],
-                   wada_merge_distance_max=float(merged.d_max),
+        out.update(wada_merge_distance_max=float(merged.d_max),
                    wada_merge_distance_min=float(merged.d_min))
     return out
