@@ -168,11 +168,13 @@ def _orbit_diagram(ds: xr.Dataset, dim: str):
         axes[1].set_xlabel(_AXIS.get(dim, dim))
         axes[0].set_title("attractors on the stroboscopic map P, followed along the sweep",
                           loc="left")
-        handles, labels = axes[0].get_legend_handles_labels()
-        for h in handles:
-            h.set_sizes([20])
-        fig.legend(handles, labels, loc="outside right upper", markerscale=1.5,
-                   fontsize=7, ncols=1 if len(labels) <= 24 else 2,
+        from matplotlib.lines import Line2D
+
+        ids = [int(g) for g in ds["attractor_id"].values]
+        handles = [Line2D([], [], ls="", marker=markers[g], color=colours[g], ms=5)
+                   for g in ids]  # proxies: the scatters keep their sizes
+        fig.legend(handles, [names[g] for g in ids], loc="outside right upper",
+                   fontsize=7, ncols=1 if len(ids) <= 24 else 2,
                    title="fine points: chaotic", title_fontsize=7)
 
     return draw
@@ -212,23 +214,25 @@ def _fraction_curves(ds: xr.Dataset, dim: str):
             ax.plot(x, u, ":", color="0.3", lw=1.2, label="unresolved")
         span = x[-1] - x[0] if x.size > 1 else 1.0
         top = ax.get_ylim()[1]
-        for group in _groups(_events(ds), 0.006 * span):
+        for group in _groups(_events(ds), 0.012 * span):
             value = float(np.mean([g[0] for g in group]))
             kinds = {g[2] for g in group}
             colour = _EVENT_COLOUR[kinds.pop()] if len(kinds) == 1 else "0.35"
             ax.axvline(value, color=colour, ls="--", lw=0.8, zorder=1)
-            tag = " ".join(f"{_EVENT_SHORT[k]}{g}" for _, _, k, g, _, _ in group)
-            ax.text(value, 1.01, tag, transform=ax.get_xaxis_transform(), rotation=90,
-                    ha="center", va="bottom", fontsize=6.5, color=colour)
+            tags = [f"{_EVENT_SHORT[k]}{g}" for _, _, k, g, _, _ in group]
+            tag = "\n".join(" ".join(tags[i:i + 5]) for i in range(0, len(tags), 5))
+            ax.text(value, 1.01, tag, linespacing=1.0, transform=ax.get_xaxis_transform(), rotation=90,
+                    ha="center", va="bottom", fontsize=7.5, color=colour)
         ax.set_ylim(0, max(top, 0.05))
         ax.set_xlim(x[0], x[-1]) if x.size > 1 else None
         ax.set_xlabel(_AXIS.get(dim, dim))
         ax.set_ylabel(f"basin fraction ({n:,} samples; band ±1 s.e.)")
-        ax.set_title("basin fractions of the attractors followed along the sweep\n"
-                     "dashed: located bifurcations (+ birth, − death, ~ period change of "
-                     "the attractor #)", fontsize=10, pad=38)
-        fig.legend(loc="outside right upper", fontsize=7,
-                   ncols=1 if len(names) <= 24 else 2)
+        fig.suptitle("basin fractions of the attractors followed along the sweep; dashed: "
+                     "located bifurcations\n(+ birth, − death, ~ period change of the "
+                     "attractor #; events within 1.2 % of the range share a line)",
+                     fontsize=10)
+        fig.legend(loc="outside lower center", fontsize=7.5,
+                   ncols=min(4, max(1, (len(names) + 1 + 3) // 4)))
 
     return draw
 
@@ -260,8 +264,9 @@ def plot_driven_study(ds: xr.Dataset, path: Path, outdir=None, fmt: str = "png",
     folder = Path(outdir) if outdir is not None else path.parent
     stem = path.name.removesuffix(path.suffix)
     wide = 12 if ds.sizes["attractor_id"] > 24 else 10.5
+    rows = -(-(ds.sizes["attractor_id"] + 1) // 4)  # the fractions' legend, 4 columns
     figures = [(f"{stem}_orbits", (wide, 7.0), _orbit_diagram(ds, dim)),
-               (f"{stem}_fractions", (wide, 6.0), _fraction_curves(ds, dim))]
+               (f"{stem}_fractions", (10.5, 6.5 + 0.16 * rows), _fraction_curves(ds, dim))]
     paths = [folder / f"{name}.{fmt}" for name, _, _ in figures]
     for out in paths:
         check_output(out, "figure", inputs=(path,), option="--outdir", command="atlas plot")
