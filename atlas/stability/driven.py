@@ -35,6 +35,7 @@ from atlas.models.driven.continuation import (
     THRESHOLD,
     Event,
     Located,
+    bridge,
     follow,
     locate,
 )
@@ -143,6 +144,17 @@ def _locate_task(params: dict, swept: str, lo: float, hi: float, at_lo: list[Att
                   max_steps=settings.max_steps)
 
 
+def _bridge_task(params: dict, swept: str, lo: float, hi: float, at_lo: list[Attractor],
+                 at_hi: list[Attractor], settings: DrivenSettings,
+                 numba_threads: int | None = None) -> dict[int, int]:
+    """The pairs of two consecutive points, bridged through midpoints (one task)."""
+    from atlas.kernels.threads import use_threads
+
+    use_threads(numba_threads)
+    return bridge(lambda value: _attractors_at(params, swept, value, settings), lo, hi,
+                  at_lo, at_hi, settings.threshold)
+
+
 @dataclass
 class DrivenStudy:
     """A computed study: the points' results in sweep order, each point's global ids
@@ -179,7 +191,18 @@ def compute_study(points: list[dict], swept: str | None, settings: DrivenSetting
             on_result(i, result)
     seconds = {"points": time.perf_counter() - clock}
     clock = time.perf_counter()
-    ids, events = follow([r.attractors for r in results], settings.threshold)
+    found = [r.attractors for r in results]
+    ids, events = follow(found, settings.threshold)
+    if swept is not None:  # steps with both a death and a birth: bridged through midpoints
+        both = sorted({e.step for e in events if e.kind == "birth"} &
+                      {e.step for e in events if e.kind == "death"})
+        tasks = [(results[s].params, swept, results[s].params[swept],
+                  results[s + 1].params[swept], found[s], found[s + 1], settings)
+                 for s in both]
+        pairs = {both[t] + 1: paired for t, paired in
+                 point_results(_bridge_task, tasks, backend=backend, scheduler=scheduler,
+                               workers=workers, per_thread=1)}
+        ids, events = follow(found, settings.threshold, pairs)
     located: list[Located | None] = [None] * len(events)
     steps = sorted({e.step for e in events})
     if steps and swept is not None:

@@ -221,7 +221,8 @@ def _fraction_curves(ds: xr.Dataset, dim: str):
             ax.axvline(value, color=colour, ls="--", lw=0.8, zorder=1)
             tags = [f"{_EVENT_SHORT[k]}{g}" for _, _, k, g, _, _ in group]
             tag = "\n".join(" ".join(tags[i:i + 5]) for i in range(0, len(tags), 5))
-            ax.text(value, 1.01, tag, linespacing=1.0, transform=ax.get_xaxis_transform(), rotation=90,
+            ax.text(value, 1.01, tag, linespacing=1.0, transform=ax.get_xaxis_transform(),
+                    rotation=90,
                     ha="center", va="bottom", fontsize=7.5, color=colour)
         ax.set_ylim(0, max(top, 0.05))
         ax.set_xlim(x[0], x[-1]) if x.size > 1 else None

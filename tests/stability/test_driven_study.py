@@ -81,6 +81,28 @@ def test_an_attractor_that_jumps_farther_than_the_threshold_dies_and_another_is_
     assert [e.kind for e in events] == ["birth", "death"]
 
 
+def test_an_attractor_that_moves_fast_is_followed_through_midpoints():
+    """An orbit at (2A, 0) moves by 2 from A = 0 to 1, four times the threshold: matched
+    through two halvings (steps of 1/4 move it by 0.5, the threshold: a match; three
+    midpoints found), it keeps its id; one that appears far away is still born."""
+    from atlas.models.driven.continuation import bridge
+
+    def find(a):
+        return [_periodic([2 * a, 0.0])] + ([_periodic([0.0, 3.0])] if a > 0.7 else [])
+
+    asked = []
+
+    def counted(a):
+        asked.append(a)
+        return find(a)
+
+    pairs = bridge(counted, 0.0, 1.0, find(0.0), find(1.0))
+    assert pairs == {0: 0} and sorted(asked) == [0.25, 0.5, 0.75]
+    ids, events = follow([find(0.0), find(1.0)], pairs={1: pairs})
+    assert ids[1].tolist() == [0, 1] and [e.kind for e in events] == ["birth"]
+    assert [e.kind for e in follow([find(0.0), find(1.0)])[1]] == ["birth", "birth", "death"]
+
+
 def test_the_bisection_closes_in_on_synthetic_events():
     """find(A): an orbit at (A/10, 0) always; another born at A = 1.2345; the first doubles
     its period at A = 1.5; located within rtol."""

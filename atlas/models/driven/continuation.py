@@ -15,6 +15,10 @@ parameter. Consecutive points' attractors are matched here, as Attractors.jl's
 - consecutive points' attractors are paired by the assignment of least total distance
   (the Hungarian method, :func:`scipy.optimize.linear_sum_assignment`) among the pairs
   nearer than the **threshold** (:data:`THRESHOLD`); a pair farther apart is no match.
+- where, between two points, some attractors have no match on either side, the step is
+  halved (:func:`bridge`): the attractors found at the midpoint are matched to both ends,
+  so that an attractor that moved farther than the threshold over the whole step is
+  followed through the halves (down to :data:`BRIDGE_DEPTH` halvings).
 - an attractor of the later point with no match is **born** (it gets the next unused
   global id; ids are never reused), one of the earlier point with no match **dies**; a
   matched pair whose kind or period differs (a period doubling, a periodic orbit turning
@@ -39,14 +43,17 @@ import numpy as np
 
 from atlas.models.driven.attractors import Attractor, wrap
 
-__all__ = ["THRESHOLD", "MATCH_POINTS", "EVENT_KINDS", "Event", "Located", "set_distance",
-           "distances", "match", "follow", "locate"]
+__all__ = ["THRESHOLD", "MATCH_POINTS", "BRIDGE_DEPTH", "EVENT_KINDS", "Event", "Located",
+           "set_distance", "distances", "match", "bridge", "follow", "locate"]
 
 #: Two attractors of consecutive points farther apart than this (set distance, θ [rad] and
 #: θ̇ [rad s⁻¹] as one unit) are not the same attractor.
 THRESHOLD = 0.5
 #: The most points of a chaotic cloud compared (evenly thinned beyond).
 MATCH_POINTS = 500
+#: Halvings of a step through which an attractor that moved farther than the threshold is
+#: followed (:func:`bridge`): a step of 0.05 in A is bridged by steps of 0.00625.
+BRIDGE_DEPTH = 3
 #: The events between consecutive points, as stored (flag values 0, 1, 2).
 EVENT_KINDS = ("birth", "death", "period_change")
 
@@ -108,11 +115,39 @@ class Event:
     period_after: int
 
 
-def follow(found: list[list[Attractor]], threshold: float = THRESHOLD
+def bridge(find: Callable[[float], list[Attractor]], lo: float, hi: float,
+           at_lo: list[Attractor], at_hi: list[Attractor], threshold: float = THRESHOLD,
+           depth: int = BRIDGE_DEPTH) -> dict[int, int]:
+    """:func:`match` of two consecutive points' attractors, where an attractor moved
+    farther than the threshold between them followed through midpoints: where some of
+    ``at_lo`` have no match and some of ``at_hi`` neither, the attractors are found at the
+    midpoint (``find``) and each half is bridged in turn, down to ``depth`` halvings; a
+    dying attractor chained through the midpoints to a born one is the same attractor."""
+    pairs = match(at_lo, at_hi, threshold)
+    dying = set(range(len(at_lo))) - set(pairs.values())
+    born = set(range(len(at_hi))) - set(pairs)
+    if depth <= 0 or not dying or not born:
+        return pairs
+    m = 0.5 * (lo + hi)
+    mid = find(m)
+    left = bridge(find, lo, m, at_lo, mid, threshold, depth - 1)  # mid index -> lo index
+    right = bridge(find, m, hi, mid, at_hi, threshold, depth - 1)  # hi index -> mid index
+    for j, k in sorted(right.items()):
+        i = left.get(k)
+        if j in born and i in dying:
+            pairs[j] = i
+            dying.discard(i)
+    return pairs
+
+
+def follow(found: list[list[Attractor]], threshold: float = THRESHOLD,
+           pairs: dict[int, dict[int, int]] | None = None
            ) -> tuple[list[np.ndarray], list[Event]]:
     """Global ids along a sweep: (per point the id of each of its attractors (int64), the
     events between consecutive points in order of step, then kind, then id). The first
-    point's attractors get ids 0, 1, … in their order; a born attractor the next unused id."""
+    point's attractors get ids 0, 1, … in their order; a born attractor the next unused id.
+    ``pairs``: {step: the pairs of points step − 1 and step, as :func:`match` gives them},
+    where they were bridged (:func:`bridge`); else they are matched here."""
     ids: list[np.ndarray] = []
     events: list[Event] = []
     next_id = 0
@@ -122,12 +157,13 @@ def follow(found: list[list[Attractor]], threshold: float = THRESHOLD
             next_id = len(now)
             continue
         before = found[step - 1]
-        pairs = match(before, now, threshold)
+        paired = (pairs or {}).get(step)
+        paired = match(before, now, threshold) if paired is None else paired
         here = np.empty(len(now), np.int64)
         born = []
         for j in range(len(now)):
-            if j in pairs:
-                here[j] = ids[-1][pairs[j]]
+            if j in paired:
+                here[j] = ids[-1][paired[j]]
             else:
                 here[j] = next_id
                 next_id += 1
@@ -136,12 +172,12 @@ def follow(found: list[list[Attractor]], threshold: float = THRESHOLD
         for j in born:
             step_events.append(Event(step - 1, "birth", int(here[j]), -1, j, -1,
                                      int(now[j].period)))
-        matched_before = set(pairs.values())
+        matched_before = set(paired.values())
         for i in range(len(before)):
             if i not in matched_before:
                 step_events.append(Event(step - 1, "death", int(ids[-1][i]), i, -1,
                                          int(before[i].period), -1))
-        for j, i in pairs.items():
+        for j, i in paired.items():
             if _signature(before[i]) != _signature(now[j]):
                 step_events.append(Event(step - 1, "period_change", int(here[j]), i, j,
                                          int(before[i].period), int(now[j].period)))
