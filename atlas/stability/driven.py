@@ -36,6 +36,7 @@ from atlas.models.driven.continuation import (
     Event,
     Located,
     bridge,
+    changes,
     follow,
     locate,
 )
@@ -132,27 +133,29 @@ def _attractors_at(params: dict, swept: str, value: float, settings: DrivenSetti
                                     settings.window, max_period=settings.max_period))
 
 
-def _locate_task(params: dict, swept: str, lo: float, hi: float, at_lo: list[Attractor],
-                 at_hi: list[Attractor], events: list[Event], settings: DrivenSettings,
-                 numba_threads: int | None = None) -> list[Located]:
-    """The events between two consecutive points, located (one task)."""
+def _step_task(params: dict, swept: str, lo: float, hi: float, at_lo: list[Attractor],
+               at_hi: list[Attractor], settings: DrivenSettings,
+               numba_threads: int | None = None) -> tuple[dict[int, int], dict]:
+    """One step of the sweep with events (one task): its pairs, bridged through midpoints
+    where attractors die and are born (:func:`~atlas.models.driven.continuation.bridge`),
+    and each of its events located (:func:`~atlas.models.driven.continuation.locate`), the
+    attractors of every midpoint found once for both: (pairs, {(kind, index before, index
+    after): Located})."""
     from atlas.kernels.threads import use_threads
 
     use_threads(numba_threads)
-    return locate(lambda value: _attractors_at(params, swept, value, settings), lo, hi,
-                  at_lo, at_hi, events, threshold=settings.threshold, rtol=settings.rtol,
-                  max_steps=settings.max_steps)
+    cache: dict[float, list[Attractor]] = {}
 
+    def find(value: float) -> list[Attractor]:
+        if value not in cache:
+            cache[value] = _attractors_at(params, swept, value, settings)
+        return cache[value]
 
-def _bridge_task(params: dict, swept: str, lo: float, hi: float, at_lo: list[Attractor],
-                 at_hi: list[Attractor], settings: DrivenSettings,
-                 numba_threads: int | None = None) -> dict[int, int]:
-    """The pairs of two consecutive points, bridged through midpoints (one task)."""
-    from atlas.kernels.threads import use_threads
-
-    use_threads(numba_threads)
-    return bridge(lambda value: _attractors_at(params, swept, value, settings), lo, hi,
-                  at_lo, at_hi, settings.threshold)
+    pairs = bridge(find, lo, hi, at_lo, at_hi, settings.threshold)
+    events = changes(at_lo, at_hi, pairs)
+    located = locate(find, lo, hi, at_lo, at_hi, events, threshold=settings.threshold,
+                     rtol=settings.rtol, max_steps=settings.max_steps)
+    return pairs, {(e.kind, e.before, e.after): p for e, p in zip(events, located)}
 
 
 @dataclass
@@ -193,30 +196,17 @@ def compute_study(points: list[dict], swept: str | None, settings: DrivenSetting
     clock = time.perf_counter()
     found = [r.attractors for r in results]
     ids, events = follow(found, settings.threshold)
-    if swept is not None:  # steps with both a death and a birth: bridged through midpoints
-        both = sorted({e.step for e in events if e.kind == "birth"} &
-                      {e.step for e in events if e.kind == "death"})
-        tasks = [(results[s].params, swept, results[s].params[swept],
-                  results[s + 1].params[swept], found[s], found[s + 1], settings)
-                 for s in both]
-        pairs = {both[t] + 1: paired for t, paired in
-                 point_results(_bridge_task, tasks, backend=backend, scheduler=scheduler,
-                               workers=workers, per_thread=1)}
-        ids, events = follow(found, settings.threshold, pairs)
-    located: list[Located | None] = [None] * len(events)
-    steps = sorted({e.step for e in events})
-    if steps and swept is not None:
-        tasks = []
-        for step in steps:
-            lo, hi = results[step], results[step + 1]
-            tasks.append((lo.params, swept, lo.params[swept], hi.params[swept],
-                          lo.attractors, hi.attractors,
-                          [e for e in events if e.step == step], settings))
-        for t, found in point_results(_locate_task, tasks, backend=backend,
-                                      scheduler=scheduler, workers=workers, per_thread=1):
-            where = [k for k, e in enumerate(events) if e.step == steps[t]]
-            for k, place in zip(where, found):
-                located[k] = place
+    steps = sorted({e.step for e in events}) if swept is not None else []
+    tasks = [(results[s].params, swept, results[s].params[swept],
+              results[s + 1].params[swept], found[s], found[s + 1], settings) for s in steps]
+    pairs, where = {}, {}
+    for t, (paired, placed) in point_results(_step_task, tasks, backend=backend,
+                                             scheduler=scheduler, workers=workers,
+                                             per_thread=1):
+        pairs[steps[t] + 1] = paired
+        where.update({(steps[t], *key): p for key, p in placed.items()})
+    ids, events = follow(found, settings.threshold, pairs)
+    located = [where.get((e.step, e.kind, e.before, e.after)) for e in events]
     seconds["bifurcations"] = time.perf_counter() - clock
     return DrivenStudy(results, ids, events, located, swept, seconds)
 

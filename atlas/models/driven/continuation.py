@@ -44,7 +44,7 @@ import numpy as np
 from atlas.models.driven.attractors import Attractor, wrap
 
 __all__ = ["THRESHOLD", "MATCH_POINTS", "BRIDGE_DEPTH", "EVENT_KINDS", "Event", "Located",
-           "set_distance", "distances", "match", "bridge", "follow", "locate"]
+           "set_distance", "distances", "match", "bridge", "changes", "follow", "locate"]
 
 #: Two attractors of consecutive points farther apart than this (set distance, θ [rad] and
 #: θ̇ [rad s⁻¹] as one unit) are not the same attractor.
@@ -140,6 +140,27 @@ def bridge(find: Callable[[float], list[Attractor]], lo: float, hi: float,
     return pairs
 
 
+def changes(before: list[Attractor], after: list[Attractor], pairs: dict[int, int],
+            step: int = -1, ids_before=None, ids_after=None) -> list[Event]:
+    """The events between two consecutive points whose attractors are paired by ``pairs``
+    ({index in ``after``: index in ``before``}): births, deaths, period changes, in this
+    order, each by its attractor's global id (``ids_before``, ``ids_after``; −1 where not
+    given)."""
+    def gid(ids, i):
+        return -1 if ids is None else int(ids[i])
+
+    out = [Event(step, "birth", gid(ids_after, j), -1, j, -1, int(after[j].period))
+           for j in range(len(after)) if j not in pairs]
+    paired = set(pairs.values())
+    out += [Event(step, "death", gid(ids_before, i), i, -1, int(before[i].period), -1)
+            for i in range(len(before)) if i not in paired]
+    out += [Event(step, "period_change", gid(ids_after, j), i, j, int(before[i].period),
+                  int(after[j].period))
+            for j, i in sorted(pairs.items()) if _signature(before[i]) != _signature(after[j])]
+    out.sort(key=lambda e: (EVENT_KINDS.index(e.kind), e.attractor))
+    return out
+
+
 def follow(found: list[list[Attractor]], threshold: float = THRESHOLD,
            pairs: dict[int, dict[int, int]] | None = None
            ) -> tuple[list[np.ndarray], list[Event]]:
@@ -160,29 +181,13 @@ def follow(found: list[list[Attractor]], threshold: float = THRESHOLD,
         paired = (pairs or {}).get(step)
         paired = match(before, now, threshold) if paired is None else paired
         here = np.empty(len(now), np.int64)
-        born = []
         for j in range(len(now)):
             if j in paired:
                 here[j] = ids[-1][paired[j]]
             else:
                 here[j] = next_id
                 next_id += 1
-                born.append(j)
-        step_events = []
-        for j in born:
-            step_events.append(Event(step - 1, "birth", int(here[j]), -1, j, -1,
-                                     int(now[j].period)))
-        matched_before = set(paired.values())
-        for i in range(len(before)):
-            if i not in matched_before:
-                step_events.append(Event(step - 1, "death", int(ids[-1][i]), i, -1,
-                                         int(before[i].period), -1))
-        for j, i in paired.items():
-            if _signature(before[i]) != _signature(now[j]):
-                step_events.append(Event(step - 1, "period_change", int(here[j]), i, j,
-                                         int(before[i].period), int(now[j].period)))
-        step_events.sort(key=lambda e: (EVENT_KINDS.index(e.kind), e.attractor))
-        events += step_events
+        events += changes(before, now, paired, step - 1, ids[-1], here)
         ids.append(here)
     return ids, events
 
