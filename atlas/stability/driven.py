@@ -10,11 +10,13 @@ from one point to the next is the attractors', not the draw's) — are labelled
 (:meth:`DrivenPoint.label`), and counted per attractor. A fraction f of N samples has the
 binomial standard error √(f(1 − f)/N).
 
-Then, here (:func:`compute_study`): the attractors are matched from point to point and given
-global ids (:func:`atlas.models.driven.continuation.follow`), and each event between two
-consecutive points (a birth, a death, a period change) is located by bisection in the
-parameter (:func:`atlas.models.driven.continuation.locate`; each pair of points one task,
-again on CPU threads or Dask). :func:`driven_dataset` lays it out as
+Then (:func:`compute_study`): the attractors are matched from point to point and given
+global ids (:func:`atlas.models.driven.continuation.follow`); each step with events (a
+birth, a death, a period change) is one task, again on CPU threads or Dask, that bridges
+its attractors through midpoints where some die and others are born
+(:func:`~atlas.models.driven.continuation.bridge`) and locates each event by bisection in
+the parameter (:func:`~atlas.models.driven.continuation.locate`), the midpoints' searches
+shared. :func:`driven_dataset` lays it out as
 :mod:`atlas.store.driven_study` says.
 """
 
@@ -178,8 +180,9 @@ def compute_study(points: list[dict], swept: str | None, settings: DrivenSetting
                   on_result: Callable[[int, DrivenPointResult], None] | None = None
                   ) -> DrivenStudy:
     """Every point of a 1-D sweep (``points`` in the order of ``swept``'s values), then the
-    matching and the events' bisections: on this machine (``backend`` "cpu", ``workers``
-    threads) or as Dask tasks ("dask", on ``scheduler`` or a local cluster), as
+    matching, the bridges and the events' bisections (:func:`_step_task`): on this machine
+    (``backend`` "cpu", ``workers`` threads) or as Dask tasks ("dask", on ``scheduler`` or
+    a local cluster), as
     :func:`atlas.pipeline.schedule.point_results` runs them. The result does not depend on
     where or on how many threads: each task is computed alone, and the matching after."""
     from atlas.pipeline.schedule import point_results

@@ -190,6 +190,26 @@ def test_the_file_holds_fractions_that_sum_to_one_with_binomial_errors(sweep):
         assert (folder / name).stat().st_size > 10_000
 
 
+@pytest.mark.parametrize("spoil, words", [
+    (lambda ds: ds["basin_fraction"].__setitem__((0, 0), 0.9),
+     "not fractions summing to 1"),
+    (lambda ds: ds["orbit_attractor"].__setitem__(0, 99), "orbit_attractor names"),
+    (lambda ds: ds.attrs.__setitem__("swept_parameter", "gravity"), "swept parameter"),
+    (lambda ds: ds.attrs.__setitem__("samples", 1.5), "samples"),
+])
+def test_a_spoiled_driven_study_is_refused_in_one_line(sweep, tmp_path, spoil, words):
+    from atlas.errors import InputFileError
+    from atlas.store.study import open_study
+
+    ds, _ = sweep
+    bad = ds.copy(deep=True)
+    spoil(bad)
+    bad.to_netcdf(tmp_path / "bad.h5", engine="h5netcdf")
+    with pytest.raises(InputFileError, match=words) as caught:
+        open_study(tmp_path / "bad.h5")
+    assert "\n" not in str(caught.value)
+
+
 def _run(argv):
     import contextlib
     import io
