@@ -13,7 +13,7 @@ CONFIG ?= configs/default.yaml
 output_of = $(shell sed -n 's/^output:[[:space:]]*//p' $(1) | tr -d "\"'")
 
 .DEFAULT_GOAL := help
-.PHONY: stability help run test test-fast atlas figures bench bench-peers faults lint clean venv docs
+.PHONY: stability driven-sweep help run test test-fast atlas figures bench bench-peers faults lint clean venv docs
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | sed -e 's/:.*## /\t/' | expand -t 10
@@ -71,6 +71,10 @@ test-fast: $(DEV) ## the fast subset: every test not marked slow (about 2 min)
 stability: $(RUN) ## Menck's figure, exact: configs/swing_stability.yaml (1,001 torques) → outputs/swing_stability*.png
 	$(BIN)/atlas stability configs/swing_stability.yaml -v
 	$(BIN)/atlas plot outputs/swing_stability.h5
+
+driven-sweep: $(RUN) ## the driven pendulum's attractors followed over A in [1, 2] (101 points, 10^4 samples each) → outputs/driven_sweep*.png
+	$(BIN)/atlas stability configs/driven_sweep.yaml -v
+	$(BIN)/atlas plot outputs/driven_sweep.h5
 
 figures: $(RUN) ## the essay's Figures 1-12 → outputs/figures/
 	$(BIN)/atlas figures

@@ -25,7 +25,7 @@ from pathlib import Path
 from atlas.errors import AtlasError, OutputInTheWay
 from atlas.models.pendulum.description import PARAMETERS
 
-__all__ = ["add_parser", "run_study", "MAX_POINTS"]
+__all__ = ["add_parser", "run_study", "run_driven_study", "MAX_POINTS"]
 
 log = logging.getLogger("atlas.stability")
 
@@ -96,12 +96,15 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
     """Load, check, compute and write the study of ``config``: (Dataset, output path,
     seconds in all). ``on_result`` as :func:`atlas.stability.study.compute_points`."""
     from atlas.kernels.threads import cores
-    from atlas.models.registry import DEFAULT
+    from atlas.models.registry import DEFAULT, DRIVEN
     from atlas.pipeline.config import load_config
     from atlas.stability.study import PHASES, StudySettings, compute_points
 
     start = time.perf_counter()
     cfg = load_config(config, output=output, study=True)
+    if cfg.description.name == DRIVEN:
+        return run_driven_study(cfg, config, start, backend=backend, force=force,
+                                verbose=verbose, on_result=on_result)
     if cfg.description.name != DEFAULT:  # the study is the pendulum's physics
         raise AtlasError(f"{config}: model {cfg.description.name}: atlas stability studies the "
                          "pendulum's basins only")
@@ -136,6 +139,47 @@ def run_study(config, *, output=None, backend=None, force=False, verbose=False,
     ds = study_dataset(cfg, settings, results)
     if verbose:
         log.info("bifurcations and the file's layout: %.3f s", time.perf_counter() - clock)
+    write_study(ds, path)
+    return ds, path, time.perf_counter() - start
+
+
+def run_driven_study(cfg, config, start: float, *, backend=None, force=False, verbose=False,
+                     on_result=None):
+    """The study of a driven config (validated ``cfg``, from the file ``config``; the clock
+    started at ``start``): its attractors followed along the swept parameter, their basin
+    fractions sampled and their bifurcations located (:mod:`atlas.stability.driven`),
+    written as :mod:`atlas.store.driven_study` lays it out: (Dataset, path, seconds)."""
+    from atlas.kernels.threads import cores
+    from atlas.pipeline.config_sections import DRIVEN_SAMPLES
+    from atlas.stability.driven import DrivenSettings, compute_study, driven_dataset
+    from atlas.store.study import write_study
+
+    pend = cfg.pendulum
+    count = len(pend.points)
+    if count > MAX_POINTS and not force:
+        raise AtlasError(f"{config}: the study has {count:,} parameter points, more "
+                         f"than {MAX_POINTS:,}; --force computes it anyway")
+    g, stab = cfg.grid, cfg.stability
+    settings = DrivenSettings(
+        window=((g.theta0.start, g.theta0.stop), (g.theta_dot0.start, g.theta_dot0.stop)),
+        samples=(stab.samples if stab is not None and stab.samples is not None
+                 else DRIVEN_SAMPLES),
+        seed=stab.seed if stab is not None and stab.seed is not None else 0,
+        max_period=pend.drive.max_period, t_max=cfg.integrator.t_max, dt=cfg.integrator.dt)
+    path = Path(cfg.output)
+    _check_output(path, force, config)
+    backend = backend or ("dask" if cfg.execution.backend == "dask" else "cpu")
+    workers = cfg.execution.workers or (None if backend == "dask" else cores())
+    swept = pend.swept[0] if pend.swept else None
+    study = compute_study(pend.points, swept, settings, backend=backend,
+                          scheduler=cfg.execution.scheduler, workers=workers,
+                          on_result=on_result)
+    if verbose:
+        for line in cost_lines(study.results, ("attractors", "samples")):
+            log.info(line)
+        log.info("matching and %d bisections: %.2f s", len(study.events),
+                 study.seconds["bifurcations"])
+    ds = driven_dataset(cfg, settings, study)
     write_study(ds, path)
     return ds, path, time.perf_counter() - start
 

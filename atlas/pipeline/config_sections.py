@@ -28,7 +28,8 @@ from atlas.pipeline.config_numbers import Number, Numbers
 
 __all__ = ["StrictModel", "ParameterSection", "DriveConfig", "PendulumConfig", "Axis",
            "GridConfig",
-           "IntegratorConfig", "SeparatricesConfig", "ExecutionConfig", "StabilityConfig"]
+           "IntegratorConfig", "SeparatricesConfig", "ExecutionConfig", "StabilityConfig",
+           "DRIVEN_SAMPLES"]
 
 
 class StrictModel(BaseModel):
@@ -298,15 +299,25 @@ class ExecutionConfig(StrictModel):
     scheduler: str | None = None
 
 
+#: Initial conditions sampled per parameter point by a driven pendulum's study, by default.
+DRIVEN_SAMPLES = 10_000
+
+
 class StabilityConfig(StrictModel):
     """``atlas stability`` only (a grid run ignores it): the Gaussian perturbation's standard
     deviations ``sigma_theta`` [rad] and ``sigma_theta_dot`` [rad s⁻¹] around each rest state
     (both or neither; none: no Gaussian stability), and whether a 1-D study stores the
-    ``tipping`` probabilities between consecutive points."""
+    ``tipping`` probabilities between consecutive points. A driven pendulum's study
+    (:mod:`atlas.stability.driven`) samples its basin fractions: ``samples`` initial
+    conditions per parameter point (default :data:`DRIVEN_SAMPLES`), drawn uniformly in the
+    window by the generator seeded with ``seed`` (default 0); the undriven pendulum's study
+    is exact and refuses both."""
 
     sigma_theta: Number | None = Field(default=None, gt=0)
     sigma_theta_dot: Number | None = Field(default=None, gt=0)
     tipping: bool = False
+    samples: int | None = Field(default=None, gt=0, le=100_000_000)
+    seed: int | None = Field(default=None, ge=0)
 
     @model_validator(mode="after")
     def _both_sigmas(self):

@@ -247,6 +247,11 @@ def check_study(ds: xr.Dataset, path) -> None:
         edges = _numbers(attrs.get(name, []))
         if edges.size != 2 or not np.isfinite(edges).all() or not edges[0] < edges[1]:
             refuse(f"the attribute {name} is not a window (min, max)")
+    from atlas.store.driven_study import check_driven_study, is_driven_study
+
+    if is_driven_study(ds):  # a driven pendulum's: its own variables
+        check_driven_study(ds, path)
+        return
     sigmas = [_numbers(attrs.get(n, np.nan)) for n in ("sigma_theta", "sigma_theta_dot")]
     if "gaussian_stability" in ds and not all(s.size and np.isfinite(s).all() for s in sigmas):
         refuse("gaussian_stability without the attributes sigma_theta, sigma_theta_dot")

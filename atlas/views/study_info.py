@@ -55,7 +55,14 @@ def _bifurcation_lines(ds: xr.Dataset) -> list[str]:
 
 
 def study_lines(ds: xr.Dataset) -> list[str]:
-    """The summary of a study (module docstring)."""
+    """The summary of a study (module docstring); a driven pendulum's:
+    :func:`atlas.views.driven_study.driven_study_lines`."""
+    from atlas.store.driven_study import is_driven_study
+
+    if is_driven_study(ds):
+        from atlas.views.driven_study import driven_study_lines
+
+        return driven_study_lines(ds)
     swept = [d for d in ("alpha", "omega0", "torque") if d in ds.dims]
     (a, b), (lo, hi) = ds.attrs["window_theta"], ds.attrs["window_theta_dot"]
     names = ("alpha", "omega0", "torque")

@@ -306,6 +306,12 @@ def plot_study(path: str | Path, outdir=None, fmt: str = "png", dpi=None) -> lis
 
     path = Path(path)
     ds = open_study(path)
+    from atlas.store.driven_study import is_driven_study
+
+    if is_driven_study(ds):  # a driven pendulum's: its orbit diagram and fractions
+        from atlas.views.driven_study import plot_driven_study
+
+        return plot_driven_study(ds, path, outdir, fmt, dpi)
     # a parameter given as a list of one value is a fixed one
     ds = ds.isel({d: 0 for d in swept_dims(ds) if ds.sizes[d] == 1})
     swept = swept_dims(ds)

@@ -279,10 +279,19 @@ def _thinned(cloud: np.ndarray) -> np.ndarray:
 
 
 def _spacing(cloud: np.ndarray) -> float:
-    """The typical distance between a cloud's points and their nearest neighbour (median)."""
-    d = _distance(cloud, cloud)
-    np.fill_diagonal(d, np.inf)
-    return float(np.median(d.min(axis=1)))
+    """The typical distance between a cloud's points and their nearest neighbour (median),
+    θ differences wrapped: by a k-d tree of the points and their copies one turn either
+    side (the same distances as all pairs', in O(n log n) rather than O(n²): a merged cloud
+    of CLOUD_MAX points took 0.3 s a call, 29 s of one search)."""
+    from scipy.spatial import cKDTree
+
+    cloud = np.asarray(cloud, np.float64)
+    if len(cloud) < 2:
+        return math.inf
+    turn = np.array([TWO_PI, 0.0])
+    tree = cKDTree(np.concatenate([cloud, cloud + turn, cloud - turn]))
+    nearest, _ = tree.query(cloud, k=2)  # the first is the point itself
+    return float(np.median(nearest[:, 1]))
 
 
 def capture_radius(attractors: list[Attractor]) -> float:

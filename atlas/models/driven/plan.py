@@ -14,7 +14,7 @@ from atlas.pipeline.config_sections import PendulumConfig
 if TYPE_CHECKING:
     from atlas.pipeline.config import Config
 
-__all__ = ["Section", "check", "begin", "sample", "plan", "MIN_STEPS",
+__all__ = ["Section", "check", "check_study", "begin", "sample", "plan", "MIN_STEPS",
            "MIN_PERIODS", "MAX_STEPS", "MAX_PERIODS"]
 
 #: The config section of its parameters: the pendulum's, with ``drive``.
@@ -44,8 +44,7 @@ def check(cfg: Config, study: bool) -> None:
     """The driven pendulum's checks across the config's sections (ValueError "key:
     problem")."""
     if study:
-        raise ValueError("stability: atlas stability studies the undriven pendulum only; "
-                         "map the driven one with atlas run")
+        check_study(cfg)
     if cfg.integrator.method != "rk4":
         raise ValueError("integrator.method: the driven pendulum is integrated by rk4")
     for point in cfg.pendulum.points:
@@ -65,6 +64,23 @@ def check(cfg: Config, study: bool) -> None:
             raise ValueError(f"integrator.t_max: {cfg.integrator.t_max:g} s holds more than "
                              f"{MAX_PERIODS:,} drive periods of {period:.4g} s (an orbit "
                              "undecided by then would run that long)")
+
+
+def check_study(cfg: Config) -> None:
+    """A driven pendulum's study (:mod:`atlas.stability.driven`) follows its attractors
+    along one swept parameter: two swept parameters, the Gaussian perturbation and the
+    tipping probabilities (the undriven study's) are refused (ValueError "key: problem")."""
+    swept = cfg.pendulum.swept
+    if len(swept) > 1:
+        raise ValueError(f"pendulum: a driven pendulum's study follows its attractors along "
+                         f"one swept parameter; this config sweeps {' and '.join(swept)}")
+    stab = cfg.stability
+    if stab is not None and stab.sigma_theta is not None:
+        raise ValueError("stability.sigma_theta: the Gaussian perturbation is the undriven "
+                         "pendulum's study; a driven one samples basin fractions only")
+    if stab is not None and stab.tipping:
+        raise ValueError("stability.tipping: tipping probabilities are the undriven "
+                         "pendulum's study; a driven one samples basin fractions only")
 
 
 def begin(cfg, layout) -> list:

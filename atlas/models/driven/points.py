@@ -38,7 +38,8 @@ from atlas.models.driven.description import (
 from atlas.store.schema import summary_dataset
 
 __all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
-           "attractors_dataset", "stored_point", "search_window", "shifted_spread"]
+           "attractors_dataset", "stored_point", "search_window", "shifted_spread",
+           "prepared"]
 
 #: Returns of P in a row within an attractor's capture radius that decide a label.
 CONFIRM = 8
@@ -364,10 +365,14 @@ def stored_point(group: xr.Dataset, params: dict[str, float], t_max: float) -> D
                        max(1, int(t_max / drive.period)))
 
 
-def _prepared(cfg, layout: Layout, drive: Drive
-              ) -> tuple[DrivenPoint, xr.Dataset, str | None]:
-    window = search_window(cfg)
-    found = find_attractors(drive, window, max_period=cfg.pendulum.drive.max_period)
+def prepared(drive: Drive, window, max_period: int, t_max: float, grid=None
+             ) -> tuple[DrivenPoint, list[Attractor], np.ndarray, np.ndarray]:
+    """One parameter point prepared from its drive alone: (the :class:`DrivenPoint` that
+    labels orbits there, its attractors found in ``window`` with periods up to
+    ``max_period``, the status their labels get, their capture radii); orbits run at most
+    ``t_max`` [s]; ``grid`` as :class:`DrivenPoint`'s. What a grid run prepares per point
+    (:func:`plan`) and a driven study (:mod:`atlas.stability.driven`) too."""
+    found = find_attractors(drive, window, max_period=max_period)
     largest = capture_radius(found)
     captures = [capture(drive, a, largest,
                         np.concatenate([b.points for b in found if b is not a] or
@@ -379,8 +384,15 @@ def _prepared(cfg, layout: Layout, drive: Drive
     targets, owner = _targets([a.points for a in found], [a.kind for a in found])
     point = DrivenPoint(drive, targets, owner, statuses,
                         radii[owner] if len(owner) else np.zeros(0),
-                        max(1, int(cfg.integrator.t_max / drive.period)),
-                        grid=(layout.x0, layout.v0))
+                        max(1, int(t_max / drive.period)), grid=grid)
+    return point, found, statuses, radii
+
+
+def _prepared(cfg, layout: Layout, drive: Drive
+              ) -> tuple[DrivenPoint, xr.Dataset, str | None]:
+    window = search_window(cfg)
+    point, found, statuses, radii = prepared(drive, window, cfg.pendulum.drive.max_period,
+                                             cfg.integrator.t_max, (layout.x0, layout.v0))
     warning = None if found else "no attractor found in the window"
     longer = [f"#{i}" for i, a in enumerate(found)
               if a.kind == "chaotic" and beyond_bound(a.points)]

@@ -36,6 +36,12 @@ def check(cfg: Config, study: bool) -> None:
                          "pendulum without torque (the running certificate is established "
                          "for 'rk4' only); use method: rk4 with a torque")
     if study:
+        stab = cfg.stability
+        for key in ("samples", "seed"):
+            if stab is not None and getattr(stab, key) is not None:
+                raise ValueError(f"stability.{key}: the undriven pendulum's study is exact, "
+                                 "from the stable manifolds (no samples); samples and seed "
+                                 "are for a driven pendulum's study")
         try:
             check_study_window((g.theta0.start, g.theta0.stop),
                                (g.theta_dot0.start, g.theta_dot0.stop))
