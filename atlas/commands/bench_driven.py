@@ -139,7 +139,45 @@ def _atlas_rows(quick: bool) -> list[dict]:
                      f"alone gives the file's labels at {same:.2%} of the points"}]
 
 
+def _sweep_rows(quick: bool) -> list[dict]:
+    """``atlas stability`` of the amplitude sweep (configs/driven_sweep.yaml's: A from 1 to
+    2, 101 points, 10⁴ samples each; quick: 3 points of A in [1, 1.1], where nothing is born
+    or dies, 1,000 samples) in a fresh interpreter,
+    on this machine's threads and on a local Dask cluster (not in quick), with the same
+    arrays."""
+    import xarray as xr
+
+    num, samples, stop = (3, 1000, 1.1) if quick else (101, 10_000, 2.0)
+    config = ("name: sweep\npendulum:\n  alpha: 0.1\n  omega0: 1.0\n"
+              f"  drive: {{amplitude: {{start: 1.0, stop: {stop}, num: {num}}}, "
+              "frequency: 1.0}\n"
+              "grid:\n  theta0: {start: -pi, stop: pi, num: 2}\n"
+              "  theta_dot0: {start: -2.0, stop: 4.0, num: 2}\n"
+              "integrator: {dt: pi/100, t_max: 1000.0}\n"
+              f"stability: {{samples: {samples}, seed: 0}}\noutput: {{output}}\n")
+    rows, arrays = [], {}
+    with tempfile.TemporaryDirectory(prefix="atlas-bench-sweep-") as tmp:
+        for backend in ("cpu",) if quick else ("cpu", "dask"):
+            out = Path(tmp) / f"{backend}.h5"
+            path = Path(tmp) / f"{backend}.yaml"
+            path.write_text(config.replace("{output}", str(out)))
+            wall, _ = run_python(["-m", "atlas", "stability", str(path), "--backend",
+                                  backend])
+            with xr.open_dataset(out, engine="h5netcdf") as ds:
+                arrays[backend] = ds["basin_fraction"].values.copy()
+            rows.append({"variant": f"sweep of A in [1, {stop:g}], {num} points x {samples:,} "
+                                    f"samples, attractors matched, events bisected "
+                                    f"({backend})",
+                         "wall_s": wall, "ratio": float("nan"), "against": "-",
+                         "note": "atlas stability in a fresh interpreter; goal 300 s for "
+                                 "101 x 10,000 on 2 cores"})
+    if "dask" in arrays:
+        same = np.array_equal(arrays["cpu"], arrays["dask"], equal_nan=True)
+        rows[-1]["note"] += f"; the same fractions as on threads: {same}"
+    return rows
+
+
 def driven_rows(quick: bool) -> list[dict]:
     """The rows (``atlas.commands.bench``'s row shape): the kernel against NumPy, then the
     Wada atlas end to end."""
-    return [_kernel_row(quick), *_atlas_rows(quick)]
+    return [_kernel_row(quick), *_atlas_rows(quick), *_sweep_rows(quick)]

@@ -40,3 +40,10 @@ def test_the_atlas_rows_set_the_run_against_its_kernel():
     assert run["wall_s"] > 0 and share["wall_s"] < run["wall_s"]
     assert 0 < share["ratio"] < 1
     assert "the file's labels at 100.00% of the points" in share["note"], share["note"]
+
+
+def test_the_sweep_row_runs_the_study():
+    """The quick sweep row: a 3-point amplitude sweep through ``atlas stability`` in a fresh
+    interpreter, timed."""
+    row, = bench_driven._sweep_rows(quick=True)
+    assert row["wall_s"] > 0 and "3 points x 1,000 samples" in row["variant"]
