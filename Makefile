@@ -57,7 +57,7 @@ atlas: $(FIGURE) ## compute any config and draw its figures: make atlas CONFIG=c
 
 # pytest-xdist: one worker per core (TEST_WORKERS=0: all in this process), each worker taking
 # whole test files so that a module's fixtures are built once. On the 2-core machine the whole
-# suite takes 8–10 min in two processes on a fresh clone, 7 once compiled (docs/contributing.md).
+# suite takes 10–12 min in two processes on a fresh clone, 7 once compiled (docs/contributing.md).
 TEST_WORKERS ?= auto
 
 test: $(DEV) ## import rules, the docs (--strict), then the whole test suite (TEST_WORKERS=0: one process)
