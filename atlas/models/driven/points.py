@@ -372,7 +372,10 @@ def prepared(drive: Drive, window, max_period: int, t_max: float, grid=None
     ``max_period``, the status their labels get, their capture radii); orbits run at most
     ``t_max`` [s]; ``grid`` as :class:`DrivenPoint`'s. What a grid run prepares per point
     (:func:`plan`) and a driven study (:mod:`atlas.stability.driven`) too."""
-    found = find_attractors(drive, window, max_period=max_period)
+    # a chaotic attractor is its last CLOUD_POINTS points from here on: its targets, the
+    # spacing its capture radius is measured on, and what the file stores
+    found = [a if a.kind == "periodic" else replace(a, points=a.points[-CLOUD_POINTS:])
+             for a in find_attractors(drive, window, max_period=max_period)]
     largest = capture_radius(found)
     captures = [capture(drive, a, largest,
                         np.concatenate([b.points for b in found if b is not a] or
@@ -401,10 +404,8 @@ def _prepared(cfg, layout: Layout, drive: Drive
                    f"than pendulum.drive.max_period = {cfg.pendulum.drive.max_period} and "
                    "it is kept as a recurrent (chaotic) one: raise max_period to find it "
                    "periodic")
-    # the file stores each attractor's targets: a chaotic cloud's last CLOUD_POINTS points
-    stored = [a if a.kind == "periodic" else replace(a, points=a.points[-CLOUD_POINTS:])
-              for a in found]
-    ds = attractors_dataset(drive, stored, statuses, radii, cfg.pendulum.drive.max_period)
+    # the file stores each attractor's targets (a chaotic cloud's last CLOUD_POINTS points)
+    ds = attractors_dataset(drive, found, statuses, radii, cfg.pendulum.drive.max_period)
     ds.attrs["search_window"] = np.array(window, np.float64).ravel()
     ds.attrs["search_window_comment"] = ("theta0 lo, hi [rad], theta_dot0 lo, hi [rad s-1]: "
                                          "where the attractors' search spread its seeds")
