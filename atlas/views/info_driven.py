@@ -88,12 +88,18 @@ def measure_lines(ds: xr.Dataset) -> list[str]:
         return []
     sbb, fractal = float(ds["boundary_basin_entropy"]), float(ds["fractal_boundary"])
     lines = [f"fractal measures of the map (labels of the RK4 stroboscopic map, "
-             f"boxes of {ds['basin_entropy'].attrs.get('box', '5 x 5 grid points')})",
-             f"  basin entropy S_b {float(ds['basin_entropy']):.4f}, boundary basin entropy "
-             f"S_bb {sbb:.4f} nats: " + (
-                 "> ln 2 = 0.6931, the boundary is fractal" if fractal == 1 else
-                 "not above ln 2: no evidence of a fractal boundary from this test (which "
-                 "two basins can never pass)")]
+             f"boxes of {ds['basin_entropy'].attrs.get('box', '5 x 5 grid points')})"]
+    if not np.isfinite(float(ds["basin_entropy"])):
+        lines.append("  basin entropy not measured (no box of labelled orbits)")
+    elif not np.isfinite(sbb):
+        lines.append(f"  basin entropy S_b {float(ds['basin_entropy']):.4f} nats; no box "
+                     "holds two basins: no boundary box")
+    else:
+        lines.append(f"  basin entropy S_b {float(ds['basin_entropy']):.4f}, boundary basin "
+                     f"entropy S_bb {sbb:.4f} nats: " + (
+                         "> ln 2 = 0.6931, the boundary is fractal" if fractal == 1 else
+                         "not above ln 2: no evidence of a fractal boundary from this test "
+                         "(which two basins can never pass)"))
     alpha = float(ds["uncertainty_exponent"])
     if np.isfinite(alpha):
         eps = ds["epsilon"].values
@@ -107,11 +113,15 @@ def measure_lines(ds: xr.Dataset) -> list[str]:
     if wada.size:
         shares = ", ".join(f"W_{m} {w:.3f}" for m, w in enumerate(wada, 1))
         merged = float(ds["wada_merge_distance_max"])
-        lines.append(f"  Wada grid method: {shares} (W_{wada.size}: the share of boundary "
-                     f"cells that meet all {wada.size} basins; 1 for Wada basins)" + (
+        meaning = (f"W_{wada.size}: the share of boundary cells that meet all {wada.size} "
+                   "basins; 1 for Wada basins" if wada.size >= 3 else
+                   "with two basins every boundary cell meets both: no Wada test")
+        lines.append(f"  Wada grid method: {shares} ({meaning}, on the map thinned to at "
+                     f"most {int(ds['wada'].attrs.get('thinned_to_at_most', 150))} points per "
+                     "axis)" + (
                          f"; merging method: Hausdorff distances "
-                         f"{float(ds['wada_merge_distance_min']):.2f} to {merged:.2f} cells"
-                         if np.isfinite(merged) else ""))
+                         f"{float(ds['wada_merge_distance_min']):.2f} to {merged:.2f} cells "
+                         "of that map" if np.isfinite(merged) else ""))
     return lines
 
 

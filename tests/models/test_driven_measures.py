@@ -50,7 +50,7 @@ def test_the_stored_measures_are_the_fractal_modules_on_the_stored_map(measured)
     tree = atlas.open(measured)
     ds = tree.to_dataset(inherit=False)
     labels = ds["attractor"].values
-    entropy = basin_entropy(labels, measures.BOX, trim=True, fill=-32768)
+    entropy = basin_entropy(labels, measures.BOX, trim=True, fill=-32768, unlabelled="exclude")
     assert float(ds["basin_entropy"]) == entropy.sb
     assert float(ds["boundary_basin_entropy"]) == entropy.sbb
     assert float(ds["wada_merge_distance_max"]) == wada_merge(labels, fill=-32768).d_max

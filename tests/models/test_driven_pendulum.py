@@ -177,7 +177,13 @@ def test_its_bad_input_is_one_line(tmp_path, capsys):
                        "max_period"),
                       (body.replace("frequency: 1.0", "frequency: 1.0, max_period: 2.5"),
                        "max_period"),
-                      (body.replace("dt: pi/100", "dt: 0.05"), "integrator.dt")):
+                      (body.replace("dt: pi/100", "dt: 0.05"), "integrator.dt"),
+                      (body.replace("frequency: 1.0", "frequency: 1.0, search_window: "
+                                    "{theta0: [-1, 1], theta_dot0: [-2, 4]}"),
+                       "search_window.theta0: [-1, 1] must contain the grid's"),
+                      (body.replace("frequency: 1.0", "frequency: 1.0, search_window: "
+                                    "{theta0: [-1e300, 1e300], theta_dot0: [-2, 4]}"),
+                       "times as wide as the grid's window")):
         path = write_config(tmp_path / "bad.yaml", bad)
         assert main(["run", str(path)]) == 2
         err = capsys.readouterr().err.strip().splitlines()

@@ -298,6 +298,11 @@ def test_a_dask_cluster_computes_the_study_of_this_process():
     ("[1.6, 1.7]", 1.0, "{samples: 0}", "stability.samples"),
     ("[1.6, 1.7]", 1.0, "{samples: -5}", "stability.samples"),
     ("[1.6, 1.7]", 1.0, "{tipping: true}", "stability.tipping"),
+    (1.66, "[1.0, 2.0]", "null", "pendulum.drive.frequency: a driven study's bisections"),
+    ("[1.7, 1.6]", 1.0, "null", "pendulum.drive.amplitude: a driven study follows its "
+                                "attractors along increasing values"),
+    ("[1.6, 1.7], search_window: {theta0: [-4, 4], theta_dot0: [-3, 5]}", 1.0, "null",
+     "pendulum.drive.search_window: a driven study searches"),
 ])
 def test_bad_input_is_refused_in_one_line(tmp_path, capsys, amplitude, frequency, stability,
                                           words):

@@ -2,9 +2,9 @@
 (:mod:`atlas.fractal`, on the map of a parameter point and its :class:`DrivenPoint`):
 
 - basin entropy S_b and boundary basin entropy S_bb [nats] in boxes of :data:`BOX` × BOX
-  grid points (Daza et al., *Sci. Rep.* 6, 31416, 2016), with the sufficient test of a
-  fractal boundary S_bb > ln 2 (it cannot pass with two basins, whose boxes hold ln 2 at
-  most);
+  grid points, over the labelled ones (an orbit without a label is no basin; Daza et al.,
+  *Sci. Rep.* 6, 31416, 2016), with the sufficient test of a fractal boundary S_bb > ln 2
+  (it cannot pass with two basins, whose boxes hold ln 2 at most);
 - the uncertainty exponent α of the fraction of ε-uncertain initial conditions,
   f(ε) ∝ ε^α, from :data:`UNCERTAIN_POINTS` seeded random points of the window each labelled
   with the map's own rule at ±ε (ε a fraction of the window's sides, :data:`EPSILONS`), α
@@ -57,7 +57,8 @@ def measure(point, labels: np.ndarray, x0: np.ndarray, v0: np.ndarray, n_attract
            "wada": np.full(n_attractors, np.nan), "wada_merge_distance_max": math.nan,
            "wada_merge_distance_min": math.nan}
     if min(labels.shape) >= BOX and np.any(labels != ATTRACTOR_FILL):
-        entropy = basin_entropy(labels, BOX, trim=True, fill=ATTRACTOR_FILL)
+        entropy = basin_entropy(labels, BOX, trim=True, fill=ATTRACTOR_FILL,
+                                unlabelled="exclude")  # no label is no basin
         out.update(basin_entropy=entropy.sb, boundary_basin_entropy=entropy.sbb,
                    fractal_boundary=float(entropy.fractal))
     if n_attractors < 2:

@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from atlas.pipeline.config import Config
 
 __all__ = ["Section", "check", "check_study", "begin", "sample", "plan", "MIN_STEPS",
-           "MIN_PERIODS", "MAX_STEPS", "MAX_PERIODS"]
+           "MIN_PERIODS", "MAX_STEPS", "MAX_PERIODS", "SEARCH_SPAN"]
 
 #: The config section of its parameters: the pendulum's, with ``drive``.
 Section = PendulumConfig
@@ -29,6 +29,9 @@ MAX_STEPS = 4096
 #: The most drive periods t_max may hold: each undecided orbit (and each sample of the
 #: pre-flight estimate, which has no attractor to stop it) runs that long.
 MAX_PERIODS = 20_000
+#: The widest ``drive.search_window`` a config may give, in widths of its grid's window
+#: (a zoom 1e-6 wide searches its atlas's window: 1e6 times as wide, and more).
+SEARCH_SPAN = 1e12
 def _not_whole(dt: float, frequency: float) -> str:
     """The error for a ``dt`` [s] that is not T/N: the two nearest that are."""
     period = 2.0 * math.pi / frequency
@@ -47,6 +50,17 @@ def check(cfg: Config, study: bool) -> None:
         check_study(cfg)
     if cfg.integrator.method != "rk4":
         raise ValueError("integrator.method: the driven pendulum is integrated by rk4")
+    given, g = cfg.pendulum.drive.search_window, cfg.grid
+    if given is not None:
+        for name, (lo, hi), axis in (("theta0", given.theta0, g.theta0),
+                                     ("theta_dot0", given.theta_dot0, g.theta_dot0)):
+            if lo > axis.start or hi < axis.stop:
+                raise ValueError(f"pendulum.drive.search_window.{name}: [{lo:g}, {hi:g}] "
+                                 f"must contain the grid's [{axis.start:g}, {axis.stop:g}]")
+            if hi - lo > SEARCH_SPAN * (axis.stop - axis.start):
+                raise ValueError(f"pendulum.drive.search_window.{name}: [{lo:g}, {hi:g}] is "
+                                 f"more than {SEARCH_SPAN:g} times as wide as the grid's "
+                                 "window: its seeds would be too sparse to find anything")
     for point in cfg.pendulum.points:
         period = 2 * math.pi / point["frequency"]
         if steps_per_period(point["frequency"], cfg.integrator.dt) is None:
@@ -68,12 +82,28 @@ def check(cfg: Config, study: bool) -> None:
 
 def check_study(cfg: Config) -> None:
     """A driven pendulum's study (:mod:`atlas.stability.driven`) follows its attractors
-    along one swept parameter: two swept parameters, the Gaussian perturbation and the
-    tipping probabilities (the undriven study's) are refused (ValueError "key: problem")."""
+    along one swept parameter, increasing: two swept parameters, a sweep over Ω (whose
+    bisections would need a dt = T/N at every frequency between), a search window of its own,
+    the Gaussian perturbation and the tipping probabilities (the undriven study's) are
+    refused (ValueError "key: problem")."""
     swept = cfg.pendulum.swept
     if len(swept) > 1:
         raise ValueError(f"pendulum: a driven pendulum's study follows its attractors along "
                          f"one swept parameter; this config sweeps {' and '.join(swept)}")
+    if "frequency" in swept:
+        raise ValueError("pendulum.drive.frequency: a driven study's bisections take "
+                         "frequencies between the listed ones, at which dt is no whole "
+                         "fraction of the drive period; sweep amplitude, alpha, omega0 or "
+                         "torque")
+    for name in swept:
+        values = cfg.pendulum.values(name)
+        if any(b <= a for a, b in zip(values, values[1:])):
+            key = f"pendulum.{'drive.' if name in cfg.pendulum.DRIVE_NAMES else ''}{name}"
+            raise ValueError(f"{key}: a driven study follows its attractors along increasing "
+                             "values; list them in increasing order")
+    if cfg.pendulum.drive.search_window is not None:
+        raise ValueError("pendulum.drive.search_window: a driven study searches its "
+                         "attractors in the grid's window; drop the key")
     stab = cfg.stability
     if stab is not None and stab.sigma_theta is not None:
         raise ValueError("stability.sigma_theta: the Gaussian perturbation is the undriven "
