@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from atlas.errors import InputFileError
+from atlas.store.schema import table_attrs
 
 __all__ = ["DRIVEN_MODEL", "DRIVEN_PARAMETERS", "DRIVEN_VARIABLES", "KIND_MEANINGS",
            "EVENT_MEANINGS", "is_driven_study", "driven_attrs", "check_driven_study"]
@@ -101,17 +102,8 @@ def is_driven_study(ds: xr.Dataset) -> bool:
 def driven_attrs(name: str) -> dict:
     """The CF attributes of driven-study variable ``name``; the swept parameter's units
     are the coordinate's (read them there)."""
-    _, _, long_name, units, comment = DRIVEN_VARIABLES[name]
-    attrs = {"long_name": long_name, "units": units}
-    if comment:
-        attrs["comment"] = comment
-    if name == "attractor_kind":
-        attrs["flag_values"] = np.array(list(KIND_MEANINGS), np.int8)
-        attrs["flag_meanings"] = " ".join(KIND_MEANINGS.values())
-    if name == "bifurcation_kind":
-        attrs["flag_values"] = np.array(list(EVENT_MEANINGS), np.int8)
-        attrs["flag_meanings"] = " ".join(EVENT_MEANINGS.values())
-    return attrs
+    flags = {"attractor_kind": KIND_MEANINGS, "bifurcation_kind": EVENT_MEANINGS}
+    return table_attrs(DRIVEN_VARIABLES, name, flags.get(name))
 
 
 def check_driven_study(ds: xr.Dataset, path) -> None:

@@ -25,7 +25,8 @@ from atlas.models.base import MapVariable
 __all__ = ["FORMAT_VERSION", "OLDEST_FORMAT", "CERTIFICATE_FORMAT", "SCHEMA", "STUDY_SCHEMA",
            "not_an_atlas",
            "MapVariable", "map_variables", "chunks_of", "summary_dataset",
-           "summary_tree", "BARRIER_DIM", "BARRIER_G", "BARRIER_ATTRS", "with_barrier"]
+           "summary_tree", "table_attrs", "BARRIER_DIM", "BARRIER_G", "BARRIER_ATTRS",
+           "with_barrier"]
 
 #: Version of the layout this atlas writes (root attribute ``format_version``). 1: files
 #: without the attribute; 2: the attribute is written; 3: every parameter (α, ω0, τ) is a
@@ -49,6 +50,20 @@ def map_variables(layout: Layout) -> dict[str, MapVariable]:
 def chunks_of(layout: Layout) -> tuple[int, ...]:
     """The map variables' chunks: one per tile (one parameter point, a band of whole rows)."""
     return (*(1 for _ in layout.swept), layout.chunk_rows, layout.x0.size)
+
+
+def table_attrs(table: dict, name: str, flags: dict | None = None) -> dict:
+    """The CF attributes of variable ``name`` from a table whose rows end (long_name, units,
+    comment): long_name, units, the comment where there is one, and for a flag variable
+    ``flags`` (code → meaning) its flag_values and flag_meanings."""
+    long_name, units, comment = table[name][-3:]
+    attrs = {"long_name": long_name, "units": units}
+    if comment:
+        attrs["comment"] = comment
+    if flags:
+        attrs["flag_values"] = np.array(list(flags), np.int8)
+        attrs["flag_meanings"] = " ".join(flags.values())
+    return attrs
 
 
 def summary_dataset(layout: Layout, points: list[dict]) -> xr.Dataset:

@@ -25,7 +25,7 @@ from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.errors import InputFileError
 from atlas.models.pendulum.description import PARAMETERS
 from atlas.store.formats import format_for
-from atlas.store.schema import STUDY_SCHEMA
+from atlas.store.schema import STUDY_SCHEMA, table_attrs
 
 __all__ = ["STUDY_SCHEMA", "STUDY_FORMAT", "STUDY_VARIABLES", "BIFURCATIONS",
            "POINT_STATUS_MEANINGS",
@@ -167,14 +167,8 @@ def swept_dims(ds: xr.Dataset) -> tuple[str, ...]:
 
 def variable_attrs(name: str) -> dict:
     """The CF attributes of study variable ``name``."""
-    _, _, long_name, units, comment = STUDY_VARIABLES[name]
-    attrs = {"long_name": long_name, "units": units}
-    if comment:
-        attrs["comment"] = comment
-    if name == "point_status":
-        attrs["flag_values"] = np.array(list(POINT_STATUS_MEANINGS), np.int8)
-        attrs["flag_meanings"] = " ".join(POINT_STATUS_MEANINGS.values())
-    return attrs
+    return table_attrs(STUDY_VARIABLES, name,
+                       POINT_STATUS_MEANINGS if name == "point_status" else None)
 
 
 def write_study(ds: xr.Dataset, path: str | Path) -> None:
