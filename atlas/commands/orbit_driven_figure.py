@@ -22,6 +22,7 @@ import numpy as np
 
 from atlas.commands.orbit_driven import DrivenOrbit
 from atlas.errors import AtlasError
+from atlas.models.driven.description import stored_confirm
 from atlas.views.info_driven import attractor_names
 from atlas.views.style import ATTRACTOR_MARKER, ORBIT_START_MARKER, STYLE, pi_ticks
 
@@ -66,11 +67,12 @@ def _phase_panel(ax, orbit: DrivenOrbit, tree, index: dict, group) -> None:
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     # the last confirm periods (the label's test: on the attractor) drawn heavier
     settled = orbit.attractor is not None and orbit.periods > 0
-    confirm = min(int(group.attrs.get("confirm", 0)), orbit.periods) if settled else 0
+    confirm = min(int(stored_confirm(group)[orbit.attractor]), orbit.periods) if settled else 0
     cut = orbit.theta.size - confirm * (orbit.drive.steps_per_period // orbit.stride)
+    last = "its last period" if confirm == 1 else f"its last {confirm} periods"
     for piece, width, label in (
             (slice(0, cut + 1), 0.6, "orbit (θ wrapped to [−π, π))"),
-            (slice(cut, None), 1.5, f"its last {confirm} periods, on the attractor")):
+            (slice(cut, None), 1.5, f"{last}, on the attractor")):
         theta, theta_dot = wrap_with_breaks(orbit.theta[piece], orbit.theta_dot[piece])
         if theta.size < 2:
             continue

@@ -13,7 +13,7 @@ import math
 from typing import TYPE_CHECKING
 
 from atlas.commands.orbit_text import outside_line
-from atlas.models.driven.description import DRIVEN_PENDULUM, NONFINITE
+from atlas.models.driven.description import DRIVEN_PENDULUM, NONFINITE, stored_confirm
 from atlas.views.info_driven import attractor_names
 
 if TYPE_CHECKING:
@@ -63,13 +63,14 @@ def _label_lines(orbit: DrivenOrbit, group: xr.Dataset) -> list[str]:
         moduli = group["floquet_modulus"].values[k]
         floquet = f", |Floquet multipliers| {moduli[0]:.3g}, {moduli[1]:.3g}"
     radius = float(group["capture_radius"].values[k])
-    confirm = int(group.attrs.get("confirm", 0))
+    confirm = int(stored_confirm(group)[k])
+    returns = (f"return {orbit.periods} lies" if confirm == 1 else
+               f"returns {orbit.periods - confirm + 1} to {orbit.periods} lie")
     return [f"label        {attractor_text(group, k)}{floquet} (the atlas's rule, "
             "DrivenPoint.label)",
             f"status       {status}: {meaning}",
-            f"t_trap       {orbit.t_trap:.2f} s = {orbit.periods} T: the returns to P "
-            f"{orbit.periods - confirm + 1} to {orbit.periods} lie within the capture radius "
-            f"{radius:.3g} of its points on P"]
+            f"t_trap       {orbit.t_trap:.2f} s = {orbit.periods} T: the orbit's {returns} to "
+            f"P within the capture radius {radius:.3g} of its points on P"]
 
 
 def _half_line(orbit: DrivenOrbit, group: xr.Dataset) -> str:

@@ -26,6 +26,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from atlas.defaults import METHODS  # noqa: F401 (the discretisations, re-exported)
+from atlas.kernels.vector_width import prefer_wide_vectors
 from atlas.status import (  # noqa: F401 (the kernels' status codes, re-exported)
     ATTRACTOR_FILL,
     NEAR_BOUNDARY,
@@ -35,6 +36,9 @@ from atlas.status import (  # noqa: F401 (the kernels' status codes, re-exported
     TRAPPED,
     UNRESOLVED,
 )
+
+# before any kernel module makes Numba's CPU target: 512-bit vectors where the CPU has them
+prefer_wide_vectors()
 
 
 def tilt(omega0: float, torque: float) -> float:

@@ -42,7 +42,8 @@ __all__ = ["step_size", "forcing_table", "advance", "sample", "trajectory", "lab
            "DECIDED"]
 
 #: ``status`` of an orbit that :func:`label_driven` labelled: it was within ``radius`` of one
-#: attractor's targets at ``confirm`` consecutive returns of P (the shared code 0, "trapped").
+#: attractor's targets at that attractor's ``confirm`` consecutive returns of P (the shared
+#: code 0, "trapped").
 DECIDED = TRAPPED
 
 TWO_PI = 2.0 * math.pi
@@ -110,15 +111,23 @@ _full_step = make_driven_step(_sin_sum, _unreduced)
 
 
 @nb.njit(inline="always", fastmath=SIN_FASTMATH)
-def orbit_path(theta, theta_dot, alpha, dt, accel):
-    """SHARED or FULL for an orbit from (θ, θ̇), ``accel`` = ω0² + max|τ + A cos| bounding
-    |θ̈ + 2αθ̇|. With α > 0 the speed stays in the band |θ̇| ≤ B = max(|θ̇0|, accel/2α) (above
-    it θ̈ points back into it), so a stage offset is at most dt·(B(1 + 2α dt) + dt·accel), as
-    in :func:`atlas.kernels.lanes` (whose margin absorbs RK4's error). The band is forward
-    invariant: an orbit that starts SHARED stays so. Non-finite input takes FULL."""
+def orbit_path(theta, theta_dot, alpha, omega0, dt, accel):
+    """SHARED or FULL for an orbit from (θ, θ̇), ``accel`` = ω0² + F bounding |θ̈ + 2αθ̇|,
+    F = max|τ + A cos(Ωt + φ)|. With α > 0 the speed stays bounded by two bands, each
+    forward invariant: |θ̇| ≤ max(|θ̇0|, accel/2α) (above it θ̈ points back into it), and
+    |θ̇| ≤ √(2 max(E0, E*)) with the energy E = ½θ̇² + ω0²(1 − cos θ) ≤ ½θ̇² + 2ω0²: E
+    changes at the rate θ̇ f(t) − 2αθ̇², negative where |θ̇| > F/2α, and there
+    E > E* = ½(F/2α)² + 2ω0² cannot be entered (the smaller band by far at a strong drive:
+    8.5 against 13.3 rad s⁻¹ at A = 1.66, α = 0.1, ω0 = 1). A stage offset is then at most
+    dt·(B(1 + 2α dt) + dt·accel) for the smaller bound B, as in :mod:`atlas.kernels.lanes`
+    (whose margin absorbs RK4's error). An orbit that starts SHARED stays so. Non-finite
+    input takes FULL."""
     if not (alpha > 0.0 and math.isfinite(theta) and math.isfinite(theta_dot)):
         return FULL
-    speed = max(abs(theta_dot), accel / (2.0 * alpha))
+    w2 = omega0 * omega0
+    drift = max(accel - w2, 0.0) / (2.0 * alpha)  # F/2α
+    energy = max(0.5 * theta_dot * theta_dot, 0.5 * drift * drift) + 2.0 * w2
+    speed = min(max(abs(theta_dot), accel / (2.0 * alpha)), math.sqrt(2.0 * energy))
     offset = dt * (speed * (1.0 + 2.0 * alpha * dt) + dt * accel)
     return SHARED if offset <= MAX_STAGE_OFFSET else FULL
 
@@ -170,7 +179,7 @@ def make_period_chunk(step, path, visit):
                     nxt += 1
                     if nxt % TILE == 0:  # end of a tile: jump to this chunk's next tile
                         nxt += (stride - 1) * TILE
-                    if orbit_path(theta0[i], theta_dot0[i], alpha, dt, accel) != path:
+                    if orbit_path(theta0[i], theta_dot0[i], alpha, omega0, dt, accel) != path:
                         continue
                     orbit[lane] = i
                     period[lane] = 0
@@ -232,7 +241,8 @@ def nearest_attractor(th, v, targets, target_attractor, radius):
 def make_visit_label(nearest):
     """Return the labelling visitor ``visit(i, p, θ, θ̇, memo, lane, args) -> done``:
     args = (targets, target_attractor, radius, confirm, max_periods, attractor, periods,
-    status); memo[lane] = (attractor of the current run of hits, its length); ``nearest`` is
+    status), ``confirm`` the returns in a row that decide each attractor (int64 per
+    attractor); memo[lane] = (attractor of the current run of hits, its length); ``nearest`` is
     :func:`nearest_attractor` (a parameter so that :mod:`atlas.kernels.driven_cuda` compiles
     this one decision rule for the device around its own device function)."""
 
@@ -252,7 +262,7 @@ def make_visit_label(nearest):
             else:
                 memo[lane, 1] = 1
             memo[lane, 0] = hit
-            if memo[lane, 1] >= confirm:
+            if hit != ATTRACTOR_FILL and memo[lane, 1] >= confirm[hit]:
                 attractor[i] = hit
                 status[i] = DECIDED
                 periods[i] = p
@@ -384,7 +394,7 @@ def _trajectory(theta0, theta_dot0, alpha, omega0, dt, forcing, accel, stride, o
     on the path :func:`orbit_path` chooses for it. It is stepped in a block of LANES copies
     by the loop of :func:`make_period_chunk` (the one LLVM vectorises), so that its bits are
     those of the lane kernels' orbit, not a scalar twin's."""
-    path = orbit_path(theta0, theta_dot0, alpha, dt, accel)
+    path = orbit_path(theta0, theta_dot0, alpha, omega0, dt, accel)
     th = np.full(LANES, theta0)
     v = np.full(LANES, theta_dot0)
     out[0, 0] = theta0
@@ -437,6 +447,7 @@ class LabelArrays(NamedTuple):
     targets: np.ndarray  # float64 (K, 2)
     target_attractor: np.ndarray  # int16 K
     radius: np.ndarray  # float64 K
+    confirm: np.ndarray  # int64, one per attractor (0 … max(target_attractor))
     attractor: np.ndarray  # int16 n, ATTRACTOR_FILL
     periods: np.ndarray  # int32 n
     status: np.ndarray  # int8 n
@@ -444,8 +455,9 @@ class LabelArrays(NamedTuple):
 
 def label_arrays(theta0, theta_dot0, targets, target_attractor, radius, confirm,
                  max_periods) -> LabelArrays:
-    """:func:`label_driven`'s arguments checked and converted (with ``confirm`` and
-    ``max_periods``), and its outputs allocated: for the CPU kernel and its CUDA twin
+    """:func:`label_driven`'s arguments checked and converted (``confirm`` one for all
+    attractors, or one per attractor: int64 of length max(target_attractor) + 1), and its
+    outputs allocated: for the CPU kernel and its CUDA twin
     (:mod:`atlas.kernels.driven_cuda`)."""
     theta0, theta_dot0 = _states(theta0, theta_dot0)
     targets = np.ascontiguousarray(targets, dtype=np.float64).reshape(-1, 2)
@@ -456,10 +468,15 @@ def label_arrays(theta0, theta_dot0, targets, target_attractor, radius, confirm,
         raise ValueError("the fill value is not an attractor")
     radius = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, np.float64),
                                                   (targets.shape[0],)))
-    if confirm < 1 or max_periods < 0:
+    attractors = int(target_attractor.max()) + 1 if target_attractor.size else 0
+    if target_attractor.size and target_attractor.min() < 0:
+        raise ValueError("target_attractor must be ≥ 0")
+    confirm = np.ascontiguousarray(np.broadcast_to(np.asarray(confirm, np.int64),
+                                                   (attractors,)))
+    if np.any(confirm < 1) or max_periods < 0:
         raise ValueError("confirm must be ≥ 1 and max_periods ≥ 0")
     n = theta0.size
-    return LabelArrays(theta0, theta_dot0, targets, target_attractor, radius,
+    return LabelArrays(theta0, theta_dot0, targets, target_attractor, radius, confirm,
                        np.full(n, ATTRACTOR_FILL, np.int16), np.zeros(n, np.int32),
                        np.zeros(n, np.int8))
 
@@ -472,9 +489,10 @@ def label_driven(theta0, theta_dot0, alpha, omega0, torque, table, dt, targets,
     with the ``targets`` (float64 (K, 2), θ in [−π, π) [rad], θ̇ [rad s⁻¹]): the distance is
     Euclidean in (θ, θ̇) with the θ difference wrapped to [−π, π); the nearest target within
     ``radius`` (one for all, or one per target: float64 length K) is a hit of attractor
-    ``target_attractor[k]`` (int16, length K). An orbit that
-    hits one attractor at ``confirm`` consecutive returns (any of its targets) is labelled
-    with it at that period and stops. Parameters of the map as in :func:`advance`.
+    ``target_attractor[k]`` (int16 ≥ 0, length K). An orbit that hits one attractor a at
+    ``confirm[a]`` consecutive returns (any of its targets; ``confirm`` one int for all, or
+    one per attractor) is labelled with it at that period and stops. Parameters of the map
+    as in :func:`advance`.
 
     Returns (attractor int16, periods int32, status int8): status ``DECIDED`` (0) with the
     attractor and the deciding period; ``UNRESOLVED`` (1) after ``max_periods`` undecided;
@@ -483,6 +501,6 @@ def label_driven(theta0, theta_dot0, alpha, omega0, torque, table, dt, targets,
     a = label_arrays(theta0, theta_dot0, targets, target_attractor, radius, confirm,
                      max_periods)
     _run(_label, _label_serial, a.theta0, a.theta_dot0, alpha, omega0, torque, table, dt,
-         (a.targets, a.target_attractor, a.radius, np.int64(confirm), np.int64(max_periods),
+         (a.targets, a.target_attractor, a.radius, a.confirm, np.int64(max_periods),
           a.attractor, a.periods, a.status))
     return a.attractor, a.periods, a.status

@@ -126,7 +126,7 @@ def _device_orbit(visit, path, one_period):
     def orbit(i, theta0, theta_dot0, alpha, omega0, dt, forcing, accel, args):
         th = theta0[i]
         v = theta_dot0[i]
-        shared = path(th, v, alpha, dt, accel) == SHARED
+        shared = path(th, v, alpha, omega0, dt, accel) == SHARED
         memo = cuda.local.array((1, 2), np.int64)
         memo[0, 0] = ATTRACTOR_FILL
         memo[0, 1] = 0
@@ -160,7 +160,7 @@ def _compile() -> DrivenKernels:
     f8, i8, i4, i2, i1 = "float64", "int64", "int32", "int16", "int8"
     common = f"{f8}, {f8}, {f8}, {f8}[::1], {f8}"  # alpha, omega0, dt, forcing, accel
     label_sig = (f"void({f8}[::1], {f8}[::1], {common}, {f8}[:, ::1], {i2}[::1], {f8}[::1], "
-                 f"{i8}, {i8}, {i2}[::1], {i4}[::1], {i1}[::1])")
+                 f"{i8}[::1], {i8}, {i2}[::1], {i4}[::1], {i1}[::1])")
     advance_sig = f"void({f8}[::1], {f8}[::1], {common}, {i8})"
 
     @cuda.jit(label_sig)
@@ -199,7 +199,7 @@ def label_driven_cuda(theta0, theta_dot0, alpha, omega0, torque, table, dt, targ
     # the drive and the targets are the same for every orbit: on the device once, whole
     args = (a.theta0, a.theta_dot0, float(alpha), float(omega0), float(dt),
             cuda.to_device(forcing), accel, cuda.to_device(a.targets),
-            cuda.to_device(a.target_attractor), cuda.to_device(a.radius), int(confirm),
+            cuda.to_device(a.target_attractor), cuda.to_device(a.radius), cuda.to_device(a.confirm),
             int(max_periods), a.attractor, a.periods, a.status)
     # attractor is "inout": the kernel writes it only where an orbit is decided
     modes = ("in", "in") + (None,) * 10 + ("inout", "out", "out")

@@ -3,9 +3,10 @@ on the stroboscopic map P in the browser (``view_assets/driven.js``).
 
 Per parameter point, read from the file and nothing rebuilt: the equation's parameters
 (α, ω0, τ, A, Ω, φ), the steps per drive period N of ``/attractors`` (dt = T/N, T = 2π/Ω),
-the most periods an orbit is followed (t_max / T, as the run's labels), the labelling rule's
-``confirm``, every attractor's points on P with its capture radius, status and name (as the
-key names it), and the stored label of every grid point. The script integrates the orbit with
+the most periods an orbit is followed (t_max / T, as the run's labels), the returns in a row
+that decide each attractor's label (``confirm``), every attractor's points on P with its
+capture radius, status and name (as the key names it), and the stored label of every grid
+point. The script integrates the orbit with
 the RK4 step of :mod:`atlas.kernels.driven` (the drive read at t, t + dt/2, t + dt of each
 step from a table of the 2N + 1 half-step times of one period, the same table every period),
 draws its returns to P and labels it by the rule of
@@ -23,6 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from atlas.layout import point_group
+from atlas.models.driven.description import stored_confirm
 from atlas.views.info_driven import attractor_names
 
 if TYPE_CHECKING:
@@ -70,7 +72,7 @@ def orbit_data(tree: xr.DataTree, ds: xr.Dataset, point: dict[str, float], t_max
         "amplitude": point["amplitude"], "frequency": point["frequency"],
         "phase": point["phase"], "steps_per_period": n, "t_max": t_max,
         "max_periods": max(1, int(t_max / period)),
-        "confirm": int(group.attrs["confirm"]),
+        "confirm": [int(c) for c in stored_confirm(group)],
         "radius": [float(r) for r in group["capture_radius"].values],
         "attractor_status": [int(s) for s in group["status"].values],
         "names": list(attractor_names(group).values()),

@@ -89,7 +89,7 @@ def test_the_printed_label_is_the_stored_one(driven_files, tmp_path, capsys):
         names = attractor_names(atlas.open(path)["attractors"].to_dataset())
         assert f"label        attractor {names[k]}, " in text
         assert f"stored attractor {names[k]}, " in text
-        assert "status       converged: within the capture radius" in text
+        assert "status       converged: a return came within the capture radius" in text
         assert f"t_trap       {float(ds['t_trap'].values[j, i]):.2f} s" in text
         assert "RK4 with dt = T/32" in text and "t_max = 320 s" in text
         changes = bool(ds["changes_at_half_dt"].values[j, i])

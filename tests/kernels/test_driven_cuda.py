@@ -75,7 +75,7 @@ py_steps = (make_driven_step(py_sin_near, reduce_pi.py_func).py_func,
 
 def reference(th, v, table, dt, periods):  # the CPU's method as plain Python floats
     forcing, accel = drive(OMEGA0, TORQUE, table, dt)
-    shared = orbit_path.py_func(th, v, ALPHA, dt, accel) == SHARED
+    shared = orbit_path.py_func(th, v, ALPHA, OMEGA0, dt, accel) == SHARED
     step = py_steps[0 if shared else 1]
     for _ in range(periods):
         for j in range(0, forcing.size - 1, 2):

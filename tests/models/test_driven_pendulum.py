@@ -151,6 +151,31 @@ def test_each_label_is_the_attractor_its_orbit_reaches(wada_atlas, wada_attracto
         assert d < float(group["capture_radius"].values[k]), (th, v, k, d)
 
 
+@pytest.mark.parametrize("amplitude", [1.66, 1.71])
+def test_one_return_into_a_contracting_ball_decides_as_eight_in_a_row(amplitude):
+    """A ``converged`` label is decided at the first return into its attractor's capture
+    ball, which was seen to map into itself: on a 64² grid of the window (and at F = 1.71,
+    four attractors) every label is the one that eight returns in a row give (the rule
+    before), each decided at least CONFIRM − 1 returns sooner."""
+    from atlas.models.driven.description import CONFIRM
+    from atlas.models.driven.points import prepared
+
+    drive = replace(WADA, amplitude=amplitude)
+    point, found, statuses, _ = prepared(drive, WINDOW, 8, 600.0)
+    assert list(point.confirm) == [1] * len(found) and np.all(statuses == CONVERGED)
+    x0, v0 = np.linspace(-math.pi, math.pi, 64)[None, :], np.linspace(-2, 4, 64)[:, None]
+    one = point.label(x0, v0)
+    eight = replace(point, confirm=np.full(len(found), CONFIRM)).label(x0, v0)
+    decided = np.isfinite(eight[2])
+    assert decided.mean() > 0.99
+    np.testing.assert_array_equal(one[0][decided], eight[0][decided])
+    np.testing.assert_array_equal(one[1][decided], eight[1][decided])
+    assert np.all(one[2][decided] <= eight[2][decided] - (CONFIRM - 1) * drive.period + 1e-3)
+    # undecided by t_max at eight in a row: within the last CONFIRM - 1 periods at one
+    late = ~decided & np.isfinite(one[2])
+    assert np.all(one[2][late] > (point.max_periods - CONFIRM + 1) * drive.period - 1e-3)
+
+
 def test_info_plot_and_view_read_it(wada_atlas, capsys):
     assert main(["info", str(wada_atlas)]) == 0
     out = capsys.readouterr().out
@@ -343,7 +368,7 @@ def test_labels_do_not_depend_on_thread_count_or_batch_split():
     targets = np.concatenate([a.points for a in found])
     owner = np.concatenate([np.full(len(a.points), i, np.int16) for i, a in enumerate(found)])
     point = DrivenPoint(WADA, targets, owner, np.zeros(len(found), np.int8),
-                        np.full(len(owner), 0.02), 100)
+                        np.full(len(owner), 0.02), np.full(len(found), 8), 100)
     rng = np.random.default_rng(3)
     theta0, theta_dot0 = rng.uniform(-math.pi, math.pi, 777), rng.uniform(-2, 4, 777)
     one = point.label(theta0, theta_dot0, numba_threads=1)[:3]

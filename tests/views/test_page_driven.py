@@ -132,7 +132,8 @@ def test_each_section_carries_its_own_points_data(driven, stored):
         point = s["point"]
         assert d["amplitude"] == point.drive.amplitude
         assert d["steps_per_period"] == point.drive.steps_per_period
-        assert d["max_periods"] == point.max_periods and d["confirm"] == 8
+        assert d["max_periods"] == point.max_periods
+        assert d["confirm"] == [int(c) for c in point.confirm]
         np.testing.assert_array_equal(d["targets"]["theta"], point.targets[:, 0])
         np.testing.assert_array_equal(d["targets"]["attractor"], point.target_attractor)
         assert [d["radius"][k] for k in d["targets"]["attractor"]] == point.radius.tolist()
@@ -187,15 +188,21 @@ def test_a_click_follows_the_orbit_as_atlas_does(driven, stored, browser):
 def test_every_grid_point_of_every_parameter_point_gets_the_files_label(driven, stored,
                                                                         browser):
     """The page's orbit from each grid point of each map (that point's own drive and
-    attractors) gets the label the file stores there, undecided ones included."""
+    attractors) gets the label the file stores there, undecided ones included, and at the
+    period the file stores wherever the page's returns follow the kernel's (to 1e-9) up to
+    it: the page's sine and its lack of FMA differ from the kernel's in the last bits, which a
+    chaotic transient may grow until a return falls on the other side of a capture circle."""
+    from atlas.kernels import driven as kernels
+
     _open(browser, driven["page"])
-    undecided = 0
+    undecided = followed = decided = 0
     for index, s in enumerate(stored):
-        ds = s["ds"]
+        ds, drive = s["ds"], s["point"].drive
         grid = [[float(t), float(v)] for v in ds.theta_dot0.values for t in ds.theta0.values]
         got = browser.evaluate(f"""{json.dumps(grid)}.map(([t, v]) => {{
             const o = atlasDriven.follow({index}, t, v);
-            return [o.attractor === null ? -32768 : o.attractor, o.status, o.periods]; }})""")
+            return [o.attractor === null ? -32768 : o.attractor, o.status, o.periods,
+                    o.returns]; }})""")
         attractor = np.array([g[0] for g in got]).reshape(ds["attractor"].shape)
         np.testing.assert_array_equal(attractor, ds["attractor"].values)
         unresolved = ds["status"].values.ravel() == UNRESOLVED
@@ -204,10 +211,19 @@ def test_every_grid_point_of_every_parameter_point_gets_the_files_label(driven, 
             assert g[2] == s["point"].max_periods
         undecided += int(unresolved.sum())
         t = ds["t_trap"].values.ravel()
-        periods = np.array([g[2] for g in got], float)
-        decided = np.isfinite(t)
-        np.testing.assert_allclose(periods[decided] * s["point"].drive.period, t[decided],
-                                   rtol=1e-6)
+        for (th0, v0), g, stored_t in zip(grid, got, t):
+            if not np.isfinite(stored_t):
+                continue
+            decided += 1
+            periods = int(round(stored_t / drive.period))
+            kernel = kernels.sample(np.array([th0]), np.array([v0]), drive.alpha,
+                                    drive.omega0, drive.torque, drive.table, drive.dt, 0,
+                                    periods)[0]
+            page = np.array(g[3][:periods])
+            if len(page) == periods and np.abs(page - kernel).max() <= 1e-9:
+                assert g[2] == periods, (th0, v0)
+                followed += 1
+    assert followed >= 0.75 * decided  # most follow (108 of 127 here): not vacuous
     assert undecided >= 1  # the "undecided" readout is met
     assert browser.errors == []
 

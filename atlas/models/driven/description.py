@@ -20,7 +20,8 @@ from atlas.models.pendulum.description import PARAMETERS as PENDULUM_PARAMETERS
 
 __all__ = ["PARAMETERS", "CONVERGED", "UNRESOLVED", "NONFINITE", "NEAR", "CHAOTIC",
            "STATUSES", "IN_FILE", "ATTRACTOR_FILL", "MAX_PERIOD", "LONGEST_PERIOD", "WHOLE",
-           "steps_per_period", "DRIVEN_PENDULUM"]
+           "steps_per_period", "DRIVEN_PENDULUM", "CONFIRM", "confirm_returns",
+           "stored_confirm"]
 
 #: The parameters: the pendulum's, then the drive's (dims in this order).
 PARAMETERS = {
@@ -30,9 +31,9 @@ PARAMETERS = {
     "phase": ("rad", "phase of the periodic torque at t = 0"),
 }
 
-#: The orbit's returns to P came within the capture radius of a stable periodic orbit of P,
+#: A return of the orbit to P came within the capture radius of a stable periodic orbit of P,
 #: one whose capture ball was seen to map into itself (every sampled state of its circle
-#: mapped inside by P^(p·m), some m ≤ 8), for ``confirm`` returns in a row.
+#: mapped inside by P^(p·m), some m ≤ 8): the orbit stays in it (``confirm`` = 1).
 CONVERGED = 0
 #: No label by t_max.
 UNRESOLVED = 1
@@ -48,10 +49,11 @@ CHAOTIC = 4
 STATUSES = {CONVERGED: "converged", UNRESOLVED: "unresolved", NONFINITE: "nonfinite",
             NEAR: "near", CHAOTIC: "chaotic"}
 IN_FILE = {
-    CONVERGED: "within the capture radius of a stable periodic orbit of the RK4 stroboscopic "
-               "map for confirm returns in a row, whose capture ball was seen to map into "
-               "itself under P^(p m), m <= 8, on sampled states of its circle (shown for "
-               "the RK4 map by sampling, not proven; not certified for the exact equation)",
+    CONVERGED: "a return came within the capture radius of a stable periodic orbit of the "
+               "RK4 stroboscopic map, whose capture ball was seen to map into itself under "
+               "P^(p m), m <= 8, on sampled states of its circle, so that the orbit stays "
+               "in it (shown for the RK4 map by sampling, not proven; not certified for the "
+               "exact equation)",
     UNRESOLVED: "no label decided before t_max",
     NONFINITE: "a NaN or inf state was met",
     NEAR: "within the capture radius of a periodic orbit of the RK4 stroboscopic map for "
@@ -59,6 +61,31 @@ IN_FILE = {
     CHAOTIC: "on a chaotic attractor of the RK4 stroboscopic map: within its recorded cloud "
              "of points for confirm returns in a row (a recurrent, non-periodic attractor)",
 }
+
+#: Returns of P in a row within an attractor's capture radius that decide a label, where
+#: its capture ball was not seen to map into itself (a ``near`` or ``chaotic`` label). One
+#: return decides a ``converged`` label: its ball maps into itself under P^(p·m) (sampled,
+#: :func:`atlas.models.driven.attractors.contracts`), so an orbit in it stays in it and
+#: converges to the orbit (the returns after it would only confirm what the test has shown).
+CONFIRM = 8
+
+
+def confirm_returns(statuses: np.ndarray) -> np.ndarray:
+    """The returns in a row within its capture radius that decide each attractor's label
+    (int64 per attractor, from the status its labels get): 1 for a ``converged`` one,
+    :data:`CONFIRM` otherwise."""
+    return np.where(np.asarray(statuses) == CONVERGED, 1, CONFIRM).astype(np.int64)
+
+
+def stored_confirm(group) -> np.ndarray:
+    """The returns in a row that decided each attractor's labels in a file (int64 per
+    attractor): its ``/attractors`` node's ``confirm``, or (a file written before that
+    variable, with one rule for all) the node's ``confirm`` attribute."""
+    n = group.sizes.get("attractor", 0)
+    if "confirm" in group.data_vars:
+        return np.asarray(group["confirm"].values, np.int64)
+    return np.full(n, int(group.attrs.get("confirm", CONFIRM)), np.int64)
+
 
 #: The largest period [drive periods] of the periodic attractors searched for, by default
 #: (``pendulum.drive.max_period``), and the largest a config may ask for (the search reads

@@ -33,16 +33,16 @@ from atlas.models.driven.description import (
     NEAR,
     NONFINITE,
     UNRESOLVED,
+    confirm_returns,
     steps_per_period,
+    stored_confirm,
 )
 from atlas.store.schema import summary_dataset
 
-__all__ = ["CONFIRM", "DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
+__all__ = ["DrivenPoint", "DrivenPlan", "drives", "begin", "plan",
            "attractors_dataset", "stored_point", "search_window", "shifted_spread",
            "prepared"]
 
-#: Returns of P in a row within an attractor's capture radius that decide a label.
-CONFIRM = 8
 #: Points of a chaotic attractor's cloud stored in ``/attractors`` (and used as targets).
 CLOUD_POINTS = 2000
 
@@ -63,8 +63,9 @@ def drives(cfg, layout: Layout) -> list[Drive]:
 class DrivenPoint:
     """One parameter point, prepared (:class:`atlas.models.base.PointPlan`): the drive, the
     targets (every attractor's points on P, θ wrapped) with the index of their attractor
-    and their capture radius, the status each attractor's labels get, the most periods
-    (t_max / T), and the grid (θ0 columns, θ̇0 rows) whose tiles :meth:`certify` labels
+    and their capture radius, the status each attractor's labels get and the returns in a
+    row that decide them (:func:`confirm_returns`), the most periods (t_max / T), and the
+    grid (θ0 columns, θ̇0 rows) whose tiles :meth:`certify` labels
     again at dt/2 (None: not checked)."""
 
     drive: Drive
@@ -72,6 +73,7 @@ class DrivenPoint:
     target_attractor: np.ndarray
     attractor_status: np.ndarray
     radius: np.ndarray
+    confirm: np.ndarray
     max_periods: int
     grid: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -80,7 +82,7 @@ class DrivenPoint:
         """The point with no attractor to reach: every orbit runs to ``t_max`` [s] (what a
         label costs at most: the pre-flight estimate's sample)."""
         return cls(drive, np.zeros((0, 2)), np.zeros(0, np.int16), np.zeros(0, np.int8),
-                   np.zeros(0), max(1, int(t_max / drive.period)))
+                   np.zeros(0), np.zeros(0, np.int64), max(1, int(t_max / drive.period)))
 
     def label(self, x0, v0, rows=None, backend: str = "cpu", numba_threads=None,
               t_max: float | None = None):
@@ -101,7 +103,7 @@ class DrivenPoint:
             labelling = kernels.label_driven
         attractor, periods, status = labelling(
             theta, theta_dot, d.alpha, d.omega0, d.torque, d.table, d.dt, self.targets,
-            self.target_attractor, self.radius, CONFIRM, periods_max)
+            self.target_attractor, self.radius, self.confirm, periods_max)
         decided = status == 0
         status = status.astype(np.int8)
         status[decided] = self.attractor_status[attractor[decided]]
@@ -170,7 +172,8 @@ def shifted_spread(counts: np.ndarray, rows: int, columns: int) -> np.ndarray:
 def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.ndarray,
                        radii: np.ndarray, max_period: int = MAX_PERIOD) -> xr.Dataset:
     """One parameter point's node of ``/attractors``: per attractor its kind, period,
-    winding, status its labels get, capture radius, Floquet multipliers' moduli and its
+    winding, status its labels get, the returns in a row that decide them
+    (:func:`confirm_returns`), capture radius, Floquet multipliers' moduli and its
     points on P (θ wrapped to [−π, π), θ̇; NaN past its own count), with the discretisation
     and the period bound ``max_period`` of the search as attributes."""
     n = max([len(a.points) for a in attractors] + [1])
@@ -189,6 +192,10 @@ def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.n
                      {"units": "1", "long_name": "net turns of the orbit over its period"}),
          "status": ("attractor", statuses.astype(np.int8),
                     {"units": "1", "long_name": "the status of this attractor's labels"}),
+         "confirm": ("attractor", confirm_returns(statuses),
+                     {"units": "1", "long_name": "returns of P in a row within the capture "
+                                                 "radius that decide a label: 1 where the "
+                                                 "capture ball was seen to map into itself"}),
          "floquet_modulus": (("attractor", "multiplier"), moduli,
                              {"units": "1", "long_name": "moduli of the Floquet multipliers "
                                                          "(NaN: chaotic)"}),
@@ -212,7 +219,7 @@ def attractors_dataset(drive: Drive, attractors: list[Attractor], statuses: np.n
                               "spread over the window",
                "steps_per_period": np.int64(drive.steps_per_period),
                "drive_period": drive.period, "drive_period_units": "s",
-               "confirm": np.int64(CONFIRM), "max_period": np.int64(max_period)})
+               "max_period": np.int64(max_period)})
 
 
 @dataclass
@@ -361,7 +368,7 @@ def stored_point(group: xr.Dataset, params: dict[str, float], t_max: float) -> D
     radii = np.asarray(group["capture_radius"].values, np.float64) if n else np.zeros(0)
     statuses = np.asarray(group["status"].values, np.int8) if n else np.zeros(0, np.int8)
     return DrivenPoint(drive, targets, owner, statuses,
-                       radii[owner] if len(owner) else np.zeros(0),
+                       radii[owner] if len(owner) else np.zeros(0), stored_confirm(group),
                        max(1, int(t_max / drive.period)))
 
 
@@ -386,7 +393,7 @@ def prepared(drive: Drive, window, max_period: int, t_max: float, grid=None
     radii = np.array([radius for radius, _ in captures])
     targets, owner = _targets([a.points for a in found], [a.kind for a in found])
     point = DrivenPoint(drive, targets, owner, statuses,
-                        radii[owner] if len(owner) else np.zeros(0),
+                        radii[owner] if len(owner) else np.zeros(0), confirm_returns(statuses),
                         max(1, int(t_max / drive.period)), grid=grid)
     return point, found, statuses, radii
 

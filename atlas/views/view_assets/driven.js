@@ -105,7 +105,7 @@
       else if (hit === run) length += 1;
       else length = 1;
       run = hit;
-      if (length >= d.confirm) {
+      if (hit >= 0 && length >= d.confirm[hit]) {
         out.attractor = hit;
         out.decided = true;
         out.status = d.status_names[String(d.attractor_status[hit])] || 'decided';
@@ -240,6 +240,10 @@
     }
   }
 
+  function returnsText(confirm) {
+    return confirm === 1 ? 'a return' : `${confirm} returns in a row`;
+  }
+
   function fmt(value, digits = 4) {
     return Number(value).toFixed(digits);
   }
@@ -275,8 +279,8 @@
     const label = line(r, 'p', '', 'orbit-label');
     if (o.decided) {
       label.textContent = `It reaches ${d.names[o.attractor]} (${o.status}) after ${o.periods} `
-        + `drive periods, t = ${o.t.toFixed(1)} s: ${d.confirm} returns in a row within its `
-        + `capture radius ${d.radius[o.attractor].toPrecision(3)}.`;
+        + `drive periods, t = ${o.t.toFixed(1)} s: ${returnsText(d.confirm[o.attractor])} `
+        + `within its capture radius ${d.radius[o.attractor].toPrecision(3)}.`;
     } else if (o.status === 'nonfinite') {
       label.textContent = `A NaN or inf state was met after ${o.periods} drive periods.`;
     } else {
