@@ -92,6 +92,55 @@ def _kernel_row(quick: bool) -> dict:
                     "period (must be < 1e-9)"}
 
 
+#: A fresh interpreter's rate of :func:`atlas.kernels.driven.advance` (M RK4 steps/s, the
+#: best of three calls after a warm-up) and the features Numba compiled for.
+_WIDTH_SCRIPT = """
+import hashlib, json, math, time
+import numpy as np
+from atlas.kernels import driven
+import numba
+n, periods = {n}, {periods}
+rng = np.random.default_rng(0)
+theta0, theta_dot0 = rng.uniform(-math.pi, math.pi, n), rng.uniform(-2.0, 4.0, n)
+table, dt = driven.forcing_table(1.66, 1.0, 0.0, 200), driven.step_size(1.0, 200)
+best = math.inf
+for i in range(4):
+    theta, theta_dot = theta0.copy(), theta_dot0.copy()
+    start = time.perf_counter()
+    driven.advance(theta, theta_dot, 0.1, 1.0, 0.0, table, dt, periods if i else 1)
+    if i:
+        best = min(best, time.perf_counter() - start)
+print(json.dumps({{"rate": n * periods * 200 / best / 1e6,
+                  "features": numba.config.CPU_FEATURES or "",
+                  "digest": hashlib.sha256(theta.tobytes() + theta_dot.tobytes()).hexdigest()}}))
+"""
+
+
+def _width_row(quick: bool) -> dict:
+    """The driven kernel at 512-bit vectors (:mod:`atlas.kernels.vector_width`, this
+    machine's default where the CPU has AVX-512) against LLVM's own choice
+    (``ATLAS_VECTOR_BITS=256``), each in a fresh interpreter, one after the other."""
+    import json
+
+    from atlas.kernels.vector_width import TUNING
+
+    script = _WIDTH_SCRIPT.format(n=20_000 if quick else 100_000, periods=2 if quick else 5)
+    out = {}
+    for name, env in (("wide", {}), ("llvm", {"ATLAS_VECTOR_BITS": "256"})):
+        _, done = run_python(["-c", script], **env)
+        out[name] = json.loads(done.stdout.strip().splitlines()[-1])
+    wide = out["wide"]["features"].endswith(f"-{TUNING}")
+    return {"variant": f"driven kernel at {'512' if wide else 'the default'}-bit vectors, "
+                       f"{out['wide']['rate']:.0f} M RK4 steps/s",
+            "wall_s": float("nan"), "ratio": out["wide"]["rate"] / out["llvm"]["rate"],
+            "against": f"LLVM's own width (ATLAS_VECTOR_BITS=256), "
+                       f"{out['llvm']['rate']:.0f} M steps/s",
+            "note": "ratio = speed-up; " + (
+                "the same states: " + str(out["wide"]["digest"] == out["llvm"]["digest"])
+                if wide else "this CPU has no AVX-512 or the width was set by the user: "
+                             "both ran alike")}
+
+
 def _atlas_rows(quick: bool) -> list[dict]:
     """The three-basin atlas over [−π, π] × [−4, 4], 1000² (quick: 100²), end to end in a
     fresh interpreter (after a small warm-up run), and the share of that time spent outside
@@ -178,6 +227,6 @@ def _sweep_rows(quick: bool) -> list[dict]:
 
 
 def driven_rows(quick: bool) -> list[dict]:
-    """The rows (``atlas.commands.bench``'s row shape): the kernel against NumPy, then the
-    Wada atlas end to end."""
-    return [_kernel_row(quick), *_atlas_rows(quick), *_sweep_rows(quick)]
+    """The rows (``atlas.commands.bench``'s row shape): the kernel against NumPy and at both
+    vector widths, the Wada atlas end to end, the amplitude sweep."""
+    return [_kernel_row(quick), _width_row(quick), *_atlas_rows(quick), *_sweep_rows(quick)]

@@ -6,7 +6,9 @@ basin map (kernel time by CUDA events, the wall time of :func:`label_cuda` host 
 effective steps/s), bulk steps/s without early exit, the GPU's labels against the CPU's on
 the same grid (the share equal; the largest exact-boundary distance of those that differ),
 and :func:`atlas.run` with backend "cuda" end to end (:func:`sweep_rows`; 16384² on request:
-``atlas bench --backend cuda --gpu-sweep 16384``). Plus a JAX peer when JAX sees a GPU.
+``atlas bench --backend cuda --gpu-sweep 16384``); the driven pendulum's three-basin map
+labelled on the GPU against the CPU kernel (:func:`atlas.commands.bench_gpu_driven.gpu_row`).
+Plus a JAX peer when JAX sees a GPU.
 Without a CUDA GPU :func:`run_gpu_bench` returns None. Details: ``docs/design/bench.md``.
 """
 
@@ -21,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from atlas import defaults
+from atlas.commands.bench_gpu_driven import gpu_line, gpu_row
 from atlas.kernels.cuda import VARIANTS, cuda_status, kernels
 from atlas.kernels.cuda_host import label_cuda
 from atlas.labels.trap import CHECK_EVERY, energy_cap, n_checks_for
@@ -210,6 +213,7 @@ def run_gpu_bench(n: int = 4096, repeats: int = 5, *, t_max: float = defaults.T_
         "cpu_labels": cpu,
         "jax": _jax_bulk(theta0, theta_dot0, p, bulk_steps, repeats),
         "sweep": _sweep_row(n, t_max),
+        "driven": gpu_row(n, repeats),
         "targets": TARGETS,
     }
 
@@ -236,6 +240,8 @@ def format_gpu_rows(result: dict | None) -> str:
         lines.append(f"sweep: atlas run --backend cuda of the {side}x{side} default atlas "
                      f"({sweep['tiles']} tiles), end to end {sweep['sweep_s']:.2f} s, "
                      f"{sweep['orbits_per_s'] / 1e6:.1f} M orbits/s")
+    if "driven" in result:
+        lines.append(gpu_line(result["driven"]))
     cpu = result.get("cpu_labels")
     if cpu is not None:
         differ = (f"{cpu['differ']} differ, all within "

@@ -64,13 +64,13 @@ def _label_lines(orbit: DrivenOrbit, group: xr.Dataset) -> list[str]:
         floquet = f", |Floquet multipliers| {moduli[0]:.3g}, {moduli[1]:.3g}"
     radius = float(group["capture_radius"].values[k])
     confirm = int(stored_confirm(group)[k])
-    returns = (f"return {orbit.periods} lies" if confirm == 1 else
-               f"returns {orbit.periods - confirm + 1} to {orbit.periods} lie")
+    returns = (f"its return {orbit.periods} to P lies" if confirm == 1 else
+               f"its returns to P {orbit.periods - confirm + 1} to {orbit.periods} lie")
     return [f"label        {attractor_text(group, k)}{floquet} (the atlas's rule, "
             "DrivenPoint.label)",
             f"status       {status}: {meaning}",
-            f"t_trap       {orbit.t_trap:.2f} s = {orbit.periods} T: the orbit's {returns} to "
-            f"P within the capture radius {radius:.3g} of its points on P"]
+            f"t_trap       {orbit.t_trap:.2f} s = {orbit.periods} T: {returns} within the "
+            f"capture radius {radius:.3g} of its points on P"]
 
 
 def _half_line(orbit: DrivenOrbit, group: xr.Dataset) -> str:

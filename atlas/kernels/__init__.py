@@ -26,7 +26,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 from atlas.defaults import METHODS  # noqa: F401 (the discretisations, re-exported)
-from atlas.kernels.vector_width import prefer_wide_vectors
 from atlas.status import (  # noqa: F401 (the kernels' status codes, re-exported)
     ATTRACTOR_FILL,
     NEAR_BOUNDARY,
@@ -36,9 +35,6 @@ from atlas.status import (  # noqa: F401 (the kernels' status codes, re-exported
     TRAPPED,
     UNRESOLVED,
 )
-
-# before any kernel module makes Numba's CPU target: 512-bit vectors where the CPU has them
-prefer_wide_vectors()
 
 
 def tilt(omega0: float, torque: float) -> float:
@@ -89,6 +85,8 @@ def cached_njit(**options):
     a function's cache folder when it is decorated, so the setting is scoped to that call).
     If the folder cannot be made, Numba's own default place is used."""
     import numba
+
+    import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 
     def decorate(func):
         saved = numba.config.CACHE_DIR

@@ -32,6 +32,7 @@ import math
 import numba as nb
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels import cached_njit
 from atlas.kernels.polygon import window_areas as chord_areas
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels import cached_njit
 
 __all__ = ["integrate", "solve", "Solution", "stable_manifold", "dense_output", "FINISHED", "EVENT",

@@ -34,6 +34,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels import ATTRACTOR_FILL, NONFINITE, TRAPPED, UNRESOLVED, cached_njit
 from atlas.kernels.fastsin import SIN_FASTMATH, fast_sin, reduce_pi, sin_near
 from atlas.kernels.lanes import FULL, LANES, MAX_STAGE_OFFSET, SHARED, TILE, n_chunks, serial_twin
@@ -447,7 +448,7 @@ class LabelArrays(NamedTuple):
     targets: np.ndarray  # float64 (K, 2)
     target_attractor: np.ndarray  # int16 K
     radius: np.ndarray  # float64 K
-    confirm: np.ndarray  # int64, one per attractor (0 … max(target_attractor))
+    confirm: np.ndarray  # int64, one per attractor (at least 0 … max(target_attractor))
     attractor: np.ndarray  # int16 n, ATTRACTOR_FILL
     periods: np.ndarray  # int32 n
     status: np.ndarray  # int8 n
@@ -471,8 +472,13 @@ def label_arrays(theta0, theta_dot0, targets, target_attractor, radius, confirm,
     attractors = int(target_attractor.max()) + 1 if target_attractor.size else 0
     if target_attractor.size and target_attractor.min() < 0:
         raise ValueError("target_attractor must be ≥ 0")
-    confirm = np.ascontiguousarray(np.broadcast_to(np.asarray(confirm, np.int64),
-                                                   (attractors,)))
+    confirm = np.asarray(confirm, np.int64)
+    if confirm.ndim == 0:
+        confirm = np.full(attractors, confirm)
+    elif confirm.ndim != 1 or confirm.size < attractors:
+        raise ValueError("confirm must be one count, or one per attractor (an attractor "
+                         "without targets may have one too)")
+    confirm = np.ascontiguousarray(confirm)
     if np.any(confirm < 1) or max_periods < 0:
         raise ValueError("confirm must be ≥ 1 and max_periods ≥ 0")
     n = theta0.size

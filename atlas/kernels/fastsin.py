@@ -17,6 +17,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels.rk4 import FASTMATH
 
 #: Max abs error of fast_sin vs sin for |x| ≤ EXACT_RANGE (and of sin_poly on |r| ≤ POLY_RANGE).

@@ -21,6 +21,7 @@ import math
 import numba as nb
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels import cached_njit
 from atlas.kernels.dop853 import dense_component, dense_step
 

@@ -23,6 +23,7 @@ import types
 import numba as nb
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels import NONFINITE, RUNNING, TRAPPED, UNRESOLVED, cached_njit, uses_torque
 from atlas.kernels.fastsin import (
     EXACT_RANGE,

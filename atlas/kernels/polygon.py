@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels import cached_njit
 
 __all__ = ["clip", "window_areas"]

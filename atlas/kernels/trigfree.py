@@ -20,6 +20,7 @@ import math
 import numba as nb
 import numpy as np
 
+import atlas.kernels.vector_width  # noqa: F401 (before any njit: 512-bit vectors)
 from atlas.kernels import NONFINITE, TRAPPED, UNRESOLVED, cached_njit, uses_torque
 from atlas.kernels.fastsin import SIN_FASTMATH, sin_cos_vers
 from atlas.kernels.rk4 import (

@@ -47,3 +47,18 @@ def test_the_sweep_row_runs_the_study():
     interpreter, timed."""
     row, = bench_driven._sweep_rows(quick=True)
     assert row["wall_s"] > 0 and "3 points x 1,000 samples" in row["variant"]
+
+
+def test_the_width_row_sets_wide_vectors_against_llvms_own_on_the_same_states():
+    """The vector-width row runs the kernel in two fresh interpreters, at this machine's
+    default width and at LLVM's own (``ATLAS_VECTOR_BITS=256``): a positive ratio, and on a
+    CPU with AVX-512 the same states from both (no timing asserted)."""
+    import llvmlite.binding as ll
+
+    row = bench_driven._width_row(True)
+    assert math.isfinite(row["ratio"]) and row["ratio"] > 0
+    if "+avx512f" in ll.get_host_cpu_features().flatten().split(","):
+        assert row["variant"].startswith("driven kernel at 512-bit vectors")
+        assert row["note"].endswith("the same states: True")
+    else:
+        assert "both ran alike" in row["note"]

@@ -133,8 +133,9 @@ def test_figures_and_bench_refuse_an_output_folder_they_cannot_make(tmp_path):
 
 
 def test_python_dash_m_atlas_and_the_bench_modules():
-    """``python -m atlas`` is the CLI; the GPU benchmark does not import the CPU one (the CPU
-    benchmark calls the GPU rows, never the other way round)."""
+    """``python -m atlas`` is the CLI; the GPU benchmark (with its driven pendulum's row)
+    does not import the CPU one (the CPU benchmark calls the GPU rows, never the other way
+    round)."""
     import subprocess
     import sys
 
@@ -147,7 +148,8 @@ def test_python_dash_m_atlas_and_the_bench_modules():
     proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                           timeout=120)
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.split() == ["['atlas.commands.bench_gpu']"]
+    assert proc.stdout.split() == ["['atlas.commands.bench_gpu',",
+                                   "'atlas.commands.bench_gpu_driven']"]
 
 
 @pytest.mark.slow

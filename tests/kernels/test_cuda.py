@@ -150,6 +150,7 @@ r["sweeps"] = sweep_rows([6], t_max=1.0)
 print(json.dumps({"default": run_gpu_bench() is None, "variants": sorted(r["variants"]),
                   "agree": r["labels_agree_fraction"], "cpu": r["cpu_labels"],
                   "sweeps": [s["n"] for s in r["sweeps"]], "table": format_gpu_rows(r),
+                  "driven": r["driven"],
                   "skip": format_gpu_rows(None)}))
 """
     out = _child(code, simulator=True)
@@ -159,6 +160,10 @@ print(json.dumps({"default": run_gpu_bench() is None, "variants": sorted(r["vari
     assert out["sweeps"] == [6] and "6x6 default atlas" in out["table"]
     assert "against CPU labels" in out["table"] and "none differs" in out["table"]
     assert "fast" in out["table"] and out["skip"].startswith("GPU benchmark skipped")
+    driven = out["driven"]  # the simulator runs the device code in Python: the same labels
+    assert driven["orbits"] == 16 and driven["cpu_sample"] == 16
+    assert driven["agree_fraction"] == 1.0 and driven["gpu_gsteps_s"] > 0
+    assert "driven: the three-basin map (A = 1.66) 4x4 labelled on the GPU" in out["table"]
 
 
 @pytest.mark.slow

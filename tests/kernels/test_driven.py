@@ -242,3 +242,45 @@ def test_nonfinite_and_unresolved_statuses():
         np.array([0.0]), np.array([1e307]), ALPHA, OMEGA0, 0.0, TABLE, DT,
         np.array([[0.0, 0.0]]), np.array([0], np.int16), 0.1, 2, 5)
     assert status[0] == NONFINITE and periods[0] == 1 and attractor[0] == ATTRACTOR_FILL
+
+
+@pytest.mark.parametrize("amplitude, torque, steps", [(1.66, 0.0, 200), (1.2, 0.3, 200)])
+def test_shared_orbits_keep_every_stage_offset_within_the_shared_reductions_range(
+        amplitude, torque, steps):
+    """The path bound (:func:`orbit_path`: the smaller of the speed band and the energy
+    bound) is a promise about the whole orbit: every orbit it sends down the SHARED path,
+    followed by a NumPy RK4 of the same map for 40 periods, keeps each stage offset
+    (½dt·k1θ, ½dt·k2θ, dt·k3θ) within MAX_STAGE_OFFSET; orbits too fast for it take FULL.
+    At the Wada case (A = 1.66, N = 200) every orbit of the window takes SHARED (the band
+    alone sent them all down FULL)."""
+    from atlas.kernels.driven import drive, orbit_path
+    from atlas.kernels.lanes import FULL, MAX_STAGE_OFFSET, SHARED
+
+    rng = np.random.default_rng(11)
+    theta = np.concatenate([rng.uniform(-math.pi, math.pi, 2000), [0.0, 0.0]])
+    theta_dot = np.concatenate([rng.uniform(-4.0, 4.0, 2000), [12.0, -12.0]])
+    table, dt = forcing_table(amplitude, FREQ, PHASE, steps), step_size(FREQ, steps)
+    forcing, accel = drive(OMEGA0, torque, table, dt)
+    path = np.array([orbit_path.py_func(a, b, ALPHA, OMEGA0, dt, accel)
+                     for a, b in zip(theta, theta_dot)])
+    if amplitude == 1.66:
+        assert np.all(path[:2000] == SHARED)
+    assert np.all(path[2000:] == FULL)  # 12 rad/s: too fast for one shared reduction
+    th, v = theta[path == SHARED].copy(), theta_dot[path == SHARED].copy()
+    assert th.size > 1000
+    w2, a2, largest = OMEGA0 ** 2, 2 * ALPHA, 0.0
+    for _ in range(40):
+        for j in range(0, forcing.size - 1, 2):
+            f0, f1, f2 = forcing[j], forcing[j + 1], forcing[j + 2]
+            k1t, k1v = v, f0 - w2 * np.sin(th) - a2 * v
+            k2t = v + 0.5 * dt * k1v
+            k2v = f1 - w2 * np.sin(th + 0.5 * dt * k1t) - a2 * k2t
+            k3t = v + 0.5 * dt * k2v
+            k3v = f1 - w2 * np.sin(th + 0.5 * dt * k2t) - a2 * k3t
+            k4t = v + dt * k3v
+            k4v = f2 - w2 * np.sin(th + dt * k3t) - a2 * k4t
+            largest = max(largest, np.abs(0.5 * dt * k1t).max(), np.abs(0.5 * dt * k2t).max(),
+                          np.abs(dt * k3t).max())
+            th = th + dt / 6 * (k1t + 2 * (k2t + k3t) + k4t)
+            v = v + dt / 6 * (k1v + 2 * (k2v + k3v) + k4v)
+    assert largest <= MAX_STAGE_OFFSET

@@ -51,6 +51,13 @@ cpu = label_driven(theta0, theta_dot0, *params, *labels, 2, 25)
 gpu = label_driven_cuda(theta0, theta_dot0, *params, *labels, 2, 25, chunk=3)
 out["labels"] = [a.tolist() for a in cpu]
 out["labels_equal"] = [bool(np.array_equal(a, b)) and a.dtype == b.dtype for a, b in zip(cpu, gpu)]
+# one count per attractor (ids 0 … 9; 3, 7, 9 have targets): the device reads each its own
+confirm = np.ones(10, np.int64)
+confirm[[3, 7, 9]] = [1, 4, 2]
+per = label_driven(theta0, theta_dot0, *params, *labels, confirm, 25)
+per_gpu = label_driven_cuda(theta0, theta_dot0, *params, *labels, confirm, 25, chunk=3)
+out["per_attractor"] = [a.tolist() for a in per]
+out["per_attractor_equal"] = [bool(np.array_equal(a, b)) for a, b in zip(per, per_gpu)]
 
 # ---- non-finite input (status 2 at period 0), max_periods reached (status 1, the fill)
 bad0 = np.concatenate([theta0[:3], [np.nan, 0.0]])
@@ -120,6 +127,13 @@ def test_labels_and_deciding_periods_equal_the_cpu_kernel(compared):
     # every orbit decides, within 14 periods, and the three seeds' attractors are reached
     assert status == [0] * 8 and max(periods) < 25
     assert attractor[:3] == [3, 7, 9] and set(attractor) == {3, 7, 9}
+    # per attractor: the same on the device; an orbit of #7 (4 in a row) decides 2 returns
+    # later than with 2 for all, one of #3 (1) a return sooner
+    assert out["per_attractor_equal"] == [True, True, True]
+    per_attractor, per_periods, _ = out["per_attractor"]
+    assert per_attractor == attractor
+    shift = {3: -1, 7: 2, 9: 0}
+    assert [p - q for p, q in zip(per_periods, periods)] == [shift[a] for a in attractor]
 
 
 @pytest.mark.slow

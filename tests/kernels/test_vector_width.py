@@ -11,24 +11,27 @@ import sys
 
 import pytest
 
-#: The bulk RK4 lanes and the driven pendulum's map and labels on orbits that take both the
-#: shared and the full reduction path; prints the width's features and a digest of the bits.
+#: The bulk RK4 lanes, the scalar straightforward RK4 (fast-math with reassociation, libm
+#: sin) and the driven pendulum's map and labels on orbits that take both the shared and
+#: the full reduction path; prints the width's features and a digest of the bits.
 SCRIPT = """
 import hashlib, json, math
 import numpy as np
-from atlas.kernels import driven, lanes
+from atlas.kernels import driven, lanes, rk4
 import numba
 rng = np.random.default_rng(1)
 theta, theta_dot = rng.uniform(-math.pi, math.pi, 4099), rng.uniform(-30.0, 30.0, 4099)
 bulk = theta.copy(), theta_dot.copy()
 lanes.propagate_lanes(*bulk, 0.1, 1.0, 0.05, 97)
+scalar = theta.copy(), theta_dot.copy()
+rk4.propagate_straightforward(*scalar, 0.1, 1.0, 0.05, 97)
 table = driven.forcing_table(1.66, 1.0, 0.3, 200)
 mapped = theta.copy(), theta_dot.copy()
 driven.advance(*mapped, 0.1, 1.0, 0.2, table, 2 * math.pi / 200, 3)
 labels = driven.label_driven(theta, theta_dot, 0.1, 1.0, 0.0, table, 2 * math.pi / 200,
                              np.array([[-2.408, 0.677]]), np.array([0], np.int16), 0.1, 1, 20)
 digest = hashlib.sha256()
-for a in (*bulk, *mapped, *labels):
+for a in (*bulk, *scalar, *mapped, *labels):
     digest.update(np.ascontiguousarray(a).tobytes())
 print(json.dumps({"features": numba.config.CPU_FEATURES or "", "digest": digest.hexdigest()}))
 """
@@ -65,7 +68,9 @@ def test_a_users_own_cpu_features_are_left_alone():
 
 def test_nothing_changes_once_numbas_target_exists(monkeypatch):
     """In a process whose Numba target is made (this one: the kernels are compiled), the
-    width can no longer change, and the call says so by changing nothing."""
+    width can no longer change, and the call says so by changing nothing; it never writes
+    the environment (which child processes, and jobs on other machines, inherit)."""
+    from numba.core import config
     from numba.core.registry import cpu_target
 
     from atlas.kernels.vector_width import prefer_wide_vectors
@@ -73,5 +78,18 @@ def test_nothing_changes_once_numbas_target_exists(monkeypatch):
     assert cpu_target.target_context is not None  # made, if it was not already
     for name in ("NUMBA_CPU_FEATURES", "NUMBA_CPU_NAME", "ATLAS_VECTOR_BITS"):
         monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(config, "CPU_FEATURES", None)
     assert prefer_wide_vectors() is None
-    assert "NUMBA_CPU_FEATURES" not in os.environ
+    assert config.CPU_FEATURES is None and "NUMBA_CPU_FEATURES" not in os.environ
+
+
+def test_import_atlas_alone_imports_no_numba():
+    """The width is set where kernels are compiled: ``import atlas`` (every command, ``atlas
+    info`` too) neither imports Numba nor sets anything."""
+    code = ("import sys, os, atlas; print(sorted(m for m in ('numba', "
+            "'atlas.kernels.vector_width') if m in sys.modules), "
+            "'NUMBA_CPU_FEATURES' in os.environ)")
+    clean = {k: v for k, v in os.environ.items() if k != "NUMBA_CPU_FEATURES"}
+    done = subprocess.run([sys.executable, "-c", code], env=clean, capture_output=True,
+                          text=True, check=True, timeout=120)
+    assert done.stdout.split() == ["[]", "False"]

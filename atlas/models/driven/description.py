@@ -33,7 +33,8 @@ PARAMETERS = {
 
 #: A return of the orbit to P came within the capture radius of a stable periodic orbit of P,
 #: one whose capture ball was seen to map into itself (every sampled state of its circle
-#: mapped inside by P^(p·m), some m ≤ 8): the orbit stays in it (``confirm`` = 1).
+#: mapped inside by P^(p·m), some m ≤ 8): its returns every p·m periods stay in the ball, which
+#: holds the orbit's point (``confirm`` = 1).
 CONVERGED = 0
 #: No label by t_max.
 UNRESOLVED = 1
@@ -51,9 +52,9 @@ STATUSES = {CONVERGED: "converged", UNRESOLVED: "unresolved", NONFINITE: "nonfin
 IN_FILE = {
     CONVERGED: "a return came within the capture radius of a stable periodic orbit of the "
                "RK4 stroboscopic map, whose capture ball was seen to map into itself under "
-               "P^(p m), m <= 8, on sampled states of its circle, so that the orbit stays "
-               "in it (shown for the RK4 map by sampling, not proven; not certified for the "
-               "exact equation)",
+               "P^(p m), m <= 8, on sampled states of its circle, so that the orbit's "
+               "returns every p m periods stay in it (shown for the RK4 map by sampling, "
+               "not proven; not certified for the exact equation)",
     UNRESOLVED: "no label decided before t_max",
     NONFINITE: "a NaN or inf state was met",
     NEAR: "within the capture radius of a periodic orbit of the RK4 stroboscopic map for "
@@ -64,9 +65,10 @@ IN_FILE = {
 
 #: Returns of P in a row within an attractor's capture radius that decide a label, where
 #: its capture ball was not seen to map into itself (a ``near`` or ``chaotic`` label). One
-#: return decides a ``converged`` label: its ball maps into itself under P^(p·m) (sampled,
-#: :func:`atlas.models.driven.attractors.contracts`), so an orbit in it stays in it and
-#: converges to the orbit (the returns after it would only confirm what the test has shown).
+#: return decides a ``converged`` label: its ball was seen to map into itself under P^(p·m)
+#: (sampled, :func:`atlas.models.driven.attractors.contracts`), so the orbit's returns every
+#: p·m periods stay in the ball with the orbit's point; eight returns in a row would add no
+#: evidence the test has not (tests/models/test_driven_pendulum.py: the same labels).
 CONFIRM = 8
 
 

@@ -8,7 +8,8 @@
 // (forcing_table), the same table in every period. After each period the return to P is
 // labelled by the rule of label_driven: the nearest target (an attractor's point on P,
 // θ wrapped to [−π, π), θ difference wrapped) within its attractor's capture radius is a
-// hit; CONFIRM hits of one attractor in a row decide the label; none by t_max: undecided.
+// hit; that attractor's confirm hits in a row decide the label (one where its capture ball
+// was seen to map into itself, else 8); none by t_max: undecided.
 // Every number comes from the file (atlas/views/page_driven.py): nothing is rebuilt here.
 (() => {
   'use strict';
