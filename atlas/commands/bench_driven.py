@@ -119,16 +119,20 @@ print(json.dumps({{"rate": n * periods * 200 / best / 1e6,
 def _width_row(quick: bool) -> dict:
     """The driven kernel at 512-bit vectors (:mod:`atlas.kernels.vector_width`, this
     machine's default where the CPU has AVX-512) against LLVM's own choice
-    (``ATLAS_VECTOR_BITS=256``), each in a fresh interpreter, one after the other."""
+    (``ATLAS_VECTOR_BITS=256``), each in fresh interpreters taking turns (three each, the
+    fastest counted; one in quick)."""
     import json
 
     from atlas.kernels.vector_width import TUNING
 
     script = _WIDTH_SCRIPT.format(n=20_000 if quick else 100_000, periods=2 if quick else 5)
     out = {}
-    for name, env in (("wide", {}), ("llvm", {"ATLAS_VECTOR_BITS": "256"})):
-        _, done = run_python(["-c", script], **env)
-        out[name] = json.loads(done.stdout.strip().splitlines()[-1])
+    for _ in range(1 if quick else 3):  # alternated, the best of each: a shared machine's
+        for name, env in (("wide", {}), ("llvm", {"ATLAS_VECTOR_BITS": "256"})):  # speed
+            _, done = run_python(["-c", script], **env)  # drifts within seconds
+            got = json.loads(done.stdout.strip().splitlines()[-1])
+            if name not in out or got["rate"] > out[name]["rate"]:
+                out[name] = got
     wide = out["wide"]["features"].endswith(f"-{TUNING}")
     return {"variant": f"driven kernel at {'512' if wide else 'the default'}-bit vectors, "
                        f"{out['wide']['rate']:.0f} M RK4 steps/s",
