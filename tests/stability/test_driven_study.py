@@ -142,11 +142,12 @@ def sweep(tmp_path_factory):
 def test_the_located_birth_lies_between_the_searches_that_lack_and_have_it(sweep):
     """Between A = 1.66 (one period-1 oscillation) and 1.71 (two), the second one's birth is
     located: at the lower end of its bracket find_attractors finds as many attractors as at
-    1.66, at the upper end more (near the saddle-node the new orbit converges so slowly
-    that the search may record it as one or more recurrent clouds), and a little further on, the two
-    oscillations. Just outside the bracket nothing is asked: this close to the saddle-node
-    the search is not monotone in A (at 1e-6 below the bracket it recorded a slow transient
-    as a cloud), which docs/continuation.md says of a located birth."""
+    1.66, at the upper end more (near the pitchfork where the oscillation splits into two
+    mirror twins the orbits converge so slowly that the search records them as recurrent
+    clouds), and a little further on, the two oscillations. Just outside the bracket
+    nothing is asked: this close to the bifurcation the search is not monotone in A (1e-6
+    below the bracket it recorded a slow transient as a cloud), as docs/continuation.md
+    says of a located birth."""
     ds, _ = sweep
     births = [i for i in range(ds.sizes["bifurcation"])
               if int(ds["bifurcation_kind"][i]) == 0]
