@@ -72,10 +72,37 @@ def id_markers(ds: xr.Dataset) -> dict[int, str]:
     return out
 
 
+def _forms(ds: xr.Dataset, gid: int) -> list[tuple[str, int, int]]:
+    """Every (kind, period, winding) the attractor ``gid`` takes along the sweep, in the
+    order met."""
+    out: list[tuple[str, int, int]] = []
+    for k, p, w in zip(ds["attractor_kind"].values[:, gid],
+                       ds["attractor_period"].values[:, gid],
+                       ds["attractor_winding"].values[:, gid]):
+        form = (KIND_MEANINGS[int(k)], int(p), int(w))
+        if k > 0 and form not in out:
+            out.append(form)
+    return out
+
+
+def _also(kind: str, period: int, winding: int) -> str:
+    if kind == "chaotic":
+        return "chaotic"
+    return f"period {period}" + (f", winding {winding:+d}" if winding else "")
+
+
 def id_names(ds: xr.Dataset) -> dict[int, str]:
-    """"#12 rotation, period 2, winding -2" of each global id (:func:`_kind_winding`)."""
-    return {int(g): f"#{int(g)} {attractor_name(*_kind_winding(ds, int(g)))}"
-            for g in ds["attractor_id"].values}
+    """"#12 rotation, period 2, winding -2" of each global id, as it is at most of its
+    points (:func:`_kind_winding`), and what else it is somewhere along the sweep ("#11
+    rotation, period 1, winding -1; also period 2, winding -2"): the period changes that
+    the events mark."""
+    out = {}
+    for g in (int(v) for v in ds["attractor_id"].values):
+        best = _kind_winding(ds, g)
+        others = [_also(*f) for f in _forms(ds, g) if f != best]
+        out[g] = f"#{g} {attractor_name(*best)}" + (
+            "; also " + ", ".join(others) if others else "")
+    return out
 
 
 def _events(ds: xr.Dataset) -> list[tuple[float, float, str, int, int, int]]:
@@ -232,8 +259,12 @@ def _fraction_curves(ds: xr.Dataset, dim: str):
                      "located bifurcations\n(+ birth, − death, ~ period change of the "
                      "attractor #; events within 1.2 % of the range share a line)",
                      fontsize=10)
+        # as many columns as the longest name leaves room for (7.5 pt: about 0.055 in a
+        # character, and 0.5 in for the line and the gap), at most 4
+        longest = max([len(v) for v in names.values()] + [len("unresolved")])
+        fits = int(fig.get_figwidth() / (0.055 * longest + 0.5))
         fig.legend(loc="outside lower center", fontsize=7.5,
-                   ncols=min(4, max(1, (len(names) + 1 + 3) // 4)))
+                   ncols=max(1, min(4, fits, (len(names) + 1 + 3) // 4)))
 
     return draw
 

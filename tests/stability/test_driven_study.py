@@ -323,3 +323,21 @@ def test_samples_are_refused_for_the_undriven_pendulum(tmp_path, capsys):
     assert main(["stability", str(config)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "stability.samples" in err, err
+
+
+def test_an_id_whose_period_changes_is_named_with_every_form_it_takes():
+    """The key names an id as it is at most of its points and adds what else it is along
+    the sweep (the period changes its events mark), in the order met; an id that never
+    changes is named once."""
+    import xarray as xr
+
+    from atlas.views.driven_study import id_names
+
+    dims = ("amplitude", "attractor_id")
+    ds = xr.Dataset({"attractor_kind": (dims, [[1, 1], [1, 1], [1, 0], [2, 0]]),
+                     "attractor_period": (dims, [[2, 1], [1, 1], [1, -1], [0, -1]]),
+                     "attractor_winding": (dims, [[-2, 0], [-1, 0], [-1, 0], [0, 0]])},
+                    coords={"attractor_id": [0, 1]})
+    assert id_names(ds) == {0: "#0 rotation, period 1, winding -1; also period 2, winding -2, "
+                               "chaotic",
+                            1: "#1 oscillation, period 1"}
