@@ -14,6 +14,7 @@ import xarray as xr
 
 from atlas import lazy_dask  # noqa: F401 (installs itself)
 from atlas.defaults import BACKEND_WORDS
+from atlas.kernels import source_hash
 from atlas.labels.trap import CHECK_EVERY
 from atlas.models.registry import DEFAULT as DEFAULT_MODEL
 from atlas.pipeline.config import Config, config_hash, integrator_json
@@ -25,11 +26,13 @@ __all__ = ["run_identity", "identity_hash", "file_attrs", "library_versions"]
 def run_identity(cfg: Config, backend: str) -> dict:
     """What determines a run's tiles, so a partial run may be continued only by an equal one:
     the grid, the physics (every key of the model's section: ``pendulum`` for the pendulum),
-    the integrator, the kernels' trap-check interval, the atlas version, the kernel class
-    that computes the labels ('cuda' for the GPU kernels; 'cpu' for the CPU kernels, which
-    the Dask backend runs too), and the separatrix settings when they are enabled (they
-    measure d_cert, which decides each tile's certified statuses). Not the tiling, the output
-    path or the name."""
+    the integrator, the kernels' trap-check interval, the atlas version and a digest of the
+    kernels' sources (:func:`atlas.kernels.source_hash`: a kernel or a decision rule that
+    changed within one version changes the labels, and its tiles must not mix with the
+    earlier ones), the kernel class that computes the labels ('cuda' for the GPU kernels;
+    'cpu' for the CPU kernels, which the Dask backend runs too), and the separatrix settings
+    when they are enabled (they measure d_cert, which decides each tile's certified
+    statuses). Not the tiling, the output path or the name."""
     from atlas import __version__
 
     return {"grid": cfg.grid.model_dump(mode="json"),
@@ -39,7 +42,7 @@ def run_identity(cfg: Config, backend: str) -> dict:
                              if cfg.separatrices.enabled and cfg.description.name == DEFAULT_MODEL
                              else {"enabled": False}),  # the pendulum's section
             "check_every": int(CHECK_EVERY), "atlas_version": __version__,
-            "kernels": BACKEND_WORDS[backend][0]}
+            "kernel_sources": source_hash(), "kernels": BACKEND_WORDS[backend][0]}
 
 
 def identity_hash(identity: dict) -> str:

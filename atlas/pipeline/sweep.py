@@ -106,9 +106,9 @@ def _refuse_another(partial: Path, identity: dict, opener=TileStore.open) -> Til
     try:
         return opener(partial, identity)
     except IdentityMismatch as exc:
-        raise InputFileError(f"{partial}: a partial run of a different config is in the way "
-                             f"({', '.join(exc.differs)} differ); run with --restart to discard "
-                             "it, or write elsewhere with -o") from None
+        raise InputFileError(f"{partial}: a partial run of a different config or atlas "
+                             f"build is in the way ({', '.join(exc.differs)} differ); run with "
+                             "--restart to discard it, or write elsewhere with -o") from None
     except PartialStoreError as exc:
         raise InputFileError(f"{partial}: cannot continue this partial run ({exc}); run with "
                              "--restart to discard it") from None

@@ -94,6 +94,30 @@ def _snapshot(folder):
             if p.is_file()}
 
 
+def test_a_partial_run_of_other_kernels_is_refused_until_restart(tmp_path, monkeypatch):
+    """Tiles labelled by other kernel sources (a decision rule or a kernel that changed
+    within one version) never mix with this build's: the run is refused in one line naming
+    kernel_sources and --restart, and nothing is written."""
+    from atlas.errors import InputFileError
+    from atlas.pipeline import identity
+
+    out = tmp_path / "x.h5"
+    cfg = atlas.load_config(write_config(tmp_path / "c.yaml",
+                                         MANY_TILES.format(t_max=50, output=out)))
+    partial = out.with_name(out.name + ".partial")
+    with monkeypatch.context() as m:
+        m.setattr(identity, "source_hash", lambda: "an-older-build")
+        crash_on_tile(m, 3, KeyboardInterrupt())
+        with pytest.raises(KeyboardInterrupt):
+            atlas.run(cfg, quiet=True)
+    before = _snapshot(partial)
+    with pytest.raises(InputFileError) as refused:
+        atlas.run(cfg, quiet=True)
+    assert "kernel_sources differ" in str(refused.value) and "--restart" in str(refused.value)
+    assert _snapshot(partial) == before and not out.exists()
+    assert atlas.run(cfg, quiet=True, restart=True).attrs["complete"] == 1
+
+
 def test_a_partial_run_of_another_config_is_refused_until_restart(tmp_path, monkeypatch):
     out = tmp_path / "x.h5"
     cfg = write_config(tmp_path / "c.yaml", MANY_TILES.format(t_max=50, output=out))
