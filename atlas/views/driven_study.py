@@ -34,16 +34,20 @@ _EVENT_SHORT = {"birth": "+", "death": "−", "period_change": "~"}
 _EVENT_COLOUR = {"birth": "#1b7837", "death": "#b2182b", "period_change": "#5e3c99"}
 
 
+def _seen(ds: xr.Dataset, gid: int) -> list[tuple[str, int, int]]:
+    """(kind, period, winding) of the attractor ``gid`` at each point where it is present,
+    in the sweep's order."""
+    return [(KIND_MEANINGS[int(k)], int(p), int(w)) for k, p, w in
+            zip(ds["attractor_kind"].values[:, gid], ds["attractor_period"].values[:, gid],
+                ds["attractor_winding"].values[:, gid]) if k > 0]
+
+
 def _kind_winding(ds: xr.Dataset, gid: int) -> tuple[str, int, int]:
     """(kind, period, winding) of the attractor ``gid`` as it is at most of the points where
     it is present (the first of equals; periodic before chaotic): what names and colours
     it, as a basin map's key would name and colour it there."""
-    kind = ds["attractor_kind"].values[:, gid]
-    seen = [(int(k), int(p), int(w)) for k, p, w in
-            zip(kind, ds["attractor_period"].values[:, gid],
-                ds["attractor_winding"].values[:, gid]) if k > 0]
-    best = max(seen, key=lambda s: (seen.count(s), s[0] == 1, -seen.index(s)))
-    return KIND_MEANINGS[best[0]], best[1], best[2]
+    seen = _seen(ds, gid)
+    return max(seen, key=lambda s: (seen.count(s), s[0] == "periodic", -seen.index(s)))
 
 
 def id_colours(ds: xr.Dataset, lines: bool = True) -> dict[int, str]:
@@ -72,19 +76,6 @@ def id_markers(ds: xr.Dataset) -> dict[int, str]:
     return out
 
 
-def _forms(ds: xr.Dataset, gid: int) -> list[tuple[str, int, int]]:
-    """Every (kind, period, winding) the attractor ``gid`` takes along the sweep, in the
-    order met."""
-    out: list[tuple[str, int, int]] = []
-    for k, p, w in zip(ds["attractor_kind"].values[:, gid],
-                       ds["attractor_period"].values[:, gid],
-                       ds["attractor_winding"].values[:, gid]):
-        form = (KIND_MEANINGS[int(k)], int(p), int(w))
-        if k > 0 and form not in out:
-            out.append(form)
-    return out
-
-
 def _also(kind: str, period: int, winding: int) -> str:
     if kind == "chaotic":
         return "chaotic"
@@ -99,7 +90,7 @@ def id_names(ds: xr.Dataset) -> dict[int, str]:
     out = {}
     for g in (int(v) for v in ds["attractor_id"].values):
         best = _kind_winding(ds, g)
-        others = [_also(*f) for f in _forms(ds, g) if f != best]
+        others = [_also(*f) for f in dict.fromkeys(_seen(ds, g)) if f != best]
         out[g] = f"#{g} {attractor_name(*best)}" + (
             "; also " + ", ".join(others) if others else "")
     return out
