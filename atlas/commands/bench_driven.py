@@ -23,12 +23,14 @@ from pathlib import Path
 import numpy as np
 
 from atlas.commands.bench_e2e import run_python
+from atlas.commands.bench_gpu_driven import DRIVE
 
 __all__ = ["driven_rows", "TITLE", "numpy_periods"]
 
 TITLE = "driven pendulum: the stroboscopic map's kernel against NumPy, the Wada atlas"
 
-_ALPHA, _OMEGA0, _AMPLITUDE, _FREQUENCY, _STEPS = 0.1, 1.0, 1.66, 1.0, 200
+#: configs/driven.yaml's drive, as the GPU rows run it (the CPU bench calls the GPU's)
+_ALPHA, _OMEGA0, _, _AMPLITUDE, _FREQUENCY, _, _STEPS = DRIVE
 
 
 def numpy_periods(theta: np.ndarray, theta_dot: np.ndarray, periods: int) -> None:
@@ -102,15 +104,16 @@ import numba
 n, periods = {n}, {periods}
 rng = np.random.default_rng(0)
 theta0, theta_dot0 = rng.uniform(-math.pi, math.pi, n), rng.uniform(-2.0, 4.0, n)
-table, dt = driven.forcing_table(1.66, 1.0, 0.0, 200), driven.step_size(1.0, 200)
+table = driven.forcing_table({amplitude}, {frequency}, 0.0, {steps})
+dt = driven.step_size({frequency}, {steps})
 best = math.inf
 for i in range(4):
     theta, theta_dot = theta0.copy(), theta_dot0.copy()
     start = time.perf_counter()
-    driven.advance(theta, theta_dot, 0.1, 1.0, 0.0, table, dt, periods if i else 1)
+    driven.advance(theta, theta_dot, {alpha}, {omega0}, 0.0, table, dt, periods if i else 1)
     if i:
         best = min(best, time.perf_counter() - start)
-print(json.dumps({{"rate": n * periods * 200 / best / 1e6,
+print(json.dumps({{"rate": n * periods * {steps} / best / 1e6,
                   "features": numba.config.CPU_FEATURES or "",
                   "digest": hashlib.sha256(theta.tobytes() + theta_dot.tobytes()).hexdigest()}}))
 """
@@ -125,7 +128,9 @@ def _width_row(quick: bool) -> dict:
 
     from atlas.kernels.vector_width import TUNING
 
-    script = _WIDTH_SCRIPT.format(n=20_000 if quick else 100_000, periods=2 if quick else 5)
+    script = _WIDTH_SCRIPT.format(n=20_000 if quick else 100_000, periods=2 if quick else 5,
+                                  alpha=_ALPHA, omega0=_OMEGA0, amplitude=_AMPLITUDE,
+                                  frequency=_FREQUENCY, steps=_STEPS)
     out = {}
     for _ in range(1 if quick else 3):  # alternated, the best of each: a shared machine's
         for name, env in (("wide", {}), ("llvm", {"ATLAS_VECTOR_BITS": "256"})):  # speed
