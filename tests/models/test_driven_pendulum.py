@@ -428,3 +428,30 @@ def test_orbits_on_a_chaotic_attractor_are_labelled_chaotic(tmp_path):
     assert tree["attractors"].to_dataset()["kind"].values.tolist() == ["chaotic"]
     status = tree.to_dataset(inherit=False)["status"].values
     assert np.mean(status == CHAOTIC) >= 0.8, np.mean(status == CHAOTIC)
+
+
+def test_the_stored_confirm_is_read_back_checked_and_has_a_fallback(wada_atlas, tmp_path,
+                                                                    capsys):
+    """``/attractors/confirm`` as the run wrote it (1 for each converged attractor); a file
+    without it (written before it) decides with its ``confirm`` attribute for all; a damaged
+    one (0) is refused by ``atlas orbit`` and ``atlas view`` in one line, nothing written."""
+    import shutil
+
+    import h5py
+
+    from atlas.models.driven.description import stored_confirm
+
+    group = atlas.open(wada_atlas)["attractors"].to_dataset()
+    assert stored_confirm(group).tolist() == [1, 1, 1]
+    older = group.drop_vars("confirm").assign_attrs(confirm=np.int64(8))
+    assert stored_confirm(older).tolist() == [8, 8, 8]
+    bad = tmp_path / "bad.h5"
+    shutil.copy(wada_atlas, bad)
+    with h5py.File(bad, "r+") as f:
+        f["attractors/confirm"][...] = 0
+    for args in (["orbit", str(bad), "-2", "3", "-o", str(tmp_path / "o.png")],
+                 ["view", str(bad), "-o", str(tmp_path / "v.html")]):
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "confirm" in err[0] and ">= 1" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.h5"]

@@ -85,8 +85,16 @@ def stored_confirm(group) -> np.ndarray:
     variable, with one rule for all) the node's ``confirm`` attribute."""
     n = group.sizes.get("attractor", 0)
     if "confirm" in group.data_vars:
-        return np.asarray(group["confirm"].values, np.int64)
-    return np.full(n, int(group.attrs.get("confirm", CONFIRM)), np.int64)
+        stored = np.asarray(group["confirm"].values)
+    else:
+        stored = np.full(n, group.attrs.get("confirm", CONFIRM))
+    if not (stored.shape == (n,) and np.all(np.isfinite(stored.astype(float)))
+            and np.all(stored >= 1) and np.all(stored == np.round(stored))):
+        from atlas.errors import InputFileError
+
+        raise InputFileError(f"/attractors confirm holds {stored.tolist()}: the returns in a "
+                             "row that decide a label are whole numbers >= 1 (a damaged file?)")
+    return stored.astype(np.int64)
 
 
 #: The largest period [drive periods] of the periodic attractors searched for, by default
