@@ -197,7 +197,8 @@ def ask(yes: bool = False, quiet: bool = False, stdin=None) -> Callable[[Estimat
     that :attr:`Estimate.asks` and responsible for saying its line: True (start) where ``yes``
     (``--yes``) or stdin is not a terminal (the line then says so; nothing said where
     ``quiet``), else the user's answer to the line and "Start? [y/N]" (no answer, Ctrl-D or
-    Ctrl-C: no)."""
+    Ctrl-C: no). Its ``silent`` is True where it would start without a word (``quiet``, and
+    ``yes`` or stdin not a terminal): a run need not estimate at all then."""
     from atlas.pipeline.progress import say
 
     def confirm(est: Estimate) -> bool:
@@ -216,6 +217,9 @@ def ask(yes: bool = False, quiet: bool = False, stdin=None) -> Callable[[Estimat
             answer = ""
         return answer.strip().lower() in ("y", "yes")
 
+    # quiet, and no question to put: the estimate would be neither said nor asked about
+    confirm.silent = quiet and (yes or not _is_terminal(stdin if stdin is not None
+                                                        else sys.stdin))
     return confirm
 
 

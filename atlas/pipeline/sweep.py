@@ -285,7 +285,11 @@ def _say_what_is_replaced(cfg: Config) -> None:
 def _preflight(cfg: Config, layout: Layout, begun: list, device: str, backend: str,
                quiet: bool, confirm, partial: Path | None) -> None:
     """Say a big run's estimate, or ask ``confirm`` for one big enough to ask (``partial``:
-    the partial run to be continued, whose finished tiles are not counted)."""
+    the partial run to be continued, whose finished tiles are not counted). Nothing is
+    measured where nothing would be said or asked: ``quiet`` with no ``confirm``, or with
+    one that starts without a word (:func:`atlas.pipeline.preflight.ask`'s ``silent``)."""
+    if quiet and (confirm is None or getattr(confirm, "silent", False)):
+        return
     todo = range(layout.n_tiles)
     if partial is not None and partial.exists():
         try:

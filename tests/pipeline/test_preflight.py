@@ -243,3 +243,25 @@ def test_a_resumed_run_counts_only_the_orbits_still_to_do(tmp_path, monkeypatch)
         sweep.run(cfg, quiet=True, confirm=lambda est: asked.append(est) or False)
     assert asked[0].orbits == (4 - done) * 4 * 24
     assert describe(tmp_path / "small.h5.partial")["tiles_done"] == done  # kept as it was
+
+
+def test_a_quiet_run_that_would_neither_say_nor_ask_measures_nothing(tmp_path, monkeypatch):
+    """``atlas run -q`` off a terminal (or with --yes), and ``atlas.run(quiet=True)``: the
+    estimate would be neither said nor asked about, so the calibration is not run at all
+    (it cost a driven run about a second); a quiet run that may ask still measures."""
+    cfg = _small(tmp_path)
+    monkeypatch.setattr(preflight, "PREFLIGHT_ORBITS", 100)
+
+    def measured(*args, **kwargs):
+        raise AssertionError("measured")
+
+    monkeypatch.setattr(preflight, "measure_rate", measured)
+    sweep.run(cfg, quiet=True, open_result=False)
+    for confirm in (preflight.ask(quiet=True, stdin=_Pipe()),
+                    preflight.ask(yes=True, quiet=True, stdin=_Terminal())):
+        assert confirm.silent
+        sweep.run(cfg, quiet=True, restart=True, confirm=confirm, open_result=False)
+    asking = preflight.ask(quiet=True, stdin=_Terminal())
+    assert not asking.silent
+    with pytest.raises(AssertionError, match="measured"):
+        sweep.run(cfg, quiet=True, restart=True, confirm=asking, open_result=False)
