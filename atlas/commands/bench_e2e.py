@@ -35,6 +35,12 @@ _FIRST_CALL = (_IMPORTS + "; import numpy as np; from atlas import label; "
 _PHASE = re.compile(r"^atlas: (.+?)\s+([0-9.]+) s$")
 
 
+def phase_seconds(stderr: str) -> dict[str, float]:
+    """{phase: seconds} of the phase lines ``atlas run -v`` writes to ``stderr``."""
+    return {m.group(1).strip(): float(m.group(2))
+            for m in map(_PHASE.match, stderr.splitlines()) if m}
+
+
 #: atlas's package folder (its sources), whatever subpackage this module sits in.
 _PACKAGE = Path(__file__).resolve().parents[1]
 
@@ -75,8 +81,7 @@ def end_to_end(map_kernel_s: float, repeats: int = 3) -> dict:
                                     "-o", str(Path(tmp) / f"run{i}.h5")])
             if i:
                 runs.append(wall)
-                phases.append({m.group(1).strip(): float(m.group(2)) for m in
-                               map(_PHASE.match, out.stderr.splitlines()) if m})
+                phases.append(phase_seconds(out.stderr))
         imports = [run_python(["-c", _IMPORTS])[0] for _ in range(repeats)]
         first_call = [run_python(["-c", _FIRST_CALL])[0] for _ in range(repeats)]
     import_s = statistics.median(imports)

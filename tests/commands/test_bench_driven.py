@@ -40,6 +40,7 @@ def test_the_atlas_rows_set_the_run_against_its_kernel():
     assert run["wall_s"] > 0 and share["wall_s"] < run["wall_s"]
     assert 0 < share["ratio"] < 1
     assert "the file's labels at 100.00% of the points" in share["note"], share["note"]
+    assert share["against"].startswith("its map phase, ")  # read from the run's -v lines
 
 
 def test_the_sweep_row_runs_the_study():
